@@ -1,0 +1,19 @@
+#pragma once
+/// Writes files under a temporary name and renames them when complete, so a crash or an error
+/// never leaves a truncated file that looks finished.
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+namespace orthofront::io {
+
+/// Calls `write(stream)` on a binary stream opened on "<path>.tmp-<pid>", then flushes, checks the
+/// stream and renames onto `path`. On any failure (including an exception from `write`) the
+/// temporary file is removed and IoError is thrown naming `path`. The directory must exist.
+void write_atomically(const std::filesystem::path& path,
+                      const std::function<void(std::ofstream&)>& write);
+
+/// Throws IoError naming `path` when its directory does not exist or is not writable.
+void check_writable(const std::filesystem::path& path);
+
+}  // namespace orthofront::io

@@ -1,0 +1,54 @@
+#pragma once
+/// Polygon surface mesh (quads and triangles kept as such) with per-vertex attributes.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "orthofront/types.h"
+
+namespace orthofront {
+
+/// One face: 3 or 4 vertex indices, counter-clockwise seen from the surface normal side.
+struct Face {
+  std::array<std::int32_t, 4> v{-1, -1, -1, -1};
+  std::uint8_t size = 0;  ///< 3 (triangle) or 4 (quad)
+  bool is_quad() const { return size == 4; }
+  bool operator==(const Face&) const = default;
+};
+
+/// Surface mesh. Positions are 3D (for N = 4 engines: the first three coordinates).
+/// All attribute arrays have one entry per vertex.
+struct Mesh {
+  std::vector<Vec3> positions;            ///< world units
+  std::vector<Face> faces;
+  std::vector<double> time;               ///< integration time in v since the seed (or physical time)
+  std::vector<double> alpha;              ///< α used on the step that produced the vertex (0 on the seed)
+  std::vector<double> s;                  ///< seed-curve parameter of the stream line, in [0, 1]
+  std::vector<double> error;              ///< orthogonality error |cos(front tangent, v)| at the vertex
+  std::vector<std::int32_t> front_id;     ///< front the vertex belonged to when created
+  std::vector<std::int32_t> step;         ///< front step that created the vertex (0 = seed)
+
+  std::size_t vertex_count() const { return positions.size(); }
+  std::size_t face_count() const { return faces.size(); }
+
+  /// Appends a vertex with its attributes; returns its index.
+  std::int32_t add_vertex(const Vec3& p, double t, double a, double s_param, double err,
+                          std::int32_t front, std::int32_t step_index) {
+    positions.push_back(p);
+    time.push_back(t);
+    alpha.push_back(a);
+    s.push_back(s_param);
+    error.push_back(err);
+    front_id.push_back(front);
+    step.push_back(step_index);
+    return static_cast<std::int32_t>(positions.size() - 1);
+  }
+  void add_triangle(std::int32_t a, std::int32_t b, std::int32_t c) {
+    faces.push_back(Face{{a, b, c, -1}, 3});
+  }
+  void add_quad(std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
+    faces.push_back(Face{{a, b, c, d}, 4});
+  }
+};
+
+}  // namespace orthofront

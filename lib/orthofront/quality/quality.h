@@ -1,0 +1,48 @@
+#pragma once
+/// Mesh quality measured the paper's way, plus validity checks (folds, non-manifold edges,
+/// T-junctions, degenerate faces, orientation).
+#include <cstdint>
+#include <vector>
+
+#include "orthofront/mesh/mesh.h"
+
+namespace orthofront {
+
+struct Histogram {
+  double lo = 0, hi = 1;                 ///< value range; values outside are clamped into end bins
+  std::vector<std::uint64_t> counts;     ///< equal-width bins over [lo, hi]
+};
+
+struct QualityOptions {
+  int angle_bins = 36;                   ///< quad-angle histogram over [0°, 180°]
+  int edge_bins = 40;                    ///< edge-ratio histogram over [-1, 1]
+  int triangle_bins = 18;                ///< triangle min-angle histogram over [0°, 90°]
+  double fold_cos = 0.0;                 ///< adjacent faces with normal dot below this are folds
+  double degenerate_area = 1e-12;        ///< relative to the mean squared edge length
+};
+
+struct QualityReport {
+  std::size_t vertices = 0, faces = 0, quads = 0, triangles = 0;
+  double quad_share = 0;                  ///< quads / faces
+  double quad_angles_within_10 = 0;       ///< share of quad interior angles within 90° ± 10°
+  double quad_angle_mean_abs_dev = 0;     ///< mean |angle - 90°|, degrees
+  double edge_spread_median = 0;          ///< median |1 - l_i / l_avg| over quad edges
+  double edge_spread_mean = 0;
+  double triangle_min_angle_median = 0;   ///< degrees
+  double triangles_below_10deg = 0;       ///< share of triangles whose min angle < 10°
+  std::size_t folds = 0;                  ///< interior edges whose two faces have opposite normals
+  std::size_t non_manifold_edges = 0;     ///< edges with more than two faces
+  std::size_t inconsistent_edges = 0;     ///< interior edges traversed twice in the same direction
+  std::size_t t_junctions = 0;            ///< boundary vertices lying inside another boundary edge
+  std::size_t degenerate_faces = 0;       ///< repeated index or (near) zero area
+  std::size_t boundary_edges = 0;
+  Histogram quad_angles;                  ///< degrees
+  Histogram edge_ratio;                   ///< 1 - l_i / l_avg
+  Histogram triangle_min_angle;           ///< degrees
+};
+
+/// Quality of a polygon mesh. Quads: four interior angles and, per edge, 1 - l_i / l_avg of its
+/// four edges; triangles: minimum angle. O(V + F) with hash maps for edges.
+QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options = {});
+
+}  // namespace orthofront
