@@ -1,1 +1,30 @@
-int main() { return 0; }
+// orthofront: flow-orthogonal stream surfaces from the command line.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "cli/progress_bar.h"
+#include "orthofront/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"orthofront: stream surfaces with flow-orthogonal front lines"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "orthofront 0.1.0");
+  orthofront::cli::add_stream_command(app);
+  orthofront::cli::add_fields_command(app);
+  orthofront::cli::add_demo_command(app);
+  orthofront::cli::add_bench_command(app);
+  orthofront::cli::install_interrupt_handler();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const orthofront::Error& e) {
+    std::cerr << "orthofront: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "orthofront: unexpected error: " << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

@@ -1,6 +1,7 @@
 #pragma once
 /// Fixed-size vector types shared by every part of the library.
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 
 namespace orthofront {
 

@@ -1,1 +1,904 @@
-// placeholder
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "orthofront/engine/stream_surface.h"
+#include "orthofront/error.h"
+#include "orthofront/integrate/runge_kutta.h"
+#include "orthofront/solve/alpha_solver.h"
+
+namespace orthofront {
+
+const char* to_string(StopReason reason) {
+  switch (reason) {
+    case StopReason::none: return "none";
+    case StopReason::steps: return "steps";
+    case StopReason::vertex_budget: return "vertex_budget";
+    case StopReason::time_budget: return "time_budget";
+    case StopReason::fronts_exhausted: return "fronts_exhausted";
+    case StopReason::left_domain: return "left_domain";
+    case StopReason::cancelled: return "cancelled";
+  }
+  return "?";
+}
+const char* to_string(Method method) {
+  return method == Method::orthogonal ? "orthogonal" : "timeline";
+}
+const char* to_string(MuMode mode) { return mode == MuMode::damping ? "damping" : "paper"; }
+const char* to_string(NegativeAlpha mode) {
+  return mode == NegativeAlpha::clamp ? "clamp" : "keep";
+}
+const char* to_string(Insertion mode) {
+  switch (mode) {
+    case Insertion::linear: return "linear";
+    case Insertion::cubic: return "cubic";
+    case Insertion::streamline: return "streamline";
+  }
+  return "?";
+}
+const char* to_string(RowSkip mode) {
+  switch (mode) {
+    case RowSkip::off: return "off";
+    case RowSkip::vertex: return "vertex";
+    case RowSkip::run: return "run";
+  }
+  return "?";
+}
+const char* to_string(IntegratorKind kind) {
+  return kind == IntegratorKind::dopri5 ? "dopri5" : "rk4";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// Adds the elapsed time of a scope to one stage counter.
+class StageTimer {
+ public:
+  explicit StageTimer(double& sink) : sink_(sink), start_(Clock::now()) {}
+  ~StageTimer() { sink_ += seconds_since(start_); }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  double& sink_;
+  Clock::time_point start_;
+};
+
+/// Runs body(begin, end) over [0, n): one functor for the serial and the parallel path.
+template <typename Body>
+void for_range(std::size_t n, std::size_t threshold, const Body& body) {
+  if (n < threshold) {
+    body(std::size_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+template <int N>
+struct FrontVertex {
+  Vec<N> x;              ///< current position on its stream line
+  Vec<N> anchor;         ///< position of the mesh vertex that stands for it
+  double s = 0;          ///< seed parameter (may exceed 1 on closed fronts: taken modulo 1)
+  double t = 0;          ///< integration time in v since the seed
+  std::int32_t mesh = -1;
+  std::int32_t origin = -1;  ///< index in the previous front (-1: inserted this step)
+};
+
+template <int N>
+struct Front {
+  std::vector<FrontVertex<N>> v;
+  bool closed = false;
+  std::int32_t id = 0;
+};
+
+enum class VertexState : unsigned char { ok, outside, no_data, zero_speed };
+
+template <int N>
+class Engine {
+ public:
+  Engine(const Field<N>& field, const Seed<N>& seed, const StreamSurfaceOptions& options,
+         const ProgressCallback& progress)
+      : field_(field), seed_(seed), opt_(options), progress_(progress) {
+    validate();
+    report_.options = opt_;
+    tol_.absolute = opt_.tolerance * opt_.edge;
+    tol_.relative = opt_.tolerance;
+    h_star_ = -std::log(1.0 - opt_.damping);
+  }
+
+  SurfaceResult run() {
+    const auto t_start = Clock::now();
+    std::vector<Front<N>> fronts = initial_fronts();
+    int step = 0;
+    StopReason reason = StopReason::none;
+    bool died_outside = false;
+    while (true) {
+      if (fronts.empty()) {
+        reason = died_outside ? StopReason::left_domain : StopReason::fronts_exhausted;
+        break;
+      }
+      if (step >= opt_.max_steps) {
+        reason = StopReason::steps;
+        break;
+      }
+      if (mesh_.vertex_count() >= opt_.max_vertices) {
+        reason = StopReason::vertex_budget;
+        break;
+      }
+      const double elapsed = seconds_since(t_start);
+      if (elapsed > opt_.time_budget_seconds) {
+        reason = StopReason::time_budget;
+        break;
+      }
+      if (progress_) {
+        Progress p{step, opt_.max_steps, mesh_.vertex_count(), fronts.size(), 0, elapsed};
+        for (const auto& f : fronts) p.front_vertices += f.v.size();
+        if (!progress_(p)) {
+          reason = StopReason::cancelled;
+          report_.complete = false;
+          break;
+        }
+      }
+      ++step;
+      step_record_ = StepRecord{};
+      step_record_.step = step;
+      step_record_.h_min = std::numeric_limits<double>::infinity();
+      ortho_sum_ = 0;
+      ortho_count_ = 0;
+      exits_this_step_ = 0;
+      std::vector<Front<N>> next;
+      std::vector<Front<N>> queue = std::move(fronts);
+      while (!queue.empty()) {
+        Front<N> f = std::move(queue.back());
+        queue.pop_back();
+        advance_front(std::move(f), step, queue, next);
+      }
+      fronts = std::move(next);
+      died_outside = fronts.empty() && exits_this_step_ > 0;
+      step_record_.fronts = fronts.size();
+      for (const auto& f : fronts) step_record_.front_vertices += f.v.size();
+      step_record_.orthogonality_mean = ortho_count_ ? ortho_sum_ / ortho_count_ : 0.0;
+      if (!std::isfinite(step_record_.h_min)) step_record_.h_min = 0;
+      report_.per_step.push_back(step_record_);
+    }
+    report_.stop_reason = reason;
+    report_.steps = step;
+    report_.vertices = mesh_.vertex_count();
+    report_.faces = mesh_.face_count();
+    report_.quads = static_cast<std::size_t>(
+        std::count_if(mesh_.faces.begin(), mesh_.faces.end(), [](const Face& f) {
+          return f.is_quad();
+        }));
+    report_.triangles = report_.faces - report_.quads;
+    if (opt_.measure_quality) {
+      StageTimer timer(report_.times.quality);
+      report_.quality = measure_quality(mesh_);
+    }
+    report_.times.total = seconds_since(t_start);
+    return SurfaceResult{std::move(mesh_), std::move(report_)};
+  }
+
+ private:
+  void validate() const {
+    auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+    if (!positive(opt_.edge))
+      throw InvalidArgument("edge length must be positive and finite, got " +
+                            std::to_string(opt_.edge));
+    if (opt_.max_steps < 0)
+      throw InvalidArgument("step count must not be negative, got " +
+                            std::to_string(opt_.max_steps));
+    if (!(opt_.damping > 0 && opt_.damping < 1))
+      throw InvalidArgument("damping must lie in (0, 1), got " + std::to_string(opt_.damping));
+    if (!std::isfinite(opt_.mu) || opt_.mu < 0)
+      throw InvalidArgument("mu must be finite and >= 0, got " + std::to_string(opt_.mu));
+    if (!(opt_.split_factor > 1.0) || !(opt_.merge_factor > 0) ||
+        opt_.merge_factor >= 2 * opt_.split_factor)
+      throw InvalidArgument("split/merge factors must satisfy split > 1, 0 < merge < 2 split");
+    if (!positive(opt_.tolerance)) throw InvalidArgument("tolerance must be positive");
+    if (!seed_.point) throw InvalidArgument("seed curve has no point function");
+    if (seed_.parameters.size() < 2)
+      throw InvalidArgument("a seed needs at least 2 vertices, got " +
+                            std::to_string(seed_.parameters.size()));
+  }
+
+  std::int32_t emit(const FrontVertex<N>& fv, double alpha, std::int32_t front, int step) {
+    const Vec3 p = fv.x.template head<3>();
+    return mesh_.add_vertex(p, fv.t, alpha, fv.s - std::floor(fv.s), 0.0, front, step);
+  }
+
+  std::vector<Front<N>> initial_fronts() {
+    Front<N> f;
+    f.closed = seed_.closed;
+    f.id = next_front_id_++;
+    report_.closed_seed = seed_.closed;
+    for (double s : seed_.parameters) {
+      FrontVertex<N> fv;
+      fv.s = s;
+      fv.x = seed_.point(s);
+      fv.anchor = fv.x;
+      f.v.push_back(fv);
+    }
+    // Vertices outside the domain or in no-data cells cut the seed into several fronts.
+    std::vector<char> keep(f.v.size(), 1);
+    std::size_t inside = 0;
+    for (std::size_t i = 0; i < f.v.size(); ++i) {
+      Vec<N> v;
+      keep[i] = field_.velocity(f.v[i].x, v) == FieldStatus::inside;
+      inside += keep[i] ? 1 : 0;
+    }
+    if (inside < 2)
+      throw InvalidArgument("seed curve has " + std::to_string(inside) +
+                            " vertices inside the field's domain; at least 2 are needed");
+    std::vector<Front<N>> out;
+    std::vector<char> cut(f.v.size(), 0);
+    for (auto& part : split(std::move(f), keep, cut)) {
+      for (auto& fv : part.v) fv.mesh = emit(fv, 0.0, part.id, 0);
+      adapt_and_link(part, nullptr, 0);
+      if (part.v.size() >= 2) out.push_back(std::move(part));
+    }
+    if (opt_.method == Method::timeline) {
+      report_.timeline_step = opt_.timeline_step;
+      if (!(report_.timeline_step > 0)) {
+        std::vector<double> speeds;
+        for (const auto& fr : out)
+          for (const auto& fv : fr.v) {
+            Vec<N> v;
+            if (field_.velocity(fv.x, v) == FieldStatus::inside) speeds.push_back(v.norm());
+          }
+        std::nth_element(speeds.begin(), speeds.begin() + static_cast<long>(speeds.size() / 2),
+                         speeds.end());
+        const double median = speeds.empty() ? 0.0 : speeds[speeds.size() / 2];
+        if (!(median > 0))
+          throw InvalidArgument("velocity is zero along the seed; the timeline step is undefined");
+        report_.timeline_step = opt_.edge / median;
+      }
+    }
+    return out;
+  }
+
+  /// Splits a front at vertices with keep[i] == 0 (removed) and after segments with
+  /// cut[i] != 0 (segment i joins i and i+1). Parts with fewer than two vertices are dropped.
+  std::vector<Front<N>> split(Front<N>&& f, const std::vector<char>& keep,
+                              const std::vector<char>& cut) {
+    const std::size_t n = f.v.size();
+    bool any = false;
+    for (std::size_t i = 0; i < n; ++i) any = any || !keep[i] || cut[i];
+    std::vector<Front<N>> parts;
+    if (!any) {
+      parts.push_back(std::move(f));
+      return parts;
+    }
+    // For a closed front start right after a break, so every part is a contiguous run.
+    std::size_t start = 0;
+    if (f.closed) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!keep[i]) {
+          start = i;
+          break;
+        }
+        if (cut[i]) {
+          start = (i + 1) % n;
+          break;
+        }
+      }
+    }
+    Front<N> current;
+    // The first part keeps the front's id; further parts are new fronts.
+    auto flush = [&]() {
+      if (current.v.size() >= 2) {
+        if (parts.empty()) {
+          current.id = f.id;
+        } else {
+          current.id = next_front_id_++;
+          ++report_.fronts_created;
+        }
+        parts.push_back(std::move(current));
+      }
+      current = Front<N>{};
+    };
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = (start + k) % n;
+      if (!keep[i]) {
+        flush();
+        continue;
+      }
+      current.v.push_back(f.v[i]);
+      if (cut[i] && (f.closed || i + 1 < n)) flush();
+    }
+    flush();
+    return parts;
+  }
+
+  static double median_of(std::vector<double> values) {
+    if (values.empty()) return 0;
+    const auto mid = values.begin() + static_cast<long>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return *mid;
+  }
+
+  /// One front step for one front. Fronts that must be cut first go back to `queue`.
+  void advance_front(Front<N>&& f, int step, std::vector<Front<N>>& queue,
+                     std::vector<Front<N>>& next) {
+    const std::size_t n = f.v.size();
+    if (n < 2) return;
+    vel_.resize(n);
+    speed_.resize(n);
+    alpha_.assign(n, 1.0);
+    state_.assign(n, VertexState::ok);
+    double h = 0;
+    {
+      StageTimer timer(report_.times.alpha);
+      for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          const FieldStatus st = field_.velocity(f.v[i].x, vel_[i]);
+          state_[i] = st == FieldStatus::inside    ? VertexState::ok
+                      : st == FieldStatus::outside ? VertexState::outside
+                                                   : VertexState::no_data;
+          speed_[i] = st == FieldStatus::inside ? vel_[i].norm() : 0.0;
+        }
+      });
+      report_.field_evaluations += n;
+      // Cut where a vertex has no usable flow: outside, no data, or vanishing speed.
+      const double median = median_of(speed_);
+      std::vector<char> keep(n, 1), cut(n, 0);
+      bool broken = false;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (state_[i] == VertexState::ok && !(speed_[i] > opt_.zero_speed_fraction * median)) {
+          state_[i] = VertexState::zero_speed;
+          ++report_.zero_velocity_cuts;
+        }
+        if (state_[i] != VertexState::ok) {
+          keep[i] = 0;
+          broken = true;
+          if (state_[i] == VertexState::outside) ++report_.domain_exits, ++exits_this_step_;
+          if (state_[i] == VertexState::no_data) ++report_.no_data_hits;
+        }
+      }
+      if (broken) {
+        for (auto& part : split(std::move(f), keep, cut)) queue.push_back(std::move(part));
+        return;
+      }
+      if (opt_.method == Method::orthogonal) {
+        const AlphaOutcome outcome = solve_alpha(f, cut);
+        if (outcome == AlphaOutcome::cut) {
+          for (auto& part : split(std::move(f), keep, cut)) queue.push_back(std::move(part));
+          return;
+        }
+      } else {
+        measure_orthogonality(f);
+      }
+    }
+    if (opt_.method == Method::orthogonal && opt_.rip) {
+      StageTimer timer(report_.times.rip);
+      std::vector<char> keep(n, 1), cut(n, 0);
+      if (find_rips(f, keep)) {
+        for (auto& part : split(std::move(f), keep, cut)) queue.push_back(std::move(part));
+        return;
+      }
+    }
+    // Front step h (α-time); negative α handling.
+    if (opt_.method == Method::orthogonal) {
+      double max_speed = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (alpha_[i] < 0) {
+          ++report_.negative_alpha;
+          if (opt_.negative_alpha == NegativeAlpha::clamp) {
+            alpha_[i] = 0;
+            ++report_.clamped_alpha;
+          }
+        }
+        max_speed = std::max(max_speed, std::abs(alpha_[i]) * speed_[i]);
+      }
+      if (!(max_speed > 0)) {
+        ++report_.fronts_stalled;  // α vanished everywhere: this front cannot advance
+        return;
+      }
+      h = opt_.edge / max_speed;
+      h = std::min(h, opt_.mu_mode == MuMode::damping ? h_star_ : opt_.paper_max_step);
+    } else {
+      h = report_.timeline_step;
+    }
+    step_record_.h_min = std::min(step_record_.h_min, h);
+    step_record_.h_max = std::max(step_record_.h_max, h);
+    for (std::size_t i = 0; i < n; ++i)
+      if (f.v[i].mesh >= 0 && f.v[i].x == f.v[i].anchor)
+        mesh_.alpha[static_cast<std::size_t>(f.v[i].mesh)] = alpha_[i];
+
+    // Advance every vertex along its stream line by τ_i = α_i h.
+    Front<N> nf;
+    nf.closed = f.closed;
+    nf.id = f.id;
+    nf.v.resize(n);
+    std::vector<char> keep(n, 1), cut(n, 0);
+    {
+      StageTimer timer(report_.times.advance);
+      std::vector<int> evaluations(n, 0);
+      for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          const double tau = alpha_[i] * h;
+          FrontVertex<N> fv = f.v[i];
+          fv.origin = static_cast<std::int32_t>(i);
+          if (tau != 0) {
+            const IntegrationResult<N> r = integrate(fv.x, tau);
+            evaluations[i] = r.evaluations;
+            fv.x = r.x;
+            fv.t += r.reached;
+            if (r.status != FieldStatus::inside) keep[i] = 0;
+            state_[i] = r.status == FieldStatus::outside  ? VertexState::outside
+                        : r.status == FieldStatus::inside ? VertexState::ok
+                                                          : VertexState::no_data;
+          }
+          nf.v[i] = fv;
+        }
+      });
+      report_.vertex_steps += n;
+      for (std::size_t i = 0; i < n; ++i) {
+        report_.field_evaluations += static_cast<std::size_t>(evaluations[i]);
+        if (state_[i] == VertexState::outside) ++report_.domain_exits, ++exits_this_step_;
+        if (state_[i] == VertexState::no_data) ++report_.no_data_hits;
+      }
+    }
+    // Vertices that left the domain end their stream lines at the last valid point: keep that
+    // point in the mesh, but not in the front.
+    for (auto& part : split(std::move(nf), keep, cut)) {
+      adapt_and_link(part, &f, step);
+      if (part.v.size() < 2 || too_short(part)) {
+        ++report_.fronts_dropped_short;
+        continue;
+      }
+      next.push_back(std::move(part));
+    }
+  }
+
+  enum class AlphaOutcome { solved, cut };
+
+  /// Builds p, q, r, solves for α (into alpha_), chooses μ. Closed fronts drop the equation
+  /// with the smallest |r| (rotating the front so it becomes the closing segment).
+  AlphaOutcome solve_alpha(Front<N>& f, std::vector<char>& cut) {
+    const std::size_t n = f.v.size();
+    const std::size_t segments = f.closed ? n : n - 1;
+    p_.resize(segments);
+    q_.resize(segments);
+    r_.resize(segments);
+    seg_ok_.assign(segments, 1);
+    seg_err_.resize(segments);
+    for_range(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+      Vec<N> vm;
+      Mat<N> jm;
+      for (std::size_t i = b; i < e; ++i) {
+        const std::size_t j = (i + 1) % n;
+        const Vec<N> d = f.v[j].x - f.v[i].x;
+        const Vec<N> mid = 0.5 * (f.v[i].x + f.v[j].x);
+        if (field_.velocity_jacobian(mid, vm, jm) != FieldStatus::inside) {
+          seg_ok_[i] = 0;
+          continue;
+        }
+        p_[i] = 0.5 * d.dot(jm * vel_[i]) - vel_[i].dot(vm);
+        q_[i] = 0.5 * d.dot(jm * vel_[j]) + vel_[j].dot(vm);
+        r_[i] = d.dot(vm);
+        const double denom = d.norm() * vm.norm();
+        seg_err_[i] = denom > 0 ? std::abs(r_[i]) / denom : 0.0;
+      }
+    });
+    report_.field_evaluations += segments;
+    bool any_bad = false;
+    for (std::size_t i = 0; i < segments; ++i)
+      if (!seg_ok_[i]) {
+        cut[i] = 1;
+        any_bad = true;
+      }
+    if (any_bad) return AlphaOutcome::cut;
+    for (std::size_t i = 0; i < segments; ++i) {
+      ortho_sum_ += seg_err_[i];
+      ++ortho_count_;
+      step_record_.orthogonality_max = std::max(step_record_.orthogonality_max, seg_err_[i]);
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (f.v[i].x == f.v[i].anchor && f.v[i].mesh >= 0) {
+        // Vertex error: mean |cos| of the adjacent segments.
+        const std::size_t a = f.closed ? (i + n - 1) % n : (i == 0 ? 0 : i - 1);
+        const std::size_t b = f.closed ? i : std::min(i, segments - 1);
+        mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (seg_err_[a] + seg_err_[b]);
+      }
+
+    if (f.closed) {
+      double log_product = 0;
+      bool negative = false;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double ratio = -p_[i] / q_[i];
+        negative = negative != (ratio < 0);
+        log_product += std::log(std::abs(ratio));
+      }
+      if (std::abs(log_product) > std::abs(report_.closed_log_product))
+        report_.closed_log_product = log_product;
+      std::size_t drop = 0;
+      for (std::size_t i = 1; i < n; ++i)
+        if (std::abs(r_[i]) < std::abs(r_[drop])) drop = i;
+      // Rotate so the dropped equation joins the last and the first vertex.
+      const auto shift = static_cast<long>((drop + 1) % n);
+      std::rotate(f.v.begin(), f.v.begin() + shift, f.v.end());
+      std::rotate(vel_.begin(), vel_.begin() + shift, vel_.end());
+      std::rotate(speed_.begin(), speed_.begin() + shift, speed_.end());
+      std::rotate(p_.begin(), p_.begin() + shift, p_.end());
+      std::rotate(q_.begin(), q_.begin() + shift, q_.end());
+      std::rotate(r_.begin(), r_.begin() + shift, r_.end());
+      if (negative || std::abs(log_product) > opt_.closed_log_product_limit) {
+        // No closed orthogonal front exists here (e.g. a spiral): open the front at the
+        // dropped segment instead of folding the mesh.
+        f.closed = false;
+        report_.closed_front_opened = true;
+        report_.message = "closed front opened: ln|prod(-p/q)| = " + std::to_string(log_product) +
+                          (negative ? " (negative product)" : "") +
+                          "; no closed flow-orthogonal front exists for this seed";
+      }
+    }
+    const std::size_t m = n - 1;
+    aln_.resize(n);
+    kernel_.resize(n);
+    const AlphaSolver::Result res =
+        solver_.solve(std::span<const double>(p_.data(), m), std::span<const double>(q_.data(), m),
+                      std::span<const double>(r_.data(), m), aln_, kernel_);
+    if (!res.ok) {
+      // Singular system (e.g. a segment of zero length): fall back to uniform advance.
+      std::fill(alpha_.begin(), alpha_.end(), 1.0);
+      return AlphaOutcome::solved;
+    }
+    double mu = opt_.mu;
+    if (opt_.mu_mode == MuMode::damping) {
+      const DampingChoice choice =
+          choose_damping_mu(aln_, kernel_, std::span<const double>(speed_.data(), n),
+                            opt_.edge / h_star_);
+      if (!choice.feasible) ++report_.infeasible_damping_steps;
+      mu = choice.mu;
+    }
+    for (std::size_t i = 0; i < n; ++i) alpha_[i] = aln_[i] + mu * kernel_[i];
+    return AlphaOutcome::solved;
+  }
+
+  void measure_orthogonality(const Front<N>& f) {
+    const std::size_t n = f.v.size();
+    const std::size_t segments = f.closed ? n : n - 1;
+    for (std::size_t i = 0; i < segments; ++i) {
+      const std::size_t j = (i + 1) % n;
+      const Vec<N> d = f.v[j].x - f.v[i].x;
+      const Vec<N> vm = 0.5 * (vel_[i] + vel_[j]);
+      const double denom = d.norm() * vm.norm();
+      const double err = denom > 0 ? std::abs(d.dot(vm)) / denom : 0.0;
+      ortho_sum_ += err;
+      ++ortho_count_;
+      step_record_.orthogonality_max = std::max(step_record_.orthogonality_max, err);
+    }
+  }
+
+  /// Sharp, slow peaks of α mark separating stream lines: their vertices are removed.
+  bool find_rips(const Front<N>& f, std::vector<char>& keep) {
+    const std::size_t n = f.v.size();
+    if (n < 3) return false;
+    const double median = median_of(speed_);
+    bool any = false;
+    const std::size_t first = f.closed ? 0 : 1;
+    const std::size_t last = f.closed ? n : n - 1;
+    for (std::size_t i = first; i < last; ++i) {
+      const double a = alpha_[i];
+      const double am = alpha_[(i + n - 1) % n];
+      const double ap = alpha_[(i + 1) % n];
+      if (!(a > 0 && a > am && a > ap)) continue;
+      const double sharpness = 1.0 - (am + ap) / (2.0 * a);
+      if (sharpness > opt_.rip_sharpness && speed_[i] < opt_.rip_speed_fraction * median) {
+        keep[i] = 0;
+        any = true;
+        ++report_.rips;
+      }
+    }
+    return any;
+  }
+
+  IntegrationResult<N> integrate(const Vec<N>& x, double tau) const {
+    if (opt_.integrator == IntegratorKind::rk4)
+      return integrate_rk4(field_, x, tau, opt_.rk4_substeps);
+    return integrate_dopri5(field_, x, tau, tol_);
+  }
+
+  bool too_short(const Front<N>& f) const {
+    double length = 0;
+    for (std::size_t i = 0; i + 1 < f.v.size(); ++i) length += (f.v[i + 1].x - f.v[i].x).norm();
+    if (f.closed && f.v.size() > 1) length += (f.v.front().x - f.v.back().x).norm();
+    return length < opt_.edge;
+  }
+
+  /// Point at fraction λ of segment i → i+1 of front f (positions only), Catmull-Rom on the
+  /// front with reflected end points.
+  Vec<N> cubic_point(const Front<N>& f, std::size_t i, double lambda) const {
+    const std::size_t n = f.v.size();
+    const std::size_t j = (i + 1) % n;
+    const Vec<N>& p1 = f.v[i].x;
+    const Vec<N>& p2 = f.v[j].x;
+    Vec<N> p0, p3;
+    if (f.closed || i > 0)
+      p0 = f.v[(i + n - 1) % n].x;
+    else
+      p0 = 2 * p1 - p2;
+    if (f.closed || j + 1 < n)
+      p3 = f.v[(j + 1) % n].x;
+    else
+      p3 = 2 * p2 - p1;
+    const double t = lambda, t2 = t * t, t3 = t2 * t;
+    return 0.5 * ((2 * p1) + (-p0 + p2) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t2 +
+                  (-p0 + 3 * p1 - 3 * p2 + p3) * t3);
+  }
+
+  /// Merge short segments, split long ones, decide which vertices get new mesh vertices, and
+  /// stitch faces between the previous front `old` (nullptr for the seed) and `f`.
+  void adapt_and_link(Front<N>& f, const Front<N>* old, int step) {
+    {
+      StageTimer timer(report_.times.adapt);
+      merge_short(f);
+      split_long(f, step);
+    }
+    StageTimer timer(report_.times.stitch);
+    if (old) {
+      emit_moved(f, step);
+      stitch(*old, f);
+    }
+  }
+
+  void merge_short(Front<N>& f) {
+    const std::size_t n = f.v.size();
+    if (n < 3) return;
+    const double limit = opt_.merge_factor * opt_.edge;
+    std::vector<FrontVertex<N>> out;
+    out.reserve(n);
+    out.push_back(f.v[0]);
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const double joined = (f.v[i].x - out.back().x).norm() + (f.v[i + 1].x - f.v[i].x).norm();
+      if (joined < limit) {
+        ++report_.merges;
+        continue;
+      }
+      out.push_back(f.v[i]);
+    }
+    out.push_back(f.v[n - 1]);
+    if (f.closed && out.size() > 3) {
+      // The closing pair: drop the last vertex when it and its closing segment are short.
+      const double joined =
+          (out.back().x - out[out.size() - 2].x).norm() + (out.front().x - out.back().x).norm();
+      if (joined < limit) {
+        out.pop_back();
+        ++report_.merges;
+      }
+    }
+    f.v = std::move(out);
+  }
+
+  void split_long(Front<N>& f, int step) {
+    const std::size_t n = f.v.size();
+    const double limit = opt_.split_factor * opt_.edge;
+    const std::size_t segments = f.closed ? n : n - 1;
+    std::vector<FrontVertex<N>> out;
+    out.reserve(n + n / 4 + 2);
+    for (std::size_t i = 0; i < n; ++i) {
+      out.push_back(f.v[i]);
+      if (i >= segments) break;
+      const std::size_t j = (i + 1) % n;
+      const double length = (f.v[j].x - f.v[i].x).norm();
+      if (!(length > limit)) continue;
+      const int pieces = static_cast<int>(std::ceil(length / opt_.edge));
+      double s_next = f.v[j].s;
+      if (f.closed && j == 0) s_next += 1.0;  // wrap the seed parameter on the closing segment
+      for (int k = 1; k < pieces; ++k) {
+        const double lambda = static_cast<double>(k) / pieces;
+        FrontVertex<N> nv;
+        nv.s = f.v[i].s + lambda * (s_next - f.v[i].s);
+        nv.t = f.v[i].t + lambda * (f.v[j].t - f.v[i].t);
+        nv.x = insertion_point(f, i, lambda, nv.s, nv.t);
+        nv.anchor = nv.x;
+        nv.origin = -1;
+        const double a = mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
+        nv.mesh = emit(nv, a, f.id, step);
+        out.push_back(nv);
+        ++report_.splits;
+      }
+    }
+    f.v = std::move(out);
+  }
+
+  double alpha_or_zero(const FrontVertex<N>& fv) const {
+    return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
+  }
+
+  Vec<N> insertion_point(const Front<N>& f, std::size_t i, double lambda, double s, double t) {
+    const std::size_t j = (i + 1) % f.v.size();
+    if (t == 0 || opt_.insertion == Insertion::streamline) {
+      const Vec<N> start = seed_.point(s - std::floor(s));
+      if (t == 0) return start;
+      const IntegrationResult<N> r = integrate_dopri5(field_, start, t, tol_, 0.0);
+      report_.field_evaluations += static_cast<std::size_t>(r.evaluations);
+      if (r.status == FieldStatus::inside) {
+        // Accept only a point that lands near the segment (the interpolated time can miss the
+        // front where α varies strongly); otherwise fall back to the cubic point.
+        const Vec<N> guess = cubic_point(f, i, lambda);
+        const double seg = (f.v[j].x - f.v[i].x).norm();
+        if ((r.x - guess).norm() < 0.5 * seg) {
+          ++report_.streamline_insertions;
+          return r.x;
+        }
+      }
+      ++report_.insertion_fallbacks;
+      return cubic_point(f, i, lambda);
+    }
+    if (opt_.insertion == Insertion::cubic) return cubic_point(f, i, lambda);
+    return f.v[i].x + lambda * (f.v[j].x - f.v[i].x);
+  }
+
+  /// Gives moved vertices new mesh vertices (all of them without row skipping).
+  void emit_moved(Front<N>& f, int step) {
+    const std::size_t n = f.v.size();
+    std::vector<char> fresh(n, 0);
+    const double min_move = opt_.skip_fraction * opt_.edge;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (f.v[i].origin < 0) continue;  // inserted: already a mesh vertex
+      const bool moved = (f.v[i].x - f.v[i].anchor).norm() >= min_move;
+      fresh[i] = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline || moved;
+    }
+    if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) {
+      // A short run (one or two vertices) that waits between moving neighbours would leave two
+      // triangles; let it move with its neighbours when it has gone at least half the way.
+      const double half = 0.5 * min_move;
+      for (std::size_t i = 0; i < n;) {
+        if (fresh[i] || f.v[i].origin < 0) {
+          ++i;
+          continue;
+        }
+        std::size_t j = i;
+        while (j < n && !fresh[j] && f.v[j].origin >= 0) ++j;
+        const bool bounded = i > 0 && j < n;
+        if (bounded && j - i <= 2) {
+          bool far = true;
+          for (std::size_t k = i; k < j; ++k)
+            far = far && (f.v[k].x - f.v[k].anchor).norm() >= half;
+          if (far)
+            for (std::size_t k = i; k < j; ++k) fresh[k] = 1;
+        }
+        i = j;
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (f.v[i].origin < 0) continue;
+      if (fresh[i]) {
+        f.v[i].mesh = emit(f.v[i], 0.0, f.id, step);
+        f.v[i].anchor = f.v[i].x;
+      } else {
+        ++report_.skipped_vertex_steps;
+      }
+    }
+  }
+
+  void add_face(std::array<std::int32_t, 4> ids, int count) {
+    // Drop repeated corners (a vertex that kept its mesh vertex collapses a quad to a triangle).
+    std::array<std::int32_t, 4> u{};
+    int m = 0;
+    for (int k = 0; k < count; ++k) {
+      bool seen = false;
+      for (int l = 0; l < m; ++l) seen = seen || u[static_cast<std::size_t>(l)] == ids[static_cast<std::size_t>(k)];
+      if (!seen) u[static_cast<std::size_t>(m++)] = ids[static_cast<std::size_t>(k)];
+    }
+    if (m == 4)
+      mesh_.add_quad(u[0], u[1], u[2], u[3]);
+    else if (m == 3)
+      mesh_.add_triangle(u[0], u[1], u[2]);
+  }
+
+  double distance(std::int32_t a, std::int32_t b) const {
+    return (mesh_.positions[static_cast<std::size_t>(a)] -
+            mesh_.positions[static_cast<std::size_t>(b)])
+        .norm();
+  }
+
+  /// Faces between an old chain A and a new chain B with common ends in correspondence:
+  /// quads while both advance together, triangles where one side has more segments, placed
+  /// where they create the shorter connecting edge.
+  void zipper(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
+    std::size_t i = 0, j = 0;
+    const std::size_t ma = a.size() - 1, mb = b.size() - 1;
+    while (i < ma || j < mb) {
+      const std::size_t ra = ma - i, rb = mb - j;
+      if (ra == rb) {
+        add_face({a[i], a[i + 1], b[j + 1], b[j]}, 4);
+        ++i, ++j;
+      } else if (ra > rb) {
+        if (rb == 0 || distance(a[i + 1], b[j]) <= distance(a[i + 1], b[j + 1])) {
+          add_face({a[i], a[i + 1], b[j], -1}, 3);
+          ++i;
+        } else {
+          add_face({a[i], a[i + 1], b[j + 1], b[j]}, 4);
+          ++i, ++j;
+        }
+      } else {
+        if (ra == 0 || distance(a[i], b[j + 1]) <= distance(a[i + 1], b[j + 1])) {
+          add_face({a[i], b[j + 1], b[j], -1}, 3);
+          ++j;
+        } else {
+          add_face({a[i], a[i + 1], b[j + 1], b[j]}, 4);
+          ++i, ++j;
+        }
+      }
+    }
+  }
+
+  void stitch(const Front<N>& old, const Front<N>& f) {
+    const std::size_t n = f.v.size();
+    const std::size_t n_old = old.v.size();
+    std::vector<std::size_t> anchors;
+    for (std::size_t i = 0; i < n; ++i)
+      if (f.v[i].origin >= 0) anchors.push_back(i);
+    if (anchors.size() < 2 && !(f.closed && anchors.size() == 1)) return;
+    std::vector<std::int32_t> chain_a, chain_b;
+    const std::size_t pairs = f.closed ? anchors.size() : anchors.size() - 1;
+    for (std::size_t k = 0; k < pairs; ++k) {
+      const std::size_t ja = anchors[k];
+      const std::size_t jb = anchors[(k + 1) % anchors.size()];
+      const auto oa = static_cast<std::size_t>(f.v[ja].origin);
+      const auto ob = static_cast<std::size_t>(f.v[jb].origin);
+      chain_a.clear();
+      chain_b.clear();
+      // Old chain: forward from oa to ob (wrapping on closed old fronts).
+      std::size_t steps_old = ob >= oa ? ob - oa : ob + n_old - oa;
+      if (ob < oa && !old.closed) continue;  // no old segment joins them
+      if (steps_old == 0) steps_old = n_old;  // a closed front with a single anchor
+      for (std::size_t s = 0; s <= steps_old; ++s) chain_a.push_back(old.v[(oa + s) % n_old].mesh);
+      std::size_t steps_new = jb >= ja ? jb - ja : jb + n - ja;
+      if (steps_new == 0) steps_new = n;
+      for (std::size_t s = 0; s <= steps_new; ++s) chain_b.push_back(f.v[(ja + s) % n].mesh);
+      zipper(chain_a, chain_b);
+    }
+  }
+
+  const Field<N>& field_;
+  const Seed<N>& seed_;
+  StreamSurfaceOptions opt_;
+  ProgressCallback progress_;
+  Tolerance tol_;
+  double h_star_ = 0;
+  Mesh mesh_;
+  SurfaceReport report_;
+  AlphaSolver solver_;
+  std::int32_t next_front_id_ = 0;
+  StepRecord step_record_;
+  double ortho_sum_ = 0;
+  std::size_t ortho_count_ = 0;
+  std::size_t exits_this_step_ = 0;
+  // Per-front scratch, reused between fronts and steps.
+  std::vector<Vec<N>> vel_;
+  std::vector<double> speed_, alpha_, p_, q_, r_, aln_, kernel_, seg_err_;
+  std::vector<char> seg_ok_;
+  std::vector<VertexState> state_;
+};
+
+}  // namespace
+
+template <int N>
+SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
+                                   const StreamSurfaceOptions& options,
+                                   const ProgressCallback& progress) {
+  Engine<N> engine(field, seed, options, progress);
+  return engine.run();
+}
+
+template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
+                                               const StreamSurfaceOptions&,
+                                               const ProgressCallback&);
+template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
+                                               const StreamSurfaceOptions&,
+                                               const ProgressCallback&);
+
+}  // namespace orthofront

@@ -1,0 +1,13 @@
+#pragma once
+/// The subcommands of the `orthofront` binary. Each registers itself on the app; its callback
+/// throws orthofront::Error on bad input (main turns that into a message and exit code 2).
+#include <CLI/CLI.hpp>
+
+namespace orthofront::cli {
+
+void add_stream_command(CLI::App& app);
+void add_fields_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
+
+}  // namespace orthofront::cli

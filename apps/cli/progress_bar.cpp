@@ -1,0 +1,48 @@
+#include "cli/progress_bar.h"
+
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+
+namespace orthofront::cli {
+
+namespace {
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_interrupt(int) { g_interrupted = 1; }
+}  // namespace
+
+bool interrupted() { return g_interrupted != 0; }
+
+void install_interrupt_handler() { std::signal(SIGINT, on_interrupt); }
+
+ProgressBar::ProgressBar(std::string label)
+    : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+
+ProgressBar::~ProgressBar() { finish(); }
+
+bool ProgressBar::update(const Progress& p) {
+  if (enabled_ && (p.elapsed_seconds - last_draw_ >= 0.1 || p.step == p.max_steps)) {
+    last_draw_ = p.elapsed_seconds;
+    const int width = 30;
+    const double share = p.max_steps > 0 ? static_cast<double>(p.step) / p.max_steps : 1.0;
+    const int filled = static_cast<int>(share * width);
+    std::string bar(static_cast<std::size_t>(filled), '#');
+    bar.resize(width, '.');
+    std::fprintf(stderr, "\r%s [%s] step %d/%d  %zu vertices  %zu fronts (%zu front vertices)  %.1fs ",
+                 label_.c_str(), bar.c_str(), p.step, p.max_steps, p.vertices, p.fronts,
+                 p.front_vertices, p.elapsed_seconds);
+    std::fflush(stderr);
+    drawn_ = true;
+  }
+  return !interrupted();
+}
+
+void ProgressBar::finish() {
+  if (drawn_) {
+    std::fprintf(stderr, "\n");
+    drawn_ = false;
+  }
+}
+
+}  // namespace orthofront::cli

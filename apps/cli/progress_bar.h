@@ -1,0 +1,30 @@
+#pragma once
+/// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+#include <string>
+
+#include "orthofront/engine/stream_surface.h"
+
+namespace orthofront::cli {
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+  /// Draws the bar (at most ~10 times a second); returns false once Ctrl-C was pressed.
+  bool update(const Progress& progress);
+  void finish();
+
+ private:
+  std::string label_;
+  bool enabled_ = false;
+  bool drawn_ = false;
+  double last_draw_ = -1;
+};
+
+/// True once SIGINT arrived (the handler is installed by install_interrupt_handler).
+bool interrupted();
+void install_interrupt_handler();
+
+}  // namespace orthofront::cli

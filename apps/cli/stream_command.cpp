@@ -1,0 +1,64 @@
+#include <filesystem>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "cli/engine_options.h"
+#include "cli/surface_job.h"
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/report_json.h"
+
+namespace orthofront::cli {
+
+namespace {
+struct StreamArgs {
+  SurfaceJob job;
+  std::string out;
+  std::string report;
+  bool quiet = false;
+};
+}  // namespace
+
+void add_stream_command(CLI::App& app) {
+  auto args = std::make_shared<StreamArgs>();
+  CLI::App* c = app.add_subcommand("stream", "Build a stream surface of a steady field");
+  c->add_option("--field", args->job.field, "Field: NAME[:key=value,...] (see `orthofront fields`)")
+      ->required();
+  c->add_option("--seed", args->job.seed,
+                "Seed: line:x0,y0,z0:x1,y1,z1 | circle:c:n:r[:open] | arc:c:n:r:a0,a1 | "
+                "file:PATH.csv[:closed]")
+      ->required();
+  c->add_option("--seed-count", args->job.seed_count, "Vertices on the seed curve")
+      ->capture_default_str();
+  add_engine_flags(*c, args->job.options);
+  c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
+  c->add_option("--report", args->report, "Write the JSON report here");
+  c->add_flag("--quiet", args->quiet, "No summary on stdout");
+  c->callback([args]() {
+    const std::filesystem::path out = args->out;
+    if (!io::is_mesh_extension(out))
+      throw InvalidArgument("output '" + args->out +
+                            "' has an unknown extension (expected .vtp, .ply or .obj)");
+    io::check_writable(out);
+    if (!args->report.empty()) io::check_writable(args->report);
+    const SurfaceResult result = run_surface(args->job, true);
+    io::write_mesh(result.mesh, out);
+    if (!args->report.empty()) {
+      nlohmann::json report = io::to_json(result.report);
+      report["field"] = args->job.field;
+      report["seed"] = args->job.seed;
+      report["seed_count"] = args->job.seed_count;
+      report["output"] = args->out;
+      io::write_json(report, args->report);
+    }
+    if (!args->quiet) {
+      std::cout << summarize(args->job, result.report) << "\nWrote " << args->out;
+      if (!args->report.empty()) std::cout << " and " << args->report;
+      std::cout << "\n";
+    }
+    if (!result.report.complete) throw Error("interrupted: the surface built so far was written");
+  });
+}
+
+}  // namespace orthofront::cli

@@ -1,0 +1,62 @@
+#include "cli/surface_job.h"
+
+#include <cstdio>
+
+#include "cli/field_source.h"
+#include "cli/progress_bar.h"
+#include "cli/seed_spec.h"
+#include "orthofront/error.h"
+
+namespace orthofront::cli {
+
+SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
+  const auto field = open_field(job.field);
+  const SeedCurve curve = parse_seed(job.seed);
+  if (job.seed_count < 2)
+    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
+  const Seed<3> seed = make_seed(curve, job.seed_count);
+  std::size_t inside = 0;
+  Vec3 first_outside = Vec3::Zero();
+  for (double s : seed.parameters) {
+    Vec3 v;
+    const Vec3 x = seed.point(s);
+    if (field->velocity(x, v) == FieldStatus::inside)
+      ++inside;
+    else if (inside == 0)
+      first_outside = x;
+  }
+  if (inside < 2) {
+    char where[128];
+    std::snprintf(where, sizeof where, "(%g, %g, %g)", first_outside.x(), first_outside.y(),
+                  first_outside.z());
+    throw InvalidArgument("seed '" + job.seed + "' lies outside the domain of field '" +
+                          job.field + "' (e.g. the point " + where + "; " + field->describe() +
+                          ")");
+  }
+  if (!show_progress) return build_stream_surface(*field, seed, job.options);
+  ProgressBar bar(job.field);
+  return build_stream_surface(*field, seed, job.options,
+                              [&](const Progress& p) { return bar.update(p); });
+}
+
+std::string summarize(const SurfaceJob& job, const SurfaceReport& r) {
+  const QualityReport& q = r.quality;
+  char text[1024];
+  std::snprintf(text, sizeof text,
+                "%s surface of %s from %s: %zu vertices, %zu faces (%.1f%% quads), %d steps, "
+                "stopped: %s%s. Quality: %.1f%% of quad angles within 90±10°, edge spread "
+                "(median |1-l/l_avg|) %.3f, %zu folds, %zu non-manifold edges, %zu T-junctions, "
+                "%zu degenerate faces; %zu rips. Time %.3f s (alpha %.3f, advance %.3f, adapt "
+                "%.3f, stitch %.3f).",
+                to_string(job.options.method), job.field.c_str(), job.seed.c_str(), r.vertices,
+                r.faces, 100.0 * q.quad_share, r.steps, to_string(r.stop_reason),
+                r.complete ? "" : " (incomplete)", 100.0 * q.quad_angles_within_10,
+                q.edge_spread_median, q.folds, q.non_manifold_edges, q.t_junctions,
+                q.degenerate_faces, r.rips, r.times.total, r.times.alpha, r.times.advance,
+                r.times.adapt, r.times.stitch);
+  std::string out = text;
+  if (!r.message.empty()) out += " Note: " + r.message + ".";
+  return out;
+}
+
+}  // namespace orthofront::cli

@@ -1,0 +1,23 @@
+#pragma once
+/// One stream-surface job as the command line describes it, and its summary text.
+#include <string>
+
+#include "orthofront/engine/stream_surface.h"
+
+namespace orthofront::cli {
+
+struct SurfaceJob {
+  std::string field;          ///< --field spec
+  std::string seed;           ///< --seed spec
+  int seed_count = 20;
+  StreamSurfaceOptions options;
+};
+
+/// Opens the field, builds the seed and runs the engine (with a progress bar when asked).
+/// Throws InvalidArgument for a bad field, seed, or a seed outside the domain.
+SurfaceResult run_surface(const SurfaceJob& job, bool show_progress);
+
+/// One paragraph: counts, quality, time, stop reason.
+std::string summarize(const SurfaceJob& job, const SurfaceReport& report);
+
+}  // namespace orthofront::cli

@@ -1,0 +1,73 @@
+#pragma once
+/// Options of the stream-surface engine; defaults are the project's recommended mode.
+#include <cstddef>
+#include <limits>
+
+namespace orthofront {
+
+enum class Method {
+  orthogonal,  ///< flow-orthogonal front lines (α-scaled advance)
+  timeline,    ///< baseline: timeline front advanced by a fixed time step in v
+};
+
+enum class MuMode {
+  damping,  ///< unit-invariant: fraction κ of the orthogonality error removed per step
+  paper,    ///< the paper's rule: unit kernel, α = α^L + μ k^+
+};
+
+enum class NegativeAlpha {
+  clamp,  ///< α_i < 0 becomes 0: the vertex waits (no folds)
+  keep,   ///< the paper: vertices may move backwards (may fold)
+};
+
+enum class Insertion {
+  linear,      ///< midpoint of the new segment (the paper)
+  cubic,       ///< Catmull-Rom point on the new front
+  streamline,  ///< on the true stream line: the seed point at the interpolated parameter,
+               ///< integrated over the interpolated time (falls back to cubic on failure)
+};
+
+enum class RowSkip {
+  off,     ///< every vertex gets a new mesh vertex every step
+  vertex,  ///< a vertex that moved less than skip_fraction·ℓ keeps its previous mesh vertex
+  run,     ///< as `vertex`, but short runs are merged with their neighbours (fewer triangles)
+};
+
+enum class IntegratorKind { dopri5, rk4 };
+
+struct StreamSurfaceOptions {
+  Method method = Method::orthogonal;
+  double edge = 0.1;       ///< target edge length ℓ, world units
+  int max_steps = 100;     ///< front steps
+  std::size_t max_vertices = 50'000'000;
+  double time_budget_seconds = std::numeric_limits<double>::infinity();
+
+  MuMode mu_mode = MuMode::damping;
+  double damping = 0.5;    ///< κ in (0, 1): share of the orthogonality error removed per step
+  double mu = 1.0;         ///< μ+ of paper mode (unit kernel)
+  double paper_max_step = 1.0;  ///< paper mode's upper bound on h
+  NegativeAlpha negative_alpha = NegativeAlpha::clamp;
+
+  Insertion insertion = Insertion::streamline;
+  double split_factor = 1.5;   ///< split a segment longer than split_factor·ℓ
+  double merge_factor = 1.25;  ///< merge two segments shorter than merge_factor·ℓ together
+  RowSkip row_skip = RowSkip::run;
+  double skip_fraction = 0.5;  ///< see RowSkip
+
+  bool rip = true;
+  double rip_sharpness = 0.5;        ///< 1 - (α_{i-1} + α_{i+1}) / (2 α_i) above this ...
+  double rip_speed_fraction = 0.05;  ///< ... and |v_i| below this share of the median speed
+  double zero_speed_fraction = 1e-9; ///< |v| below this share of the median speed: no flow
+
+  IntegratorKind integrator = IntegratorKind::dopri5;
+  double tolerance = 1e-9;   ///< relative tolerance; absolute tolerance is tolerance·ℓ
+  int rk4_substeps = 4;
+
+  double timeline_step = 0;  ///< time step of the timeline baseline; 0: ℓ / median seed speed
+  double closed_log_product_limit = 0.5;  ///< |ln ∏(-p_i/q_i)| above this: no closed front
+
+  std::size_t parallel_threshold = 512;  ///< fronts with fewer vertices run serially
+  bool measure_quality = true;
+};
+
+}  // namespace orthofront

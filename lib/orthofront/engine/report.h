@@ -1,0 +1,77 @@
+#pragma once
+/// What a stream-surface run did: counts, times per stage, why it stopped, per-step figures.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "orthofront/engine/options.h"
+#include "orthofront/quality/quality.h"
+
+namespace orthofront {
+
+enum class StopReason {
+  none,
+  steps,             ///< max_steps reached
+  vertex_budget,     ///< max_vertices reached
+  time_budget,       ///< time_budget_seconds exceeded
+  fronts_exhausted,  ///< every front became shorter than two vertices / ℓ, or stalled
+  left_domain,       ///< every remaining vertex left the domain (or reached no-data cells)
+  cancelled,         ///< the progress callback asked to stop
+};
+
+const char* to_string(StopReason reason);
+const char* to_string(Method method);
+const char* to_string(MuMode mode);
+const char* to_string(NegativeAlpha mode);
+const char* to_string(Insertion mode);
+const char* to_string(RowSkip mode);
+const char* to_string(IntegratorKind kind);
+
+/// Seconds spent per stage (wall clock, summed over steps).
+struct StageTimes {
+  double alpha = 0;    ///< field evaluation at vertices and midpoints, system set-up, solve, μ
+  double rip = 0;      ///< peak detection and front splitting
+  double advance = 0;  ///< stream-line integration of every vertex
+  double adapt = 0;    ///< split / merge
+  double stitch = 0;   ///< mesh vertices and faces
+  double quality = 0;  ///< final quality measurement
+  double total = 0;
+};
+
+struct StepRecord {
+  int step = 0;
+  std::size_t fronts = 0;
+  std::size_t front_vertices = 0;
+  double h_min = 0, h_max = 0;           ///< front step (α-time) over the fronts
+  double orthogonality_mean = 0;         ///< mean |cos(front tangent, v)| over segments
+  double orthogonality_max = 0;
+};
+
+struct SurfaceReport {
+  StreamSurfaceOptions options;
+  StopReason stop_reason = StopReason::none;
+  int steps = 0;
+  std::size_t vertices = 0, faces = 0, quads = 0, triangles = 0;
+  std::size_t vertex_steps = 0;        ///< vertex advances performed
+  std::size_t rips = 0;
+  std::size_t negative_alpha = 0;      ///< vertex-steps with α < 0 (before clamping)
+  std::size_t clamped_alpha = 0;       ///< vertex-steps whose α was clamped to 0
+  std::size_t splits = 0, merges = 0;
+  std::size_t streamline_insertions = 0, insertion_fallbacks = 0;
+  std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
+  std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
+  std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;
+  std::size_t infeasible_damping_steps = 0;  ///< steps where no μ reached h = h*
+  std::size_t field_evaluations = 0;
+  double timeline_step = 0;              ///< the time step used by the timeline baseline
+  bool closed_seed = false;
+  bool closed_front_opened = false;      ///< a closed front had no closed orthogonal solution
+  double closed_log_product = 0;         ///< ln|∏(-p_i/q_i)| at the worst check
+  std::vector<StepRecord> per_step;
+  StageTimes times;
+  QualityReport quality;
+  bool complete = true;                  ///< false when cancelled or interrupted
+  std::string message;                   ///< a human-readable note (e.g. why a front was opened)
+};
+
+}  // namespace orthofront

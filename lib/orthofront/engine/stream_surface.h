@@ -1,0 +1,43 @@
+#pragma once
+/// The advancing-front stream-surface engine: α solve → rip → advance → adapt → stitch.
+#include <functional>
+#include <vector>
+
+#include "orthofront/engine/options.h"
+#include "orthofront/engine/report.h"
+#include "orthofront/field/field.h"
+#include "orthofront/mesh/mesh.h"
+#include "orthofront/seed/seed.h"
+
+namespace orthofront {
+
+struct Progress {
+  int step = 0, max_steps = 0;
+  std::size_t vertices = 0, fronts = 0, front_vertices = 0;
+  double elapsed_seconds = 0;
+};
+/// Called once per front step; return false to stop (the mesh built so far is returned).
+using ProgressCallback = std::function<bool(const Progress&)>;
+
+struct SurfaceResult {
+  Mesh mesh;
+  SurfaceReport report;
+};
+
+/// Builds the stream surface of `field` from `seed`.
+/// The mesh holds 3D positions (the first three coordinates when N = 4).
+/// Throws InvalidArgument for unusable options or a seed with fewer than two vertices inside
+/// the domain.
+template <int N>
+SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
+                                   const StreamSurfaceOptions& options,
+                                   const ProgressCallback& progress = {});
+
+extern template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
+                                                      const StreamSurfaceOptions&,
+                                                      const ProgressCallback&);
+extern template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
+                                                      const StreamSurfaceOptions&,
+                                                      const ProgressCallback&);
+
+}  // namespace orthofront
