@@ -1,1 +1,100 @@
-// placeholder
+#include "orthofront/io/atomic_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <exception>
+#include <string>
+#include <system_error>
+
+#include "orthofront/io/error.h"
+
+namespace orthofront::io {
+namespace {
+
+std::string errno_text(int err) {
+  return err != 0 ? std::generic_category().message(err) : std::string("stream error");
+}
+
+[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
+  throw IoError("cannot write " + path.string() + ": " + what);
+}
+
+std::filesystem::path temporary_path(const std::filesystem::path& path) {
+  std::filesystem::path temp = path;
+  temp += ".tmp-" + std::to_string(::getpid());
+  return temp;
+}
+
+/// Forces the file's data to disk, so that after a power loss the renamed file is never empty.
+int sync_file(const std::filesystem::path& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return errno;
+  const int err = ::fsync(fd) == 0 ? 0 : errno;
+  ::close(fd);
+  return err;
+}
+
+void discard(std::ofstream& out, const std::filesystem::path& temp) {
+  out.exceptions(std::ios::goodbit);  // close() must not throw while cleaning up
+  if (out.is_open()) out.close();
+  std::error_code ignored;
+  std::filesystem::remove(temp, ignored);
+}
+
+}  // namespace
+
+void write_atomically(const std::filesystem::path& path,
+                      const std::function<void(std::ofstream&)>& write) {
+  const std::filesystem::path temp = temporary_path(path);
+  std::ofstream out;
+  try {
+    errno = 0;
+    out.open(temp, std::ios::binary | std::ios::trunc);
+    if (!out) fail(path, "cannot create " + temp.string() + ": " + errno_text(errno));
+    write(out);
+    out.exceptions(std::ios::goodbit);
+    errno = 0;
+    out.flush();
+    out.close();
+    if (out.fail()) fail(path, "writing " + temp.string() + " failed: " + errno_text(errno));
+    if (const int err = sync_file(temp, 0); err != 0) {
+      fail(path, "fsync of " + temp.string() + " failed: " + errno_text(err));
+    }
+    std::error_code ec;
+    std::filesystem::rename(temp, path, ec);
+    if (ec) fail(path, "cannot rename " + temp.string() + ": " + ec.message());
+  } catch (const IoError&) {
+    discard(out, temp);
+    throw;
+  } catch (const std::exception& e) {
+    discard(out, temp);
+    // Keeps the cause reachable through std::rethrow_if_nested.
+    std::throw_with_nested(IoError("cannot write " + path.string() + ": " + e.what()));
+  } catch (...) {
+    // Not an error of ours (e.g. thread cancellation): clean up and let it pass unchanged.
+    discard(out, temp);
+    throw;
+  }
+  // The rename is durable only once the directory entry is; failures here (file systems that
+  // cannot sync directories) leave a complete file behind, so they are not errors.
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  sync_file(dir, O_DIRECTORY);
+}
+
+void check_writable(const std::filesystem::path& path) {
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  const auto status = std::filesystem::status(dir, ec);
+  if (!std::filesystem::exists(status)) fail(path, "directory " + dir.string() + " does not exist");
+  if (!std::filesystem::is_directory(status)) fail(path, dir.string() + " is not a directory");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+    fail(path, "directory " + dir.string() + " is not writable: " + errno_text(errno));
+  }
+  if (std::filesystem::is_directory(path, ec)) fail(path, "it is a directory");
+}
+
+}  // namespace orthofront::io

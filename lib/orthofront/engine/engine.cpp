@@ -559,7 +559,8 @@ class Engine {
           choose_damping_mu(aln_, kernel_, std::span<const double>(speed_.data(), n),
                             opt_.edge / h_star_);
       if (!choice.feasible) ++report_.infeasible_damping_steps;
-      mu = choice.mu;
+      // An unbounded μ means the kernel vanishes on every moving vertex: advance along α^L.
+      mu = std::isfinite(choice.mu) ? choice.mu : 0.0;
     }
     for (std::size_t i = 0; i < n; ++i) alpha_[i] = aln_[i] + mu * kernel_[i];
     return AlphaOutcome::solved;
@@ -740,6 +741,37 @@ class Engine {
     return f.v[i].x + lambda * (f.v[j].x - f.v[i].x);
   }
 
+  /// Row skipping leaves one triangle wherever a waiting vertex neighbours a moving one. Grow
+  /// moving regions into neighbours that went at least half the way, and let short waiting
+  /// or moving runs join their surroundings, so rows start and end in few places.
+  void smooth_rows(const Front<N>& f, std::vector<char>& fresh) const {
+    const std::size_t n = f.v.size();
+    const double full = opt_.skip_fraction * opt_.edge;
+    const double low = 0.5 * full;
+    const double high = 0.9 * opt_.edge;
+    auto moved = [&](std::size_t i) { return (f.v[i].x - f.v[i].anchor).norm(); };
+    auto movable = [&](std::size_t i) { return f.v[i].origin >= 0 && moved(i) >= low; };
+    // Inserted vertices count as moving (they are new mesh vertices).
+    auto moving = [&](std::size_t i) { return f.v[i].origin < 0 || fresh[i]; };
+    for (std::size_t i = 1; i < n; ++i)
+      if (!fresh[i] && moving(i - 1) && movable(i)) fresh[i] = 1;
+    for (std::size_t i = n - 1; i-- > 0;)
+      if (!fresh[i] && moving(i + 1) && movable(i)) fresh[i] = 1;
+    // A short moving run inside waiting vertices waits too, unless it has gone nearly ℓ.
+    for (std::size_t i = 0; i < n;) {
+      if (!(f.v[i].origin >= 0 && fresh[i])) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      bool early = true;
+      for (; j < n && f.v[j].origin >= 0 && fresh[j]; ++j) early = early && moved(j) < high;
+      if (early && j - i <= 2 && i > 0 && j < n && !moving(i - 1) && !moving(j))
+        for (std::size_t k = i; k < j; ++k) fresh[k] = 0;
+      i = j;
+    }
+  }
+
   /// Gives moved vertices new mesh vertices (all of them without row skipping).
   void emit_moved(Front<N>& f, int step) {
     const std::size_t n = f.v.size();
@@ -750,28 +782,7 @@ class Engine {
       const bool moved = (f.v[i].x - f.v[i].anchor).norm() >= min_move;
       fresh[i] = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline || moved;
     }
-    if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) {
-      // A short run (one or two vertices) that waits between moving neighbours would leave two
-      // triangles; let it move with its neighbours when it has gone at least half the way.
-      const double half = 0.5 * min_move;
-      for (std::size_t i = 0; i < n;) {
-        if (fresh[i] || f.v[i].origin < 0) {
-          ++i;
-          continue;
-        }
-        std::size_t j = i;
-        while (j < n && !fresh[j] && f.v[j].origin >= 0) ++j;
-        const bool bounded = i > 0 && j < n;
-        if (bounded && j - i <= 2) {
-          bool far = true;
-          for (std::size_t k = i; k < j; ++k)
-            far = far && (f.v[k].x - f.v[k].anchor).norm() >= half;
-          if (far)
-            for (std::size_t k = i; k < j; ++k) fresh[k] = 1;
-        }
-        i = j;
-      }
-    }
+    if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) smooth_rows(f, fresh);
     for (std::size_t i = 0; i < n; ++i) {
       if (f.v[i].origin < 0) continue;
       if (fresh[i]) {

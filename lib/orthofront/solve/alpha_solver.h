@@ -14,17 +14,23 @@ namespace orthofront {
 class AlphaSolver {
  public:
   struct Result {
-    bool ok = false;        ///< false when n < 2 or R has a zero pivot (rank < n-1)
-    double min_pivot = 0;   ///< smallest |R_ii| relative to the largest (conditioning hint)
+    bool ok = false;       ///< false when n < 2 or R has a zero pivot (rank < n-1)
+    double min_pivot = 0;  ///< smallest |R_ii| relative to the largest (conditioning hint)
   };
 
-  /// p, q, r: n-1 entries each (n >= 2). alpha_ln, kernel: n entries each (outputs).
-  /// kernel has unit length and is oriented so that at least half its entries are positive (k^+).
+  /// p, q, r: n-1 entries each. alpha_ln, kernel: n entries each (outputs). Throws
+  /// std::invalid_argument when the sizes disagree.
+  /// kernel has unit length and is oriented towards more positive than negative entries (k^+;
+  /// without zero entries: at least half positive), a tie going to a positive sum.
+  /// Rank deficiency (a zero pivot, e.g. a row with p_i = q_i = 0) gives ok = false, yet the
+  /// outputs stay usable: kernel is still a unit vector with M k = 0 (one of several), and
+  /// alpha_ln satisfies every equation except those at zero pivots. n = 1 gives ok = false,
+  /// alpha_ln = {0}, kernel = {1}.
   Result solve(std::span<const double> p, std::span<const double> q, std::span<const double> r,
                std::span<double> alpha_ln, std::span<double> kernel);
 
  private:
-  std::vector<double> c_, s_, diag_, super_, y_;
+  std::vector<double> c_, s_;  // rotation j: cosine and sine; grown, never shrunk
 };
 
 /// μ for the unit-invariant damping mode.
@@ -38,7 +44,11 @@ struct DampingChoice {
 /// The admissible μ form an interval (intersection of one interval per vertex, found in O(n));
 /// the largest admissible μ is returned (most advance along k^+, so the fastest vertex moves by
 /// exactly speed_limit * h*). When the interval is empty, returns the μ minimising the maximum
-/// speed (convex, piecewise linear), with feasible = false.
+/// speed (convex, piecewise linear; the largest such μ if several), with feasible = false, after
+/// a few more O(n) passes (Newton steps on the minimax speed: at most 2n, about ten on random
+/// data). Vertices with speed 0 are ignored. mu is +infinity when nothing bounds it from above
+/// (k_i = 0 on every vertex with speed > 0). Allocates nothing; throws std::invalid_argument when
+/// the sizes disagree or speed_limit <= 0.
 DampingChoice choose_damping_mu(std::span<const double> alpha_ln, std::span<const double> kernel,
                                 std::span<const double> speed, double speed_limit);
 

@@ -1,0 +1,89 @@
+#include "orthofront/io/base64.h"
+
+#include <array>
+#include <cstdint>
+
+namespace orthofront::io::detail {
+namespace {
+
+constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+constexpr std::array<std::int8_t, 256> make_decode_table() {
+  std::array<std::int8_t, 256> table{};
+  table.fill(-1);
+  for (int i = 0; i < 64; ++i)
+    table[static_cast<unsigned char>(kAlphabet[i])] = static_cast<std::int8_t>(i);
+  return table;
+}
+constexpr std::array<std::int8_t, 256> kDecode = make_decode_table();
+
+std::uint32_t byte_at(std::string_view bytes, std::size_t i) {
+  return static_cast<unsigned char>(bytes[i]);
+}
+
+bool is_space(char c) {
+  return c == ' ' || c == '\n' || c == '\r' || c == '\t';
+}
+
+}  // namespace
+
+std::string base64_encode(std::string_view bytes) {
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 3 <= bytes.size(); i += 3) {
+    const std::uint32_t group =
+        byte_at(bytes, i) << 16 | byte_at(bytes, i + 1) << 8 | byte_at(bytes, i + 2);
+    out += kAlphabet[group >> 18 & 63];
+    out += kAlphabet[group >> 12 & 63];
+    out += kAlphabet[group >> 6 & 63];
+    out += kAlphabet[group & 63];
+  }
+  const std::size_t rest = bytes.size() - i;
+  if (rest > 0) {
+    std::uint32_t group = byte_at(bytes, i) << 16;
+    if (rest == 2) group |= byte_at(bytes, i + 1) << 8;
+    out += kAlphabet[group >> 18 & 63];
+    out += kAlphabet[group >> 12 & 63];
+    out += rest == 2 ? kAlphabet[group >> 6 & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+bool base64_decode(std::string_view text, std::string& bytes) {
+  bytes.clear();
+  bytes.reserve(text.size() / 4 * 3);
+  std::uint32_t group = 0;
+  int filled = 0;   // characters in the current group, padding included
+  int padding = 0;  // '=' in the current group
+  // Emits the bytes of a (possibly short) group: n significant characters carry n - 1 bytes.
+  const auto flush = [&]() {
+    const int significant = filled - padding;
+    if (significant < 2) return false;
+    group <<= 6 * (4 - filled);
+    bytes += static_cast<char>(group >> 16 & 255);
+    if (significant > 2) bytes += static_cast<char>(group >> 8 & 255);
+    if (significant > 3) bytes += static_cast<char>(group & 255);
+    group = 0;
+    filled = 0;
+    padding = 0;
+    return true;
+  };
+  for (const char c : text) {
+    if (is_space(c)) continue;
+    if (c == '=') {
+      if (filled - padding < 2) return false;
+      ++padding;
+      group <<= 6;
+    } else {
+      const int digit = kDecode[static_cast<unsigned char>(c)];
+      if (digit < 0 || padding > 0) return false;
+      group = group << 6 | static_cast<std::uint32_t>(digit);
+    }
+    if (++filled == 4 && !flush()) return false;
+  }
+  return filled == 0 || flush();
+}
+
+}  // namespace orthofront::io::detail

@@ -1,0 +1,39 @@
+#pragma once
+/// The per-vertex attributes of a Mesh by the names the mesh codecs store them under (internal).
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "orthofront/mesh/mesh.h"
+
+namespace orthofront::io::detail {
+
+struct RealAttribute {
+  const char* name;
+  std::vector<double> Mesh::*values;
+};
+
+struct IntAttribute {
+  const char* name;
+  std::vector<std::int32_t> Mesh::*values;
+};
+
+inline constexpr std::array<RealAttribute, 4> kRealAttributes{{
+    {"time", &Mesh::time},
+    {"alpha", &Mesh::alpha},
+    {"s", &Mesh::s},
+    {"error", &Mesh::error},
+}};
+
+inline constexpr std::array<IntAttribute, 2> kIntAttributes{{
+    {"front_id", &Mesh::front_id},
+    {"step", &Mesh::step},
+}};
+
+/// An attribute is stored when it has one value per vertex; an empty array means "not recorded".
+template <typename T>
+bool is_recorded(const Mesh& mesh, const std::vector<T>& values) {
+  return !values.empty() && values.size() == mesh.positions.size();
+}
+
+}  // namespace orthofront::io::detail

@@ -1,0 +1,652 @@
+#include "orthofront/io/vtp_codec.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "orthofront/io/base64.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/mesh_attributes.h"
+#include "orthofront/io/number_text.h"
+#include "orthofront/io/scalar_codec.h"
+
+namespace orthofront::io::detail {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+/// Base64-encodes little-endian values straight into the stream, in chunks, so that a large
+/// array is never held twice in memory.
+class Base64Stream {
+ public:
+  explicit Base64Stream(std::ostream& out) : out_(out) { pending_.reserve(kChunk + 16); }
+
+  template <typename T>
+  void put(T value) {
+    store_le<T>(pending_, value);
+    if (pending_.size() >= kChunk) drain(false);
+  }
+  void finish() { drain(true); }
+
+ private:
+  // A multiple of 3 bytes, so that chunks concatenate to one unbroken base64 text.
+  static constexpr std::size_t kChunk = 3 << 20;
+
+  void drain(bool all) {
+    const std::size_t n = all ? pending_.size() : pending_.size() / 3 * 3;
+    const std::string text = base64_encode(std::string_view(pending_).substr(0, n));
+    out_.write(text.data(), static_cast<std::streamsize>(text.size()));
+    pending_.erase(0, n);
+  }
+
+  std::ostream& out_;
+  std::string pending_;
+};
+
+void write_text(std::ostream& out, const std::string& text) {
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+}
+
+/// Writes one inline binary DataArray: a UInt64 byte count, then `count` values from `value(i)`.
+template <typename T, typename ValueAt>
+void write_array(std::ostream& out, const char* type, const std::string& name, int components,
+                 std::size_t count, ValueAt value) {
+  std::string open = std::string("        <DataArray type=\"") + type + "\" Name=\"" + name + "\"";
+  if (components != 1) open += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+  write_text(out, open + " format=\"binary\">\n          ");
+  Base64Stream stream(out);
+  stream.put<std::uint64_t>(count * sizeof(T));
+  for (std::size_t i = 0; i < count; ++i) stream.put<T>(value(i));
+  stream.finish();
+  write_text(out, "\n        </DataArray>\n");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading: a minimal XML scan, enough for VTK's own structure (no DTDs, no namespaces).
+
+struct XmlTag {
+  std::string name;
+  std::vector<std::pair<std::string, std::string>> attributes;
+  bool end = false;           // </name>
+  bool self_closing = false;  // <name ... />
+
+  const std::string* attribute(std::string_view key) const {
+    for (const auto& [k, v] : attributes) {
+      if (k == key) return &v;
+    }
+    return nullptr;
+  }
+};
+
+class XmlScanner {
+ public:
+  XmlScanner(std::string_view text, const std::string& file) : text_(text), file_(file) {}
+
+  /// Moves to the next start or end tag, skipping declarations, comments and text. False at the
+  /// end of the text.
+  bool next(XmlTag& tag) {
+    for (;;) {
+      pos_ = text_.find('<', pos_);
+      if (pos_ == std::string_view::npos) {
+        pos_ = text_.size();
+        return false;
+      }
+      const std::string_view rest = text_.substr(pos_);
+      if (rest.starts_with("<?")) {
+        skip_past("?>");
+      } else if (rest.starts_with("<!--")) {
+        skip_past("-->");
+      } else if (rest.starts_with("<![CDATA[")) {
+        skip_past("]]>");
+      } else if (rest.starts_with("<!")) {
+        skip_past(">");
+      } else {
+        break;
+      }
+    }
+    ++pos_;
+    tag = XmlTag{};
+    if (peek() == '/') {
+      tag.end = true;
+      ++pos_;
+    }
+    tag.name = read_name();
+    if (tag.name.empty()) throw error("tag without a name");
+    for (;;) {
+      skip_spaces();
+      if (peek() == '>') {
+        ++pos_;
+        return true;
+      }
+      if (text_.substr(pos_).starts_with("/>") && !tag.end) {
+        tag.self_closing = true;
+        pos_ += 2;
+        return true;
+      }
+      if (tag.end) throw error("unexpected content in </" + tag.name + ">");
+      std::string key = read_name();
+      if (key.empty()) throw error("bad attribute in <" + tag.name + ">");
+      skip_spaces();
+      if (peek() != '=') throw error("attribute " + key + " of <" + tag.name + "> has no value");
+      ++pos_;
+      skip_spaces();
+      const char quote = peek();
+      if (quote != '"' && quote != '\'') throw error("unquoted value of attribute " + key);
+      const std::size_t close = text_.find(quote, pos_ + 1);
+      if (close == std::string_view::npos) throw error("unterminated value of attribute " + key);
+      tag.attributes.emplace_back(std::move(key),
+                                  decode_entities(text_.substr(pos_ + 1, close - pos_ - 1)));
+      pos_ = close + 1;
+    }
+  }
+
+  /// Character data from the current position up to the next tag.
+  std::string_view text() {
+    const std::size_t start = pos_;
+    pos_ = std::min(text_.find('<', pos_), text_.size());
+    return text_.substr(start, pos_ - start);
+  }
+
+ private:
+  FormatError error(const std::string& what) const {
+    return FormatError(file_ + ": malformed XML at byte " + std::to_string(pos_) + ": " + what);
+  }
+  char peek() const { return pos_ < text_.size() ? text_[pos_] : '\0'; }
+  static bool is_space(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
+  void skip_spaces() {
+    while (pos_ < text_.size() && is_space(text_[pos_])) ++pos_;
+  }
+  void skip_past(std::string_view terminator) {
+    const std::size_t end = text_.find(terminator, pos_);
+    if (end == std::string_view::npos)
+      throw error("unterminated '" + std::string(terminator) + "'");
+    pos_ = end + terminator.size();
+  }
+  std::string read_name() {
+    const std::size_t start = pos_;
+    while (pos_ < text_.size() && !is_space(text_[pos_]) && text_[pos_] != '=' &&
+           text_[pos_] != '>' && text_[pos_] != '/' && text_[pos_] != '<') {
+      ++pos_;
+    }
+    return std::string(text_.substr(start, pos_ - start));
+  }
+  static std::string decode_entities(std::string_view value) {
+    std::string out;
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      if (value[i] != '&') {
+        out += value[i];
+        continue;
+      }
+      const std::size_t semicolon = value.find(';', i);
+      const std::string_view entity =
+          semicolon == std::string_view::npos ? "" : value.substr(i + 1, semicolon - i - 1);
+      char c = '\0';
+      if (entity == "lt") c = '<';
+      if (entity == "gt") c = '>';
+      if (entity == "amp") c = '&';
+      if (entity == "quot") c = '"';
+      if (entity == "apos") c = '\'';
+      if (c == '\0') {
+        out += '&';  // not one of the five predefined entities: kept as written
+      } else {
+        out += c;
+        i = semicolon;
+      }
+    }
+    return out;
+  }
+
+  std::string_view text_;
+  const std::string& file_;
+  std::size_t pos_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Reading: VTK structure
+
+struct VtkLayout {
+  bool little_endian = true;
+  std::size_t header_size = 4;  // UInt32 unless header_type says otherwise
+  std::string compressor;
+};
+
+/// A decoded DataArray: integer types in `integer`, floating-point types in `real`.
+struct ArrayData {
+  ScalarType type = ScalarType::kFloat64;
+  std::size_t components = 1;
+  std::vector<double> real;
+  std::vector<std::int64_t> integer;
+
+  std::size_t values() const { return is_integer(type) ? integer.size() : real.size(); }
+  std::size_t tuples() const { return values() / components; }
+  double real_at(std::size_t i) const {
+    return is_integer(type) ? static_cast<double>(integer[i]) : real[i];
+  }
+};
+
+std::optional<ScalarType> vtk_type(std::string_view name) {
+  if (name == "Int8") return ScalarType::kInt8;
+  if (name == "UInt8") return ScalarType::kUInt8;
+  if (name == "Int16") return ScalarType::kInt16;
+  if (name == "UInt16") return ScalarType::kUInt16;
+  if (name == "Int32") return ScalarType::kInt32;
+  if (name == "UInt32") return ScalarType::kUInt32;
+  if (name == "Int64") return ScalarType::kInt64;
+  if (name == "UInt64") return ScalarType::kUInt64;
+  if (name == "Float32") return ScalarType::kFloat32;
+  if (name == "Float64") return ScalarType::kFloat64;
+  return std::nullopt;
+}
+
+struct PieceData {
+  std::uint64_t points = 0;
+  std::uint64_t polys = 0;
+  std::uint64_t strips = 0;
+  std::optional<ArrayData> positions;
+  std::optional<ArrayData> poly_connectivity;
+  std::optional<ArrayData> poly_offsets;
+  std::optional<ArrayData> strip_connectivity;
+  std::optional<ArrayData> strip_offsets;
+  std::vector<std::pair<std::string, ArrayData>> point_data;
+};
+
+class VtpReader {
+ public:
+  VtpReader(std::string_view data, const std::string& file) : xml_(data, file), file_(file) {}
+
+  Mesh read() {
+    XmlTag tag;
+    std::vector<std::string> open;  // enclosing elements
+    bool have_root = false;
+    while (xml_.next(tag)) {
+      if (tag.end) {
+        if (open.empty() || open.back() != tag.name) {
+          throw error("unexpected </" + tag.name + ">" +
+                      (open.empty() ? std::string() : " inside <" + open.back() + ">"));
+        }
+        open.pop_back();
+        if (tag.name == "Piece" && piece_) finish_piece();
+        continue;
+      }
+      const std::string parent = open.empty() ? std::string() : open.back();
+      if (tag.name == "VTKFile" && open.empty()) {
+        read_root(tag);
+        have_root = true;
+      } else if (!have_root) {
+        throw error("not a VTK XML file (no <VTKFile> element)");
+      } else if (tag.name == "AppendedData") {
+        // Raw appended data is binary and not XML; every array that used it was rejected already.
+        open.clear();
+        break;
+      } else if (tag.name == "Piece" && parent == "PolyData") {
+        start_piece(tag);
+      } else if (tag.name == "DataArray") {
+        read_data_array(tag, parent);
+      }
+      if (!tag.self_closing) open.push_back(tag.name);
+    }
+    if (!have_root) throw error("not a VTK XML file (no <VTKFile> element)");
+    if (!open.empty()) throw error("file ends inside <" + open.back() + ">");
+    if (pieces_ == 0) throw error("no PolyData <Piece> element");
+    // An attribute is kept only when every piece carried it.
+    for (const RealAttribute& attribute : kRealAttributes) {
+      if ((mesh_.*attribute.values).size() != mesh_.positions.size()) {
+        (mesh_.*attribute.values).clear();
+      }
+    }
+    for (const IntAttribute& attribute : kIntAttributes) {
+      if ((mesh_.*attribute.values).size() != mesh_.positions.size()) {
+        (mesh_.*attribute.values).clear();
+      }
+    }
+    return std::move(mesh_);
+  }
+
+ private:
+  FormatError error(const std::string& what) const { return FormatError(file_ + ": " + what); }
+
+  std::uint64_t count_attribute(const XmlTag& tag, std::string_view key) const {
+    const std::string* text = tag.attribute(key);
+    std::uint64_t value = 0;
+    if (text != nullptr && !parse_number(*text, value)) {
+      throw error("bad " + std::string(key) + " '" + *text + "' in <" + tag.name + ">");
+    }
+    return value;
+  }
+
+  void read_root(const XmlTag& tag) {
+    const std::string* type = tag.attribute("type");
+    if (type == nullptr || *type != "PolyData") {
+      throw error("VTK file type is '" + (type ? *type : std::string()) + "', expected PolyData");
+    }
+    if (const std::string* order = tag.attribute("byte_order")) {
+      if (*order != "LittleEndian" && *order != "BigEndian")
+        throw error("bad byte_order " + *order);
+      layout_.little_endian = *order == "LittleEndian";
+    }
+    if (const std::string* header = tag.attribute("header_type")) {
+      if (*header != "UInt32" && *header != "UInt64") throw error("bad header_type " + *header);
+      layout_.header_size = *header == "UInt64" ? 8 : 4;
+    }
+    if (const std::string* compressor = tag.attribute("compressor"))
+      layout_.compressor = *compressor;
+  }
+
+  void start_piece(const XmlTag& tag) {
+    piece_.emplace();
+    piece_->points = count_attribute(tag, "NumberOfPoints");
+    piece_->polys = count_attribute(tag, "NumberOfPolys");
+    piece_->strips = count_attribute(tag, "NumberOfStrips");
+    if (tag.self_closing) finish_piece();
+  }
+
+  void read_data_array(const XmlTag& tag, const std::string& parent) {
+    const std::string* name_attribute = tag.attribute("Name");
+    const std::string name = name_attribute ? *name_attribute : std::string();
+    const std::string what = parent + " DataArray" + (name.empty() ? "" : " '" + name + "'");
+    const std::string* format = tag.attribute("format");
+    if (format != nullptr && *format == "appended") {
+      throw error(what +
+                  " uses appended data, which is not supported (save inline ascii or "
+                  "binary data, e.g. ParaView's 'Data Mode' ascii or binary)");
+    }
+    const std::string_view content = tag.self_closing ? std::string_view() : xml_.text();
+    if (!piece_) return;
+    const bool is_attribute = [&] {
+      for (const RealAttribute& a : kRealAttributes) {
+        if (name == a.name) return true;
+      }
+      for (const IntAttribute& a : kIntAttributes) {
+        if (name == a.name) return true;
+      }
+      return false;
+    }();
+    if (parent == "Points") {
+      piece_->positions = decode(tag, content, what);
+    } else if ((parent == "Polys" || parent == "Strips") &&
+               (name == "connectivity" || name == "offsets")) {
+      const bool polys = parent == "Polys";
+      auto& slot = name == "connectivity"
+                       ? (polys ? piece_->poly_connectivity : piece_->strip_connectivity)
+                       : (polys ? piece_->poly_offsets : piece_->strip_offsets);
+      slot = decode(tag, content, what);
+    } else if (parent == "PointData" && is_attribute) {
+      piece_->point_data.emplace_back(name, decode(tag, content, what));
+    }
+  }
+
+  ArrayData decode(const XmlTag& tag, std::string_view content, const std::string& what) const {
+    ArrayData array;
+    const std::string* type_name = tag.attribute("type");
+    const auto type = type_name ? vtk_type(*type_name) : std::nullopt;
+    if (!type) throw error(what + " has unsupported type '" + (type_name ? *type_name : "") + "'");
+    array.type = *type;
+    if (const std::string* components = tag.attribute("NumberOfComponents")) {
+      if (!parse_number(*components, array.components) || array.components == 0) {
+        throw error(what + " has bad NumberOfComponents '" + *components + "'");
+      }
+    }
+    const std::string* format = tag.attribute("format");
+    if (format != nullptr && *format == "ascii") {
+      decode_ascii(content, what, array);
+    } else if (format != nullptr && *format == "binary") {
+      decode_binary(content, what, array);
+    } else {
+      throw error(what + " has unsupported format '" + (format ? *format : "") + "'");
+    }
+    if (array.values() % array.components != 0) {
+      throw error(what + " has " + std::to_string(array.values()) + " values, not a multiple of " +
+                  std::to_string(array.components) + " components");
+    }
+    return array;
+  }
+
+  void decode_ascii(std::string_view content, const std::string& what, ArrayData& array) const {
+    std::size_t pos = 0;
+    const auto is_space = [](char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; };
+    for (;;) {
+      while (pos < content.size() && is_space(content[pos])) ++pos;
+      if (pos == content.size()) break;
+      const std::size_t start = pos;
+      while (pos < content.size() && !is_space(content[pos])) ++pos;
+      const std::string_view token = content.substr(start, pos - start);
+      bool ok = false;
+      if (is_integer(array.type)) {
+        ok = parse_number(token, array.integer.emplace_back());
+      } else {
+        ok = parse_number(token, array.real.emplace_back());
+      }
+      if (!ok) throw error(what + " has the bad value '" + std::string(token) + "'");
+    }
+  }
+
+  void decode_binary(std::string_view content, const std::string& what, ArrayData& array) const {
+    if (!layout_.compressor.empty()) {
+      throw error(what + " is compressed (" + layout_.compressor +
+                  "), which is not supported (save uncompressed)");
+    }
+    std::string bytes;
+    if (!base64_decode(content, bytes)) throw error(what + " is not valid base64");
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    if (bytes.size() < layout_.header_size) throw error(what + " ends inside its byte count");
+    const std::uint64_t size = layout_.header_size == 8
+                                   ? load<std::uint64_t>(data, layout_.little_endian)
+                                   : load<std::uint32_t>(data, layout_.little_endian);
+    const std::size_t available = bytes.size() - layout_.header_size;
+    const std::size_t scalar = scalar_size(array.type);
+    if (size > available) {
+      throw error(what + " declares " + std::to_string(size) + " bytes but holds " +
+                  std::to_string(available));
+    }
+    if (size % scalar != 0) {
+      throw error(what + " declares " + std::to_string(size) + " bytes, not a multiple of " +
+                  std::to_string(scalar));
+    }
+    const std::size_t count = static_cast<std::size_t>(size) / scalar;
+    data += layout_.header_size;
+    if (is_integer(array.type)) {
+      array.integer.resize(count);
+      for (std::size_t i = 0; i < count; ++i) {
+        array.integer[i] = load_integer(array.type, data + i * scalar, layout_.little_endian);
+      }
+    } else {
+      array.real.resize(count);
+      for (std::size_t i = 0; i < count; ++i) {
+        array.real[i] = load_real(array.type, data + i * scalar, layout_.little_endian);
+      }
+    }
+  }
+
+  /// Index-like values as integers; floating-point arrays must hold whole numbers.
+  std::vector<std::int64_t> integers(const ArrayData& array, const std::string& what) const {
+    if (is_integer(array.type)) return array.integer;
+    std::vector<std::int64_t> result(array.real.size());
+    for (std::size_t i = 0; i < array.real.size(); ++i) {
+      const double v = array.real[i];
+      if (!(std::abs(v) < 9.0e18) || v != std::floor(v)) {
+        throw error(what + " value " + std::to_string(v) + " is not an integer");
+      }
+      result[i] = static_cast<std::int64_t>(v);
+    }
+    return result;
+  }
+
+  /// Cells given as connectivity plus end offsets; calls add(first, size) per cell.
+  template <typename Add>
+  void for_each_cell(const std::optional<ArrayData>& connectivity,
+                     const std::optional<ArrayData>& offsets, std::uint64_t cells,
+                     const std::string& kind, std::vector<std::int64_t>& indices, Add add) const {
+    if (cells == 0) return;
+    if (!connectivity || !offsets) {
+      throw error(piece_name() + " has " + std::to_string(cells) + " " + kind +
+                  " but no connectivity/offsets arrays");
+    }
+    indices = integers(*connectivity, kind + " connectivity");
+    const std::vector<std::int64_t> ends = integers(*offsets, kind + " offsets");
+    if (ends.size() != cells) {
+      throw error(piece_name() + ": NumberOf" + kind + " is " + std::to_string(cells) +
+                  " but there are " + std::to_string(ends.size()) + " offsets");
+    }
+    std::int64_t begin = 0;
+    for (std::size_t c = 0; c < ends.size(); ++c) {
+      if (ends[c] < begin || ends[c] > static_cast<std::int64_t>(indices.size())) {
+        throw error(piece_name() + ": " + kind + " offset " + std::to_string(ends[c]) +
+                    " of cell " + std::to_string(c) +
+                    " is out of order or beyond the connectivity");
+      }
+      add(c, static_cast<std::size_t>(begin), static_cast<std::size_t>(ends[c] - begin));
+      begin = ends[c];
+    }
+  }
+
+  std::string piece_name() const { return "piece " + std::to_string(pieces_); }
+
+  void finish_piece() {
+    PieceData& piece = *piece_;
+    const std::size_t base = mesh_.positions.size();
+    const std::uint64_t n = piece.points;
+    if (base + n > static_cast<std::uint64_t>(std::numeric_limits<std::int32_t>::max())) {
+      throw error("point count " + std::to_string(base + n) + " exceeds the supported 2^31 - 1");
+    }
+    if (n > 0) {
+      if (!piece.positions) throw error(piece_name() + " has no Points array");
+      if (piece.positions->components != 3) {
+        throw error(piece_name() + ": Points have " + std::to_string(piece.positions->components) +
+                    " components, expected 3");
+      }
+      if (piece.positions->tuples() != n) {
+        throw error(piece_name() + ": NumberOfPoints is " + std::to_string(n) +
+                    " but Points holds " + std::to_string(piece.positions->tuples()));
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        mesh_.positions.emplace_back(piece.positions->real_at(3 * i),
+                                     piece.positions->real_at(3 * i + 1),
+                                     piece.positions->real_at(3 * i + 2));
+      }
+    }
+    const auto vertex = [&](std::int64_t index, const std::string& kind, std::size_t cell) {
+      if (index < 0 || static_cast<std::uint64_t>(index) >= n) {
+        throw error(piece_name() + ": " + kind + " cell " + std::to_string(cell) +
+                    " refers to point " + std::to_string(index) + " but there are " +
+                    std::to_string(n) + " points");
+      }
+      return static_cast<std::int32_t>(base + static_cast<std::size_t>(index));
+    };
+    std::vector<std::int64_t> indices;
+    for_each_cell(piece.poly_connectivity, piece.poly_offsets, piece.polys, "Polys", indices,
+                  [&](std::size_t cell, std::size_t first, std::size_t size) {
+                    if (size < 3 || size > 4) {
+                      throw error(piece_name() + ": polygon " + std::to_string(cell) + " has " +
+                                  std::to_string(size) +
+                                  " vertices; only triangles and quads are supported");
+                    }
+                    Face face;
+                    face.size = static_cast<std::uint8_t>(size);
+                    for (std::size_t k = 0; k < size; ++k) {
+                      face.v[k] = vertex(indices[first + k], "Polys", cell);
+                    }
+                    mesh_.faces.push_back(face);
+                  });
+    // Strips become triangles, every other one flipped to keep the orientation.
+    for_each_cell(piece.strip_connectivity, piece.strip_offsets, piece.strips, "Strips", indices,
+                  [&](std::size_t cell, std::size_t first, std::size_t size) {
+                    for (std::size_t k = 0; k + 2 < size; ++k) {
+                      const std::size_t a = first + k + (k % 2 == 0 ? 0 : 1);
+                      const std::size_t b = first + k + (k % 2 == 0 ? 1 : 0);
+                      mesh_.add_triangle(vertex(indices[a], "Strips", cell),
+                                         vertex(indices[b], "Strips", cell),
+                                         vertex(indices[first + k + 2], "Strips", cell));
+                    }
+                  });
+    for (const auto& [name, array] : piece.point_data) {
+      if (array.components != 1) continue;  // not one of ours, whatever its name
+      if (array.tuples() != n) {
+        throw error(piece_name() + ": point data '" + name + "' has " +
+                    std::to_string(array.tuples()) + " values for " + std::to_string(n) +
+                    " points");
+      }
+      for (const RealAttribute& attribute : kRealAttributes) {
+        if (name != attribute.name) continue;
+        std::vector<double>& values = mesh_.*attribute.values;
+        for (std::size_t i = 0; i < n; ++i) values.push_back(array.real_at(i));
+      }
+      for (const IntAttribute& attribute : kIntAttributes) {
+        if (name != attribute.name) continue;
+        std::vector<std::int32_t>& values = mesh_.*attribute.values;
+        for (const std::int64_t v : integers(array, "point data '" + name + "'")) {
+          if (v < std::numeric_limits<std::int32_t>::min() ||
+              v > std::numeric_limits<std::int32_t>::max()) {
+            throw error(piece_name() + ": point data '" + name + "' value " + std::to_string(v) +
+                        " does not fit a 32-bit integer");
+          }
+          values.push_back(static_cast<std::int32_t>(v));
+        }
+      }
+    }
+    piece_.reset();
+    ++pieces_;
+  }
+
+  XmlScanner xml_;
+  const std::string& file_;
+  VtkLayout layout_;
+  std::optional<PieceData> piece_;
+  std::size_t pieces_ = 0;
+  Mesh mesh_;
+};
+
+}  // namespace
+
+void write_vtp(const Mesh& mesh, std::ostream& out) {
+  const std::size_t n = mesh.positions.size();
+  write_text(out,
+             "<?xml version=\"1.0\"?>\n"
+             "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\" "
+             "header_type=\"UInt64\">\n"
+             "  <PolyData>\n"
+             "    <Piece NumberOfPoints=\"" +
+                 std::to_string(n) +
+                 "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" "
+                 "NumberOfPolys=\"" +
+                 std::to_string(mesh.faces.size()) + "\">\n      <PointData>\n");
+  for (const RealAttribute& attribute : kRealAttributes) {
+    const std::vector<double>& values = mesh.*attribute.values;
+    if (!is_recorded(mesh, values)) continue;
+    write_array<double>(out, "Float64", attribute.name, 1, n,
+                        [&](std::size_t i) { return values[i]; });
+  }
+  for (const IntAttribute& attribute : kIntAttributes) {
+    const std::vector<std::int32_t>& values = mesh.*attribute.values;
+    if (!is_recorded(mesh, values)) continue;
+    write_array<std::int32_t>(out, "Int32", attribute.name, 1, n,
+                              [&](std::size_t i) { return values[i]; });
+  }
+  write_text(out, "      </PointData>\n      <Points>\n");
+  write_array<double>(out, "Float64", "Points", 3, 3 * n, [&](std::size_t i) {
+    return mesh.positions[i / 3][static_cast<int>(i % 3)];
+  });
+  write_text(out, "      </Points>\n      <Polys>\n");
+  std::vector<std::int64_t> connectivity;
+  std::vector<std::int64_t> offsets;
+  offsets.reserve(mesh.faces.size());
+  for (const Face& face : mesh.faces) {
+    for (int k = 0; k < face.size; ++k) connectivity.push_back(face.v[k]);
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+  }
+  write_array<std::int64_t>(out, "Int64", "connectivity", 1, connectivity.size(),
+                            [&](std::size_t i) { return connectivity[i]; });
+  write_array<std::int64_t>(out, "Int64", "offsets", 1, offsets.size(),
+                            [&](std::size_t i) { return offsets[i]; });
+  write_text(out, "      </Polys>\n    </Piece>\n  </PolyData>\n</VTKFile>\n");
+}
+
+Mesh read_vtp(std::string_view data, const std::string& file) {
+  return VtpReader(data, file).read();
+}
+
+}  // namespace orthofront::io::detail
