@@ -717,27 +717,39 @@ class Engine {
     return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
   }
 
-  Vec<N> insertion_point(const Front<N>& f, std::size_t i, double lambda, double s, double t) {
+  /// Position of a vertex inserted at fraction λ of segment i; `t` (its time in v) is updated
+  /// when the point is put on its true stream line.
+  Vec<N> insertion_point(const Front<N>& f, std::size_t i, double lambda, double s, double& t) {
     const std::size_t j = (i + 1) % f.v.size();
-    if (t == 0 || opt_.insertion == Insertion::streamline) {
-      const Vec<N> start = seed_.point(s - std::floor(s));
-      if (t == 0) return start;
-      const IntegrationResult<N> r = integrate_dopri5(field_, start, t, tol_, 0.0);
+    if (t == 0) return seed_.point(s - std::floor(s));
+    const Vec<N> guess = cubic_point(f, i, lambda);
+    if (opt_.insertion == Insertion::streamline) {
+      // The stream line of parameter s, followed for the interpolated time, then moved along
+      // itself onto the front: the plane through the cubic guess normal to the flow.
+      const double seg = (f.v[j].x - f.v[i].x).norm();
+      IntegrationResult<N> r = integrate_dopri5(field_, seed_.point(s - std::floor(s)), t, tol_);
       report_.field_evaluations += static_cast<std::size_t>(r.evaluations);
-      if (r.status == FieldStatus::inside) {
-        // Accept only a point that lands near the segment (the interpolated time can miss the
-        // front where α varies strongly); otherwise fall back to the cubic point.
-        const Vec<N> guess = cubic_point(f, i, lambda);
-        const double seg = (f.v[j].x - f.v[i].x).norm();
-        if ((r.x - guess).norm() < 0.5 * seg) {
-          ++report_.streamline_insertions;
-          return r.x;
-        }
+      double time = t;
+      for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
+        Vec<N> w;
+        if (field_.velocity(r.x, w) != FieldStatus::inside) break;
+        const double ww = w.squaredNorm();
+        if (!(ww > 0)) break;
+        const double delta = (guess - r.x).dot(w) / ww;
+        if (std::abs(delta) * std::sqrt(ww) < 1e-6 * seg) break;
+        r = integrate_dopri5(field_, r.x, delta, tol_);
+        report_.field_evaluations += static_cast<std::size_t>(r.evaluations + 1);
+        time += delta;
+      }
+      if (r.status == FieldStatus::inside && (r.x - guess).norm() < 0.25 * seg) {
+        ++report_.streamline_insertions;
+        t = time;
+        return r.x;
       }
       ++report_.insertion_fallbacks;
-      return cubic_point(f, i, lambda);
+      return guess;
     }
-    if (opt_.insertion == Insertion::cubic) return cubic_point(f, i, lambda);
+    if (opt_.insertion == Insertion::cubic) return guess;
     return f.v[i].x + lambda * (f.v[j].x - f.v[i].x);
   }
 

@@ -1,1 +1,432 @@
-// placeholder
+#include "orthofront/quality/quality.h"
+
+#include <Eigen/Geometry>  // cross products
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "orthofront/error.h"
+
+namespace orthofront {
+namespace {
+
+constexpr double kDegrees = 180.0 / std::numbers::pi;
+
+/// Open-addressing hash map from 64-bit keys to 32-bit values (grid cells of the T-junction
+/// search). Sized once from an upper bound on the number of keys, so it never rehashes.
+class FlatMap {
+ public:
+  explicit FlatMap(std::size_t max_keys)
+      : keys_(std::bit_ceil(std::max<std::size_t>(16, max_keys + max_keys / 2 + 1)), kEmpty),
+        values_(keys_.size()),
+        mask_(keys_.size() - 1) {}
+
+  /// Value stored under key, after storing `value` there if the key was absent.
+  /// The flag says whether it was inserted.
+  std::pair<std::uint32_t, bool> emplace(std::uint64_t key, std::uint32_t value) {
+    for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
+      if (keys_[slot] == key) return {values_[slot], false};
+      if (keys_[slot] == kEmpty) {
+        keys_[slot] = key;
+        values_[slot] = value;
+        return {value, true};
+      }
+    }
+  }
+
+  const std::uint32_t* find(std::uint64_t key) const {
+    for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
+      if (keys_[slot] == key) return &values_[slot];
+      if (keys_[slot] == kEmpty) return nullptr;
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // cell keys use 63 bits
+
+  // splitmix64 finalizer: neighbouring cells must not cluster under linear probing.
+  static std::size_t hash(std::uint64_t x) {
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    x ^= x >> 31;
+    return static_cast<std::size_t>(x);
+  }
+
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> values_;
+  std::size_t mask_;
+};
+
+/// One undirected edge and the faces using it.
+struct Edge {
+  std::int32_t a = 0, b = 0;  ///< a < b
+  std::int32_t f0 = -1, f1 = -1;
+  std::uint32_t count = 0;
+  bool inconsistent = false;  ///< f1 traverses it in the same direction as f0
+};
+
+/// Undirected edges with the faces using them. Each face edge goes into the bucket of its smaller
+/// vertex index (a counting sort, O(V + F)); a bucket holds a handful of uses, which a small
+/// stable sort groups by the other index. Buckets keyed on the smaller index act as a perfect hash
+/// of the sorted pair and keep memory access local for meshes stored front by front.
+std::vector<Edge> build_edges(const Mesh& mesh) {
+  struct Use {
+    std::int32_t other, face;
+    bool forward;  ///< the face traverses smaller -> other
+  };
+  const std::size_t nv = mesh.positions.size();
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const Face& face : mesh.faces) {
+    for (int i = 0; i < face.size; ++i) {
+      const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
+      if (u != w) ++start[std::min(u, w) + 1];  // repeated index: no edge
+    }
+  }
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<Use> uses(start[nv]);
+  std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& face = mesh.faces[f];
+    for (int i = 0; i < face.size; ++i) {
+      const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
+      if (u == w) continue;
+      uses[next[std::min(u, w)]++] = Use{std::max(u, w), static_cast<std::int32_t>(f), u < w};
+    }
+  }
+
+  std::vector<Edge> edges;
+  edges.reserve(uses.size() / 2 + 16);
+  const auto by_other = [](const Use& x, const Use& y) { return x.other < y.other; };
+  for (std::size_t a = 0; a < nv; ++a) {
+    const auto first = uses.begin() + start[a], last = uses.begin() + start[a + 1];
+    if (last - first > 32) {
+      std::stable_sort(first, last, by_other);
+    } else {
+      for (auto it = first; it != last; ++it) {  // insertion sort: buckets are tiny
+        const Use use = *it;
+        auto hole = it;
+        for (; hole != first && by_other(use, *(hole - 1)); --hole) *hole = *(hole - 1);
+        *hole = use;
+      }
+    }
+    for (auto it = first; it != last;) {
+      Edge edge{static_cast<std::int32_t>(a), it->other, it->face, -1, 0, false};
+      const auto group_end =
+          std::find_if(it, last, [&](const Use& x) { return x.other != it->other; });
+      edge.count = static_cast<std::uint32_t>(group_end - it);
+      if (edge.count >= 2) {
+        edge.f1 = (it + 1)->face;
+        edge.inconsistent = (it + 1)->forward == it->forward;
+      }
+      edges.push_back(edge);
+      it = group_end;
+    }
+  }
+  return edges;
+}
+
+Histogram make_histogram(double lo, double hi, int bins) {
+  Histogram h;
+  h.lo = lo;
+  h.hi = hi;
+  h.counts.assign(static_cast<std::size_t>(std::max(1, bins)), 0);
+  return h;
+}
+
+void add(Histogram& h, double x) {
+  if (!std::isfinite(x)) return;
+  const auto n = h.counts.size();
+  const double u = (x - h.lo) / (h.hi - h.lo) * static_cast<double>(n);
+  std::size_t bin = 0;
+  if (u >= static_cast<double>(n)) {
+    bin = n - 1;
+  } else if (u > 0) {
+    bin = static_cast<std::size_t>(u);
+  }
+  ++h.counts[bin];
+}
+
+/// q-quantile with linear interpolation between order statistics; reorders `values`.
+double quantile(std::vector<double>& values, double q) {
+  if (values.empty()) return 0;
+  const double pos = q * static_cast<double>(values.size() - 1);
+  const auto k = static_cast<std::size_t>(pos);
+  const auto kth = values.begin() + static_cast<std::ptrdiff_t>(k);
+  std::nth_element(values.begin(), kth, values.end());
+  const double lo = *kth;
+  if (k + 1 >= values.size()) return lo;
+  const double hi = *std::min_element(kth + 1, values.end());
+  return lo + (pos - static_cast<double>(k)) * (hi - lo);
+}
+
+double mean(const std::vector<double>& values) {
+  if (values.empty()) return 0;
+  double sum = 0;
+  for (double x : values) sum += x;
+  return sum / static_cast<double>(values.size());
+}
+
+/// Angle between two vectors in degrees; atan2 stays accurate near 0° and 180°.
+double angle_deg(const Vec3& u, const Vec3& w) {
+  return std::atan2(u.cross(w).norm(), u.dot(w)) * kDegrees;
+}
+
+void validate(const Mesh& mesh) {
+  const auto n = static_cast<std::int64_t>(mesh.positions.size());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& face = mesh.faces[f];
+    if (face.size != 3 && face.size != 4) {
+      throw InvalidArgument("measure_quality: face " + std::to_string(f) + " has size " +
+                            std::to_string(face.size) + " (expected 3 or 4)");
+    }
+    for (int i = 0; i < face.size; ++i) {
+      if (face.v[i] < 0 || face.v[i] >= n) {
+        throw InvalidArgument("measure_quality: face " + std::to_string(f) + " has vertex index " +
+                              std::to_string(face.v[i]) + " outside [0, " + std::to_string(n) +
+                              ")");
+      }
+    }
+  }
+}
+
+bool has_repeated_index(const Face& face) {
+  for (int i = 0; i < face.size; ++i) {
+    for (int j = i + 1; j < face.size; ++j) {
+      if (face.v[i] == face.v[j]) return true;
+    }
+  }
+  return false;
+}
+
+/// Area vector (normal times area): half the cross product of the diagonals for a quad, of two
+/// edges for a triangle.
+Vec3 area_vector(const Mesh& mesh, const Face& face) {
+  const auto& p = mesh.positions;
+  if (face.is_quad()) {
+    return 0.5 * (p[face.v[2]] - p[face.v[0]]).cross(p[face.v[3]] - p[face.v[1]]);
+  }
+  return 0.5 * (p[face.v[1]] - p[face.v[0]]).cross(p[face.v[2]] - p[face.v[0]]);
+}
+
+/// Boundary vertices lying strictly inside a boundary edge they are not an endpoint of. Edges go
+/// into a uniform grid (cell ~ mean boundary edge length) and each vertex tests only its cell, so
+/// the cost grows with the boundary size, not its square.
+std::size_t count_t_junctions(const Mesh& mesh, const std::vector<Edge>& edges,
+                              const std::vector<std::uint32_t>& boundary) {
+  if (boundary.empty()) return 0;
+  const auto& p = mesh.positions;
+  constexpr double kRel = 1e-6;
+
+  Vec3 lo = p[edges[boundary[0]].a], hi = lo;
+  double total_length = 0;
+  for (std::uint32_t e : boundary) {
+    const Vec3& a = p[edges[e].a];
+    const Vec3& b = p[edges[e].b];
+    lo = lo.cwiseMin(a).cwiseMin(b);
+    hi = hi.cwiseMax(a).cwiseMax(b);
+    total_length += (b - a).norm();
+  }
+  double cell = total_length / static_cast<double>(boundary.size());
+  if (!(cell > 0) || !std::isfinite(cell)) return 0;
+  // 21 bits per axis in the cell key; a coarser cell only costs time.
+  constexpr double kMaxCells = double{1 << 20};
+  cell = std::max(cell, (hi - lo).maxCoeff() / kMaxCells);
+  const Vec3 origin = lo - Vec3::Constant(cell);  // margin for the tolerance around edges
+  const auto cell_of = [&](const Vec3& x) {
+    const Vec3 c = (x - origin) / cell;
+    std::array<std::uint64_t, 3> idx{};
+    for (int k = 0; k < 3; ++k) {
+      idx[k] = static_cast<std::uint64_t>(std::clamp(std::floor(c[k]), 0.0, 2.0 * kMaxCells - 1));
+    }
+    return idx;
+  };
+  const auto key_of = [](const std::array<std::uint64_t, 3>& idx) {
+    return (idx[0] << 42) | (idx[1] << 21) | idx[2];
+  };
+
+  // (cell, edge) pairs: each edge is cut into pieces no longer than a cell, and the box of each
+  // piece, grown by the tolerance, covers the cells it may touch. Pieces total at most
+  // 2 * boundary.size() since the cell is the mean length.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
+  pairs.reserve(boundary.size() * 8);
+  for (std::uint32_t e : boundary) {
+    const Vec3& a = p[edges[e].a];
+    const Vec3 d = p[edges[e].b] - a;
+    const double length = d.norm();
+    if (!(length > 0)) continue;
+    const double tol = kRel * length;
+    const auto pieces = static_cast<int>(std::ceil(length / cell));
+    for (int s = 0; s < pieces; ++s) {
+      const Vec3 x0 = a + d * (static_cast<double>(s) / pieces);
+      const Vec3 x1 = a + d * (static_cast<double>(s + 1) / pieces);
+      const auto c0 = cell_of(x0.cwiseMin(x1) - Vec3::Constant(tol));
+      const auto c1 = cell_of(x0.cwiseMax(x1) + Vec3::Constant(tol));
+      for (auto i = c0[0]; i <= c1[0]; ++i) {
+        for (auto j = c0[1]; j <= c1[1]; ++j) {
+          for (auto k = c0[2]; k <= c1[2]; ++k) pairs.emplace_back(key_of({i, j, k}), e);
+        }
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  FlatMap first(pairs.size());  // cell key -> index of its first pair
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    first.emplace(pairs[i].first, static_cast<std::uint32_t>(i));
+  }
+
+  std::vector<char> on_boundary(p.size(), 0);
+  std::vector<std::int32_t> candidates;
+  for (std::uint32_t e : boundary) {
+    for (std::int32_t v : {edges[e].a, edges[e].b}) {
+      if (!on_boundary[v]) {
+        on_boundary[v] = 1;
+        candidates.push_back(v);
+      }
+    }
+  }
+
+  std::size_t count = 0;
+  for (std::int32_t v : candidates) {
+    const std::uint64_t key = key_of(cell_of(p[v]));
+    const std::uint32_t* start = first.find(key);
+    if (start == nullptr) continue;
+    for (std::size_t i = *start; i < pairs.size() && pairs[i].first == key; ++i) {
+      const Edge& edge = edges[pairs[i].second];
+      if (edge.a == v || edge.b == v) continue;
+      const Vec3& a = p[edge.a];
+      const Vec3 d = p[edge.b] - a;
+      const double length_sq = d.squaredNorm();
+      const double t = (p[v] - a).dot(d) / length_sq;
+      if (!(t > kRel && t < 1 - kRel)) continue;
+      if ((p[v] - (a + t * d)).squaredNorm() < kRel * kRel * length_sq) {
+        ++count;
+        break;
+      }
+    }
+  }
+  return count;
+}
+
+}  // namespace
+
+QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
+  validate(mesh);
+  const auto& p = mesh.positions;
+  QualityReport r;
+  r.vertices = p.size();
+  r.faces = mesh.faces.size();
+  r.quad_angles = make_histogram(0, 180, options.angle_bins);
+  r.edge_ratio = make_histogram(-1, 1, options.edge_bins);
+  r.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
+
+  for (const Face& face : mesh.faces) (face.is_quad() ? r.quads : r.triangles) += 1;
+  r.quad_share = r.faces ? static_cast<double>(r.quads) / static_cast<double>(r.faces) : 0.0;
+
+  const std::vector<Edge> edges = build_edges(mesh);
+
+  // Degenerate faces and unit normals (zero where degenerate, which keeps them out of folds).
+  double mean_sq_edge = 0;
+  for (const Edge& edge : edges) mean_sq_edge += (p[edge.b] - p[edge.a]).squaredNorm();
+  if (!edges.empty()) mean_sq_edge /= static_cast<double>(edges.size());
+  const double min_area = options.degenerate_area * mean_sq_edge;
+  std::vector<Vec3> normals(mesh.faces.size(), Vec3::Zero());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& face = mesh.faces[f];
+    if (has_repeated_index(face)) {
+      ++r.degenerate_faces;
+      continue;
+    }
+    const Vec3 area = area_vector(mesh, face);
+    const double norm = area.norm();
+    if (!(norm >= min_area) || norm == 0) {
+      ++r.degenerate_faces;
+      continue;
+    }
+    normals[f] = area / norm;
+  }
+
+  std::vector<std::uint32_t> boundary;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const Edge& edge = edges[e];
+    if (edge.count == 1) {
+      boundary.push_back(static_cast<std::uint32_t>(e));
+    } else if (edge.count > 2) {
+      ++r.non_manifold_edges;
+    } else {
+      if (edge.inconsistent) ++r.inconsistent_edges;
+      const Vec3& n0 = normals[edge.f0];
+      const Vec3& n1 = normals[edge.f1];
+      if (n0.squaredNorm() == 0 || n1.squaredNorm() == 0) continue;
+      // Undo an orientation flip so that only geometry decides.
+      const double dot = edge.inconsistent ? -n0.dot(n1) : n0.dot(n1);
+      if (dot < options.fold_cos) ++r.folds;
+    }
+  }
+  r.boundary_edges = boundary.size();
+  r.t_junctions = count_t_junctions(mesh, edges, boundary);
+
+  // Shape statistics; faces with a zero-length edge have no defined angles and are skipped.
+  std::vector<double> angle_dev, spread, tri_min;
+  angle_dev.reserve(4 * r.quads);
+  spread.reserve(4 * r.quads);
+  tri_min.reserve(r.triangles);
+  std::size_t within_10 = 0, below_10 = 0;
+  for (const Face& face : mesh.faces) {
+    const int n = face.size;
+    std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
+    std::array<double, 4> length{};
+    bool measurable = true;
+    for (int i = 0; i < n; ++i) {
+      e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
+      length[i] = e[i].norm();
+      measurable = measurable && length[i] > 0;
+    }
+    if (!measurable) continue;
+    if (face.is_quad()) {
+      ++r.measured_quads;
+      const double avg = 0.25 * (length[0] + length[1] + length[2] + length[3]);
+      for (int i = 0; i < 4; ++i) {
+        const double angle = angle_deg(-e[(i + 3) % 4], e[i]);
+        add(r.quad_angles, angle);
+        angle_dev.push_back(std::abs(angle - 90));
+        if (angle >= 80 && angle <= 100) ++within_10;
+        const double ratio = 1 - length[i] / avg;
+        add(r.edge_ratio, ratio);
+        spread.push_back(std::abs(ratio));
+      }
+    } else {
+      ++r.measured_triangles;
+      double smallest = 180;
+      for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
+      add(r.triangle_min_angle, smallest);
+      tri_min.push_back(smallest);
+      if (smallest < 10) ++below_10;
+    }
+  }
+  if (!angle_dev.empty()) {
+    r.quad_angles_within_10 =
+        static_cast<double>(within_10) / static_cast<double>(angle_dev.size());
+  }
+  r.quad_angle_mean_abs_dev = mean(angle_dev);
+  r.quad_angle_abs_dev_p90 = quantile(angle_dev, 0.9);
+  r.edge_spread_mean = mean(spread);
+  r.edge_spread_median = quantile(spread, 0.5);
+  r.edge_spread_p90 = quantile(spread, 0.9);
+  r.triangle_min_angle_median = quantile(tri_min, 0.5);
+  if (!tri_min.empty()) {
+    r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(tri_min.size());
+  }
+  return r;
+}
+
+}  // namespace orthofront
