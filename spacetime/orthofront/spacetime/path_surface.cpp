@@ -1,0 +1,275 @@
+#include "orthofront/spacetime/path_surface.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "orthofront/error.h"
+#include "orthofront/seed/seed.h"
+#include "orthofront/spacetime/lifted_field.h"
+#include "orthofront/spacetime/streamed_field.h"
+
+namespace orthofront::spacetime {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Forwards to a flow and records the range of times it was evaluated at (lock-free: a relaxed
+/// load first, a compare-exchange only when the range grows).
+class TrackedFlow final : public UnsteadyField {
+ public:
+  explicit TrackedFlow(const UnsteadyField& flow) : flow_(flow) { reset(); }
+  int dimension() const override { return flow_.dimension(); }
+  FieldStatus velocity(const Vec3& x, double t, Vec3& v) const override {
+    note(t);
+    return flow_.velocity(x, t, v);
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J,
+                                Vec3& dvdt) const override {
+    note(t);
+    return flow_.velocity_jacobian(x, t, v, J, dvdt);
+  }
+  Box<3> domain() const override { return flow_.domain(); }
+  TimeRange time_range() const override { return flow_.time_range(); }
+  std::string describe() const override { return flow_.describe(); }
+
+  /// Range since the last reset (lo > hi when nothing was evaluated), then resets.
+  std::pair<double, double> take() {
+    const std::pair<double, double> r{lo_.load(), hi_.load()};
+    reset();
+    return r;
+  }
+
+ private:
+  void reset() {
+    lo_.store(kInf);
+    hi_.store(-kInf);
+  }
+  void note(double t) const {
+    double lo = lo_.load(std::memory_order_relaxed);
+    while (t < lo && !lo_.compare_exchange_weak(lo, t, std::memory_order_relaxed)) {
+    }
+    double hi = hi_.load(std::memory_order_relaxed);
+    while (t > hi && !hi_.compare_exchange_weak(hi, t, std::memory_order_relaxed)) {
+    }
+  }
+  const UnsteadyField& flow_;
+  mutable std::atomic<double> lo_, hi_;
+};
+
+void check_options(const PathSurfaceOptions& o, const UnsteadyField& flow) {
+  if (!(std::isfinite(o.t0) && std::isfinite(o.t1) && o.t1 > o.t0))
+    throw InvalidArgument("path surface: need finite t0 < t1, got t0 = " + std::to_string(o.t0) +
+                          ", t1 = " + std::to_string(o.t1));
+  const TimeRange r = flow.time_range();
+  if (!r.contains(o.t0))
+    throw InvalidArgument("path surface: t0 = " + std::to_string(o.t0) +
+                          " lies outside the time range [" + std::to_string(r.begin) + ", " +
+                          std::to_string(r.end) + "] of " + flow.describe());
+  if (!(std::isfinite(o.time_scale) && o.time_scale >= 0))
+    throw InvalidArgument("path surface: time scale must be > 0 (or 0: derived), got " +
+                          std::to_string(o.time_scale));
+}
+
+// c = median |v(x, t0)| over the seed vertices: one time unit then lifts a path line by the
+// distance a typical particle travels in it, so the lifted stream lines lean about 45° and the
+// front's orthogonality weighs time and space alike; one front step spans about ℓ/c in time,
+// the time a particle needs to cross one edge. Where the seed sits in still flow, fall back to
+// the domain's diagonal over the time range (the surface then crosses the domain once).
+std::pair<double, std::string> choose_time_scale(const UnsteadyField& flow, const Seed<3>& seed,
+                                                 const PathSurfaceOptions& o) {
+  if (o.time_scale > 0) return {o.time_scale, "given"};
+  std::vector<double> speeds;
+  const int d = flow.dimension();
+  for (double s : seed.parameters) {
+    Vec3 v;
+    if (flow.velocity(seed.point(s), o.t0, v) == FieldStatus::inside)
+      speeds.push_back(d == 2 ? v.head<2>().norm() : v.norm());
+  }
+  if (!speeds.empty()) {
+    std::nth_element(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2),
+                     speeds.end());
+    const double median = speeds[speeds.size() / 2];
+    if (median > 0 && std::isfinite(median)) return {median, "median seed speed"};
+  }
+  const Box<3> box = flow.domain();
+  const Vec3 extent = box.extent();
+  const double diagonal = d == 2 ? extent.head<2>().norm() : extent.norm();
+  return {diagonal / (o.t1 - o.t0), "domain / time range"};
+}
+
+struct Run {
+  const UnsteadyField& flow;
+  StreamedField* streamed = nullptr;
+  TimeStepCache* cache = nullptr;
+};
+
+template <int N>
+PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_count,
+                           const PathSurfaceOptions& o) {
+  const auto start = Clock::now();
+  if (seed_count < 2)
+    throw InvalidArgument("a path surface needs at least 2 seed vertices, got " +
+                          std::to_string(seed_count));
+  PathSurfaceResult result;
+  PathReport& pr = result.path;
+  pr.t0 = o.t0;
+  pr.t1 = o.t1;
+  pr.dimension = N - 1;
+  pr.streamed = run.streamed != nullptr;
+  TrackedFlow tracked(run.flow);
+  const Seed<3> seed3 = make_seed(curve, seed_count);
+  if (run.streamed) run.streamed->update_band(o.t0, o.t0);  // the steps around t0 (checks fit)
+  const auto [c, source] = choose_time_scale(run.flow, seed3, o);
+  pr.time_scale = c;
+  pr.time_scale_source = source;
+  const LiftedField<N> lifted(tracked, c, TimeRange{o.t0, o.t1});
+  Seed<N> seed;
+  seed.parameters = seed3.parameters;
+  seed.closed = seed3.closed;
+  seed.point = [curve, &lifted, t0 = o.t0](double s) { return lifted.lift(curve.point(s), t0); };
+
+  const double step_time = o.engine.edge / c;  // the most a vertex moves in time per step
+  const bool backwards = o.engine.negative_alpha == NegativeAlpha::keep;
+  std::pair<double, double> observed{o.t0, o.t0};
+  double wait_before = 0;
+  auto move_band = [&](double lo, double hi) {
+    if (!run.streamed) return;
+    const double below = (backwards ? 1.0 : 0.25) * step_time;
+    const double t_lo = std::max(o.t0, lo - below);
+    const double t_hi = std::min(o.t1, hi + 1.25 * step_time);
+    run.streamed->update_band(t_lo, t_hi);
+  };
+  if (run.streamed) {
+    move_band(o.t0, o.t0);
+    wait_before = run.cache->statistics().wait_seconds;
+  }
+  auto callback = [&](const Progress& p) -> bool {
+    const auto [lo, hi] = tracked.take();
+    if (lo <= hi) observed = {lo, hi};
+    if (p.step > 0) {
+      BandRecord b;
+      b.step = p.step;
+      b.t_min = observed.first;
+      b.t_max = observed.second;
+      if (run.streamed) b.first_step = run.streamed->band_first(), b.last_step = run.streamed->band_last();
+      pr.band.push_back(b);
+    }
+    pr.time_reached = std::max(pr.time_reached, observed.second);
+    if (run.streamed) {
+      if (const std::string e = run.streamed->error(); !e.empty()) {
+        pr.complete = false;
+        pr.message = e;
+        return false;
+      }
+      try {
+        move_band(observed.first, observed.second);
+      } catch (const std::exception& e) {
+        pr.complete = false;
+        pr.message = e.what();
+        return false;
+      }
+    }
+    if (o.progress) {
+      PathProgress pp;
+      pp.engine = p;
+      pp.t0 = o.t0;
+      pp.t1 = o.t1;
+      pp.time_reached = pr.time_reached;
+      pp.band_begin = observed.first;
+      pp.band_end = observed.second;
+      pp.streamed = pr.streamed;
+      if (run.streamed) {
+        pp.band_first = run.streamed->band_first();
+        pp.band_last = run.streamed->band_last();
+        pp.cache = run.cache->statistics();
+      }
+      if (!o.progress(pp)) {
+        pr.complete = false;
+        if (pr.message.empty()) pr.message = "cancelled";
+        return false;
+      }
+    }
+    return true;
+  };
+  SurfaceResult sr = build_stream_surface<N>(lifted, seed, o.engine, callback);
+  if (run.streamed && pr.complete) {
+    if (const std::string e = run.streamed->error(); !e.empty()) {
+      pr.complete = false;
+      pr.message = e;
+    }
+  }
+  // Spatial mesh with physical time; space-time positions for 2D flows.
+  result.mesh = std::move(sr.mesh);
+  Mesh& mesh = result.mesh;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    if constexpr (N == 3) {
+      const double t = mesh.positions[i][2] / c;
+      result.spacetime_positions.emplace_back(mesh.positions[i][0], mesh.positions[i][1], t);
+      mesh.positions[i][2] = 0;
+      mesh.time[i] = t;
+    } else {
+      mesh.time[i] += o.t0;
+    }
+    pr.time_reached = std::max(pr.time_reached, mesh.time[i]);
+  }
+  // Per step: the time range of the vertices it created.
+  for (BandRecord& b : pr.band) {
+    b.vertex_t_min = kInf;
+    b.vertex_t_max = -kInf;
+  }
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    const auto k = static_cast<std::size_t>(mesh.step[i]);
+    if (k >= 1 && k <= pr.band.size()) {
+      BandRecord& b = pr.band[k - 1];
+      b.vertex_t_min = std::min(b.vertex_t_min, mesh.time[i]);
+      b.vertex_t_max = std::max(b.vertex_t_max, mesh.time[i]);
+    }
+  }
+  for (BandRecord& b : pr.band)
+    if (b.vertex_t_min > b.vertex_t_max) b.vertex_t_min = b.vertex_t_max = b.t_max;
+  result.report = std::move(sr.report);
+  if (!pr.complete) {
+    result.report.complete = false;
+    if (!result.report.message.empty()) result.report.message += "; ";
+    result.report.message += pr.message;
+  }
+  pr.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (run.streamed) {
+    pr.cache = run.cache->statistics();
+    pr.slow_evaluations = run.streamed->slow_evaluations();
+    pr.wait_seconds = pr.cache.wait_seconds - wait_before;
+    pr.io_seconds = pr.cache.read_seconds;
+    pr.decode_seconds = pr.cache.decode_seconds;
+  }
+  pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
+  return result;
+}
+
+PathSurfaceResult dispatch(const Run& run, const SeedCurve& seed, int seed_count,
+                           const PathSurfaceOptions& options) {
+  check_options(options, run.flow);
+  if (run.flow.dimension() == 2) return run_path<3>(run, seed, seed_count, options);
+  return run_path<4>(run, seed, seed_count, options);
+}
+
+}  // namespace
+
+PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve& seed,
+                                     int seed_count, const PathSurfaceOptions& options) {
+  return dispatch(Run{flow}, seed, seed_count, options);
+}
+
+PathSurfaceResult build_path_surface(TimeStepCache& cache, const SeedCurve& seed, int seed_count,
+                                     const PathSurfaceOptions& options) {
+  StreamedField field(cache);
+  PathSurfaceOptions o = options;
+  // Inserting on the true path line would integrate from the seed time, outside the band.
+  if (o.engine.insertion == Insertion::streamline) o.engine.insertion = Insertion::cubic;
+  return dispatch(Run{field, &field, &cache}, seed, seed_count, o);
+}
+
+}  // namespace orthofront::spacetime

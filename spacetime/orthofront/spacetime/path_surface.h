@@ -1,0 +1,83 @@
+#pragma once
+/// Path surfaces of unsteady flows: the stream surface of the lifted field (v, c) in R^(d+1),
+/// built by the flow-orthogonal engine, from analytic fields or from time series streamed
+/// through a narrow-band TimeStepCache.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "orthofront/engine/stream_surface.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/seed/seed_curve.h"
+#include "orthofront/spacetime/time_step_cache.h"
+
+namespace orthofront::spacetime {
+
+/// What the progress callback sees after each front step.
+struct PathProgress {
+  Progress engine;
+  double t0 = 0, t1 = 0;
+  double time_reached = 0;         ///< latest time evaluated so far
+  double band_begin = 0, band_end = 0;  ///< time band the last step used
+  std::size_t band_first = 0, band_last = 0;  ///< resident steps of the band (streamed only)
+  bool streamed = false;
+  CacheStatistics cache;           ///< streamed only
+};
+
+struct PathSurfaceOptions {
+  StreamSurfaceOptions engine;     ///< engine options (edge ℓ, ...; max_steps bounds the steps)
+  double t0 = 0;                   ///< seed time
+  double t1 = 1;                   ///< the surface ends where its path lines reach t1
+  /// c (length per time unit) of the lifted coordinate τ = c t; 0 derives it: the median speed
+  /// |v(x, t0)| over the seed vertices (fallback: domain diagonal / (t1 - t0) where v = 0).
+  double time_scale = 0;
+  std::function<bool(const PathProgress&)> progress;  ///< false stops (the surface is kept)
+};
+
+/// The time band of one front step: the range of times evaluated during it.
+struct BandRecord {
+  int step = 0;
+  double t_min = 0, t_max = 0;     ///< over the front's evaluations (vertices and stages)
+  double vertex_t_min = 0, vertex_t_max = 0;  ///< over the mesh vertices created by the step
+  std::size_t first_step = 0, last_step = 0;  ///< resident time steps (streamed)
+};
+
+struct PathReport {
+  double time_scale = 0;
+  std::string time_scale_source;   ///< "given", "median seed speed" or "domain / time range"
+  double t0 = 0, t1 = 0;
+  double time_reached = 0;         ///< max vertex time
+  int dimension = 0;               ///< d of the flow
+  bool streamed = false;
+  bool complete = true;            ///< false: stopped by an error or a cancel
+  std::string message;             ///< why it stopped early (names step and file on errors)
+  std::vector<BandRecord> band;
+  CacheStatistics cache;
+  std::size_t slow_evaluations = 0;
+  double total_seconds = 0;
+  double wait_seconds = 0;         ///< engine thread blocked on data
+  double io_seconds = 0;           ///< read_raw seconds (pipeline thread, overlapped)
+  double decode_seconds = 0;       ///< decode seconds summed over threads
+  double compute_seconds = 0;      ///< total - wait
+};
+
+struct PathSurfaceResult {
+  Mesh mesh;                       ///< positions in R^d (z = 0 for 2D flows), time = physical t
+  std::vector<Vec3> spacetime_positions;  ///< 2D flows: (x, y, t) per vertex; empty for 3D
+  SurfaceReport report;
+  PathReport path;
+};
+
+/// Path surface of an analytic (or any in-memory) unsteady field from `seed` sampled with
+/// `seed_count` vertices at time t0. Seeds use the first d coordinates.
+/// Throws InvalidArgument for bad times, scale or a seed outside the domain.
+PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve& seed,
+                                     int seed_count, const PathSurfaceOptions& options);
+
+/// Path surface of a time series read through `cache`. Errors reading a step mid-run stop the
+/// surface (complete = false, message naming step and file); the mesh built so far is returned.
+/// A band that cannot fit the budget at the start throws InvalidArgument naming the budget.
+PathSurfaceResult build_path_surface(TimeStepCache& cache, const SeedCurve& seed, int seed_count,
+                                     const PathSurfaceOptions& options);
+
+}  // namespace orthofront::spacetime
