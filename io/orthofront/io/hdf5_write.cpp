@@ -1,0 +1,397 @@
+// Writing the HDF5 layout: one field group per file, written under a temporary name.
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/hdf5_detail.h"
+
+namespace orthofront::io {
+
+using detail::H5Id;
+
+const char* to_string(Hdf5Storage storage) {
+  switch (storage) {
+    case Hdf5Storage::steady:
+      return "steady";
+    case Hdf5Storage::chunked:
+      return "chunked";
+    case Hdf5Storage::per_step:
+      return "per-step";
+  }
+  return "?";
+}
+
+std::filesystem::path xdmf_path(const std::filesystem::path& file) {
+  std::filesystem::path sidecar = file;
+  return sidecar.replace_extension(".xmf");
+}
+
+namespace {
+
+void check_grid(const GridGeometry& g, int components) {
+  if (g.dimension != 2 && g.dimension != 3)
+    throw InvalidArgument("HDF5 layout: dimension must be 2 or 3, got " +
+                          std::to_string(g.dimension));
+  if (components != 2 && components != 3)
+    throw InvalidArgument("HDF5 layout: components must be 2 or 3, got " +
+                          std::to_string(components));
+  for (int a = 0; a < 3; ++a) {
+    const auto n = g.size[static_cast<std::size_t>(a)];
+    if (n < 1 || (a == 2 && g.dimension == 2 && n != 1))
+      throw InvalidArgument("HDF5 layout: " + std::to_string(n) + " samples along axis " +
+                            std::to_string(a) + " of a " + std::to_string(g.dimension) + "D grid");
+    if (g.rectilinear() &&
+        g.axes[static_cast<std::size_t>(a)].size() != static_cast<std::size_t>(n))
+      throw InvalidArgument("HDF5 layout: rectilinear axis " + std::to_string(a) + " has " +
+                            std::to_string(g.axes[static_cast<std::size_t>(a)].size()) +
+                            " coordinates for " + std::to_string(n) + " samples");
+  }
+  if (!(g.rectilinear())) {
+    for (int a = 0; a < g.dimension; ++a)
+      if (!std::isfinite(g.spacing[a]) || !(g.spacing[a] > 0) || !std::isfinite(g.origin[a]))
+        throw InvalidArgument("HDF5 layout: origin and spacing must be finite, spacing positive");
+  }
+}
+
+void check_times(const std::vector<double>& times) {
+  if (times.empty()) throw InvalidArgument("HDF5 layout: a time series needs at least one step");
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    if (!std::isfinite(times[i]) || (i > 0 && !(times[i] > times[i - 1])))
+      throw InvalidArgument("HDF5 layout: times must be finite and strictly increasing; time " +
+                            std::to_string(i) + " is " + std::to_string(times[i]));
+  }
+}
+
+std::filesystem::path temporary_path(const std::filesystem::path& file) {
+  std::filesystem::path temp = file;
+  temp += ".tmp-" + std::to_string(::getpid());
+  return temp;
+}
+
+void write_doubles_dataset(hid_t group, const char* name, std::span<const double> values,
+                           const std::string& where) {
+  const hsize_t n = values.size();
+  H5Id space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  H5Id set(
+      H5Dcreate2(group, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+      H5Dclose);
+  if (!set.valid() ||
+      H5Dwrite(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
+    throw IoError("cannot write " + where + ": dataset '" + name + "'");
+}
+
+/// The shared writer: steady files are a "series" of one step with storage `steady`.
+struct FieldWriter {
+  std::filesystem::path file, temp;
+  Hdf5Description description;
+  Hdf5WriteOptions options;
+  detail::SliceLayout layout;
+  std::vector<hsize_t> shape;  // one step
+  H5Id h5file, group, dataset, steps_group;
+  std::size_t written = 0;
+  bool committed = false;
+
+  FieldWriter(const std::filesystem::path& path, const GridGeometry& geometry, int components,
+              std::vector<double> times, const Hdf5WriteOptions& opts, Hdf5Storage storage)
+      : file(path), temp(temporary_path(path)), options(opts) {
+    detail::silence_hdf5();
+    check_grid(geometry, components);
+    if (storage != Hdf5Storage::steady) check_times(times);
+    if (options.gzip_level < 0 || options.gzip_level > 9)
+      throw InvalidArgument("HDF5 layout: gzip level must be 0 (none) to 9, got " +
+                            std::to_string(options.gzip_level));
+    check_writable(file);
+    description.file = file;
+    description.group = detail::normalize_group(options.group);
+    description.storage = storage;
+    description.geometry = geometry;
+    description.components = components;
+    description.times = std::move(times);
+    description.units = options.units;
+    description.fill_value = options.fill_value;
+    description.zero_is_no_data = options.zero_is_no_data;
+    description.gzip_level = options.gzip_level;
+    description.dataset = detail::child_path(
+        description.group, storage == Hdf5Storage::per_step ? "steps" : "velocity");
+    layout = detail::slice_layout(geometry, components, options.max_chunk_bytes);
+    shape = detail::step_shape(geometry, components);
+
+    h5file = H5Id(H5Fcreate(temp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    if (!h5file.valid()) throw IoError("cannot create HDF5 file " + temp.string());
+    try {
+      create_structure();
+    } catch (...) {
+      discard();
+      throw;
+    }
+  }
+
+  ~FieldWriter() {
+    if (!committed) discard();
+  }
+  FieldWriter(const FieldWriter&) = delete;
+  FieldWriter& operator=(const FieldWriter&) = delete;
+
+  void discard() {
+    dataset.reset();
+    steps_group.reset();
+    group.reset();
+    h5file.reset();
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+  }
+
+  std::string where() const { return file.string() + " (group '" + description.group + "')"; }
+
+  void create_structure() {
+    if (description.group == "/") {
+      group = H5Id(H5Gopen2(h5file.get(), "/", H5P_DEFAULT), H5Gclose);
+    } else {
+      H5Id links(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+      H5Pset_create_intermediate_group(links.get(), 1);
+      group = H5Id(H5Gcreate2(h5file.get(), description.group.c_str(), links.get(), H5P_DEFAULT,
+                              H5P_DEFAULT),
+                   H5Gclose);
+    }
+    if (!group.valid()) throw IoError("cannot create " + where());
+    const hid_t g = group.get();
+    const GridGeometry& geometry = description.geometry;
+    detail::write_string_attribute(g, "orthofront_layout", "vector-grid");
+    detail::write_int_attribute(g, "layout_version", 1);
+    detail::write_int_attribute(g, "dimension", geometry.dimension);
+    detail::write_int_attribute(g, "components", description.components);
+    detail::write_string_attribute(g, "storage", to_string(description.storage));
+    detail::write_string_attribute(g, "grid", geometry.rectilinear() ? "rectilinear" : "uniform");
+    if (geometry.rectilinear()) {
+      for (int a = 0; a < 3; ++a) {
+        const std::string name(1, static_cast<char>('x' + a));
+        write_doubles_dataset(g, name.c_str(), geometry.axes[static_cast<std::size_t>(a)], where());
+      }
+    } else {
+      const double origin[3] = {geometry.origin.x(), geometry.origin.y(), geometry.origin.z()};
+      const double spacing[3] = {geometry.spacing.x(), geometry.spacing.y(), geometry.spacing.z()};
+      detail::write_doubles_attribute(g, "origin", origin);
+      detail::write_doubles_attribute(g, "spacing", spacing);
+    }
+    if (!options.units.length.empty())
+      detail::write_string_attribute(g, "units_length", options.units.length);
+    if (!options.units.time.empty())
+      detail::write_string_attribute(g, "units_time", options.units.time);
+    if (!options.units.velocity.empty())
+      detail::write_string_attribute(g, "units_velocity", options.units.velocity);
+    if (options.fill_value) detail::write_float_attribute(g, "fill_value", *options.fill_value);
+    detail::write_int_attribute(g, "zero_is_no_data", options.zero_is_no_data ? 1 : 0);
+
+    if (description.storage != Hdf5Storage::steady)
+      write_doubles_dataset(g, "times", description.times, where());
+    if (description.storage == Hdf5Storage::chunked) {
+      std::vector<hsize_t> dims{description.times.size()};
+      dims.insert(dims.end(), shape.begin(), shape.end());
+      dataset = create_samples(g, "velocity", dims, true);
+    } else if (description.storage == Hdf5Storage::per_step) {
+      steps_group = H5Id(H5Gcreate2(g, "steps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+      if (!steps_group.valid()) throw IoError("cannot create " + where() + ": group 'steps'");
+    } else {
+      dataset = create_samples(g, "velocity", shape, false);
+    }
+  }
+
+  bool compressed() const { return options.gzip_level > 0; }
+
+  /// A float32 dataset of `dims`; chunked by slices (with a leading 1 for the step axis of a
+  /// chunked series) when compressed or when `series` is set, contiguous otherwise.
+  H5Id create_samples(hid_t location, const char* name, const std::vector<hsize_t>& dims,
+                      bool series) {
+    H5Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+    H5Id create(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    H5Pset_fill_time(create.get(), H5D_FILL_TIME_NEVER);
+    if (series || compressed()) {
+      std::vector<hsize_t> chunk = dims;
+      if (series) chunk[0] = 1;
+      chunk[series ? 1 : 0] = static_cast<hsize_t>(layout.chunk_slices);
+      H5Pset_chunk(create.get(), static_cast<int>(chunk.size()), chunk.data());
+      if (compressed()) {
+        if (options.shuffle) H5Pset_shuffle(create.get());
+        H5Pset_deflate(create.get(), static_cast<unsigned>(options.gzip_level));
+      }
+    }
+    H5Id set(H5Dcreate2(location, name, H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, create.get(),
+                        H5P_DEFAULT),
+             H5Dclose);
+    if (!set.valid()) throw IoError("cannot create " + where() + ": dataset '" + name + "'");
+    return set;
+  }
+
+  void write_step(std::span<const float> values) {
+    const std::size_t step_floats =
+        description.geometry.point_count() * static_cast<std::size_t>(description.components);
+    if (values.size() != step_floats)
+      throw InvalidArgument("HDF5 layout: a step of " + where() + " needs " +
+                            std::to_string(step_floats) + " floats, got " +
+                            std::to_string(values.size()));
+    const std::size_t total =
+        description.storage == Hdf5Storage::steady ? 1 : description.times.size();
+    if (written >= total)
+      throw InvalidArgument("HDF5 layout: all " + std::to_string(total) + " steps of " + where() +
+                            " are written already");
+    std::vector<float> converted;
+    if (options.fill_value) {
+      converted.assign(values.begin(), values.end());
+      for (float& v : converted)
+        if (std::isnan(v)) v = *options.fill_value;
+      values = converted;
+    }
+    hid_t target = dataset.get();
+    H5Id step_set;
+    if (description.storage == Hdf5Storage::per_step) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%06zu", written);
+      step_set = create_samples(steps_group.get(), name, shape, false);
+      target = step_set.get();
+    }
+    const bool series_axis = description.storage == Hdf5Storage::chunked;
+    if (compressed() && options.parallel_compression)
+      write_compressed_chunks(target, values, series_axis);
+    else
+      write_plain(target, values, series_axis);
+    ++written;
+  }
+
+  void write_plain(hid_t target, std::span<const float> values, bool series_axis) {
+    H5Id memory(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), H5Sclose);
+    H5Id file_space(H5Dget_space(target), H5Sclose);
+    if (series_axis) {
+      std::vector<hsize_t> start(shape.size() + 1, 0), count{1};
+      start[0] = written;
+      count.insert(count.end(), shape.begin(), shape.end());
+      H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                          nullptr);
+    }
+    if (H5Dwrite(target, H5T_NATIVE_FLOAT, memory.get(), file_space.get(), H5P_DEFAULT,
+                 values.data()) < 0)
+      throw IoError("cannot write step " + std::to_string(written) + " of " + where());
+  }
+
+  /// Shuffle + deflate every chunk of the step in parallel, then store them in order with
+  /// H5Dwrite_chunk. A chunk that deflate cannot shrink is stored as is, its filters marked as
+  /// skipped in the filter mask (as HDF5's optional filters do).
+  void write_compressed_chunks(hid_t target, std::span<const float> values, bool series_axis) {
+    const std::int64_t chunks = layout.chunk_count();
+    std::vector<std::vector<Bytef>> encoded(static_cast<std::size_t>(chunks));
+    std::vector<std::uint32_t> masks(static_cast<std::size_t>(chunks), 0);
+    const std::size_t slice_bytes = layout.slice_floats * sizeof(float);
+    tbb::parallel_for(std::int64_t{0}, chunks, [&](std::int64_t c) {
+      const std::int64_t first = c * layout.chunk_slices;
+      const std::int64_t count = std::min(layout.chunk_slices, layout.slices - first);
+      // HDF5 chunks are always whole: an edge chunk is padded (with zeros) past the last slice.
+      const std::size_t bytes = static_cast<std::size_t>(layout.chunk_slices) * slice_bytes;
+      const auto* source = reinterpret_cast<const std::byte*>(values.data()) +
+                           static_cast<std::size_t>(first) * slice_bytes;
+      std::vector<std::byte> padded;
+      if (count < layout.chunk_slices) {
+        padded.assign(bytes, std::byte{0});
+        std::memcpy(padded.data(), source, static_cast<std::size_t>(count) * slice_bytes);
+        source = padded.data();
+      }
+      const std::byte* unfiltered = source;
+      std::vector<std::byte> shuffled;
+      if (options.shuffle) {
+        shuffled.resize(bytes);
+        detail::shuffle4(source, bytes, shuffled.data());
+        source = shuffled.data();
+      }
+      std::vector<Bytef>& out = encoded[static_cast<std::size_t>(c)];
+      uLongf size = compressBound(static_cast<uLong>(bytes));
+      out.resize(size);
+      const int rc = compress2(out.data(), &size, reinterpret_cast<const Bytef*>(source),
+                               static_cast<uLong>(bytes), options.gzip_level);
+      if (rc == Z_OK && size < bytes) {
+        out.resize(size);
+      } else {  // store the raw floats, every filter skipped
+        const auto* raw = reinterpret_cast<const Bytef*>(unfiltered);
+        out.assign(raw, raw + bytes);
+        masks[static_cast<std::size_t>(c)] = options.shuffle ? 0x3u : 0x1u;
+      }
+    });
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      std::vector<hsize_t> offset(shape.size() + (series_axis ? 1 : 0), 0);
+      if (series_axis) offset[0] = written;
+      offset[series_axis ? 1 : 0] = static_cast<hsize_t>(c * layout.chunk_slices);
+      const auto& chunk = encoded[static_cast<std::size_t>(c)];
+      if (H5Dwrite_chunk(target, H5P_DEFAULT, masks[static_cast<std::size_t>(c)], offset.data(),
+                         chunk.size(), chunk.data()) < 0)
+        throw IoError("cannot write chunk " + std::to_string(c) + " of step " +
+                      std::to_string(written) + " of " + where());
+    }
+  }
+
+  void commit() {
+    const std::size_t total =
+        description.storage == Hdf5Storage::steady ? 1 : description.times.size();
+    if (written != total)
+      throw InvalidArgument("HDF5 layout: " + std::to_string(written) + " of " +
+                            std::to_string(total) + " steps written to " + where());
+    dataset.reset();
+    steps_group.reset();
+    group.reset();
+    if (H5Fflush(h5file.get(), H5F_SCOPE_GLOBAL) < 0 || !h5file.reset())
+      throw IoError("cannot write HDF5 file " + temp.string());
+    std::error_code error;
+    std::filesystem::rename(temp, file, error);
+    if (error)
+      throw IoError("cannot rename " + temp.string() + " to " + file.string() + ": " +
+                    error.message());
+    committed = true;
+    if (options.xdmf) {
+      try {
+        const std::string text = detail::xdmf_text(description, file.filename().string());
+        write_atomically(xdmf_path(file), [&](std::ofstream& out) { out << text; });
+      } catch (...) {
+        std::filesystem::remove(file, error);
+        throw;
+      }
+    }
+  }
+};
+
+}  // namespace
+
+struct Hdf5SeriesWriter::Impl : FieldWriter {
+  using FieldWriter::FieldWriter;
+};
+
+Hdf5SeriesWriter::Hdf5SeriesWriter(const std::filesystem::path& file, const GridGeometry& geometry,
+                                   int components, std::vector<double> times,
+                                   const Hdf5WriteOptions& options)
+    : impl_(std::make_unique<Impl>(file, geometry, components, std::move(times), options,
+                                   options.storage == Hdf5Storage::per_step
+                                       ? Hdf5Storage::per_step
+                                       : Hdf5Storage::chunked)) {}
+
+Hdf5SeriesWriter::~Hdf5SeriesWriter() = default;
+
+void Hdf5SeriesWriter::write_step(std::span<const float> values) {
+  impl_->write_step(values);
+}
+std::size_t Hdf5SeriesWriter::steps_written() const {
+  return impl_->written;
+}
+void Hdf5SeriesWriter::commit() {
+  impl_->commit();
+}
+
+void write_hdf5_grid(const VectorGrid& grid, const std::filesystem::path& file,
+                     const Hdf5WriteOptions& options) {
+  FieldWriter writer(file, grid.geometry, grid.components, {}, options, Hdf5Storage::steady);
+  writer.write_step(grid.values);
+  writer.commit();
+}
+
+}  // namespace orthofront::io
