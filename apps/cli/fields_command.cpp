@@ -2,6 +2,7 @@
 
 #include "cli/commands.h"
 #include "orthofront/field/analytic.h"
+#include "orthofront/field/unsteady.h"
 
 namespace orthofront::cli {
 
@@ -9,6 +10,12 @@ void add_fields_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand("fields", "List the analytic fields, parameters and domains");
   c->callback([]() {
     for (const AnalyticFieldInfo& f : analytic_fields()) {
+      std::cout << f.name << "\n  " << f.formula << "\n  domain: " << f.domain << "\n";
+      for (const FieldParameter& p : f.parameters)
+        std::cout << "  " << p.name << " = " << p.default_value << "  " << p.help << "\n";
+    }
+    std::cout << "\nUnsteady fields (for `orthofront path`):\n";
+    for (const AnalyticFieldInfo& f : unsteady_fields()) {
       std::cout << f.name << "\n  " << f.formula << "\n  domain: " << f.domain << "\n";
       for (const FieldParameter& p : f.parameters)
         std::cout << "  " << p.name << " = " << p.default_value << "  " << p.help << "\n";

@@ -196,6 +196,16 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     return true;
   };
   SurfaceResult sr = build_stream_surface<N>(lifted, seed, o.engine, callback);
+  // The last step has no callback after it: record its band here.
+  if (const auto [lo, hi] = tracked.take(); lo <= hi && sr.report.steps > 0 &&
+                                            pr.band.size() < static_cast<std::size_t>(sr.report.steps)) {
+    BandRecord b;
+    b.step = sr.report.steps;
+    b.t_min = lo;
+    b.t_max = hi;
+    if (run.streamed) b.first_step = run.streamed->band_first(), b.last_step = run.streamed->band_last();
+    pr.band.push_back(b);
+  }
   if (run.streamed && pr.complete) {
     if (const std::string e = run.streamed->error(); !e.empty()) {
       pr.complete = false;

@@ -1,0 +1,183 @@
+// `orthofront path`: path surfaces of unsteady flows (analytic, or time series streamed from
+// disk through the narrow-band cache).
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "cli/engine_options.h"
+#include "cli/progress_bar.h"
+#include "cli/seed_spec.h"
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/report_json.h"
+#include "orthofront/spacetime/path_command_json.h"
+#include "orthofront/spacetime/path_surface.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+struct PathArgs {
+  std::string field, seed, out, report, budget = "512MiB";
+  int seed_count = 20;
+  double t0 = 0, t1 = 1, time_scale = 0;
+  bool spacetime_out = false, quiet = false, no_prefetch = false;
+  StreamSurfaceOptions options;
+};
+
+// One status line on stderr (terminals only): simulated time, band, cache.
+class PathStatus {
+ public:
+  PathStatus() : enabled_(isatty(STDERR_FILENO) != 0) {}
+  ~PathStatus() { finish(); }
+  PathStatus(const PathStatus&) = delete;
+  PathStatus& operator=(const PathStatus&) = delete;
+  bool update(const spacetime::PathProgress& p) {
+    if (interrupted()) return false;
+    if (!enabled_ || p.engine.elapsed_seconds - last_ < 0.1) return true;
+    last_ = p.engine.elapsed_seconds;
+    std::fprintf(stderr, "\rpath: t = %.4g of [%g, %g]  step %d  %zu vertices  band [%.4g, %.4g]",
+                 p.time_reached, p.t0, p.t1, p.engine.step, p.engine.vertices, p.band_begin,
+                 p.band_end);
+    if (p.streamed)
+      std::fprintf(stderr, "  steps %zu-%zu  cache %s resident, %zu hits %zu misses, wait %.2fs",
+                   p.band_first, p.band_last,
+                   spacetime::format_bytes(p.cache.resident_bytes).c_str(), p.cache.hits,
+                   p.cache.misses, p.cache.wait_seconds);
+    std::fprintf(stderr, "   ");
+    drawn_ = true;
+    return true;
+  }
+  void finish() {
+    if (drawn_) std::fprintf(stderr, "\n");
+    drawn_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+  double last_ = -1;
+};
+
+}  // namespace
+
+void add_path_command(CLI::App& app) {
+  auto args = std::make_shared<PathArgs>();
+  args->options.max_steps = 1'000'000;  // path surfaces end at t1
+  CLI::App* c = app.add_subcommand(
+      "path", "Build a path surface of an unsteady flow (analytic, or an HDF5 time series)");
+  c->add_option("--field", args->field,
+                "Unsteady field NAME[:key=value,...] (see `orthofront fields`) or an HDF5 time "
+                "series file")
+      ->required();
+  c->add_option("--seed", args->seed, "Seed curve at t0 (as for `stream`; 2D flows use x, y)")
+      ->required();
+  c->add_option("--seed-count", args->seed_count, "Vertices on the seed curve")
+      ->capture_default_str();
+  c->add_option("--t0", args->t0, "Seed time")->capture_default_str();
+  c->add_option("--t1", args->t1, "End time: the surface stops where its path lines reach it")
+      ->capture_default_str();
+  c->add_option("--time-scale", args->time_scale,
+                "c of the lifted time coordinate tau = c t (length per time unit); 0: median "
+                "seed speed at t0")
+      ->capture_default_str();
+  c->add_option("--cache-budget", args->budget,
+                "Memory for resident and in-flight time steps (e.g. 512MiB, 2GiB)")
+      ->capture_default_str();
+  c->add_flag("--no-prefetch", args->no_prefetch, "Load steps on demand only (no read-ahead)");
+  c->add_flag("--spacetime-out", args->spacetime_out,
+              "2D flows: write positions (x, y, t) instead of (x, y, 0)");
+  add_engine_flags(*c, args->options);
+  c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
+  c->add_option("--report", args->report, "Write the JSON report here");
+  c->add_flag("--quiet", args->quiet, "No summary on stdout");
+  c->callback([args]() {
+    const std::filesystem::path out = args->out;
+    if (!io::is_mesh_extension(out))
+      throw InvalidArgument("output '" + args->out +
+                            "' has an unknown extension (expected .vtp, .ply or .obj)");
+    io::check_writable(out);
+    if (!args->report.empty()) io::check_writable(args->report);
+    if (args->seed_count < 2)
+      throw InvalidArgument("--seed-count must be at least 2, got " +
+                            std::to_string(args->seed_count));
+    const SeedCurve seed = parse_seed(args->seed);
+    spacetime::PathSurfaceOptions o;
+    o.engine = args->options;
+    o.t0 = args->t0;
+    o.t1 = args->t1;
+    o.time_scale = args->time_scale;
+    PathStatus status;
+    o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
+
+    spacetime::PathSurfaceResult result;
+    if (is_unsteady_field_name(args->field)) {
+      const auto flow = make_unsteady_field(args->field);
+      result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
+    } else {
+      const std::filesystem::path file = args->field;
+      if (!std::filesystem::exists(file))
+        throw InvalidArgument("--field '" + args->field +
+                              "' is neither an unsteady field name (see `orthofront fields`) "
+                              "nor an existing file");
+      if (!io::is_hdf5_file(file))
+        throw InvalidArgument("--field '" + args->field +
+                              "': path surfaces read time series in the project's HDF5 layout "
+                              "(docs/hdf5-layout.md); this file is not HDF5");
+      const auto series = io::open_hdf5_series(file);
+      spacetime::CacheOptions co;
+      co.budget_bytes = spacetime::parse_bytes(args->budget);
+      co.prefetch = !args->no_prefetch;
+      spacetime::TimeStepCache cache(*series, co);
+      result = spacetime::build_path_surface(cache, seed, args->seed_count, o);
+    }
+    status.finish();
+    Mesh& mesh = result.mesh;
+    if (args->spacetime_out && !result.spacetime_positions.empty())
+      mesh.positions = result.spacetime_positions;
+    io::write_mesh(mesh, out);
+    if (!args->report.empty()) {
+      nlohmann::json report = io::to_json(result.report);
+      report["field"] = args->field;
+      report["seed"] = args->seed;
+      report["seed_count"] = args->seed_count;
+      report["output"] = args->out;
+      report["complete"] = result.report.complete;
+      report["path"] = spacetime::to_json(result.path);
+      report["path"]["spacetime_out"] = args->spacetime_out;
+      io::write_json(report, args->report);
+    }
+    const spacetime::PathReport& pr = result.path;
+    if (!args->quiet) {
+      std::printf(
+          "Path surface of %s from %s: %zu vertices, %zu faces, t from %g to %g (reached %g), "
+          "c = %g (%s), %d steps, stopped: %s%s. Time %.3f s",
+          args->field.c_str(), args->seed.c_str(), mesh.vertex_count(), mesh.face_count(), pr.t0,
+          pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(),
+          result.report.steps, to_string(result.report.stop_reason),
+          pr.complete ? "" : " (incomplete)", pr.total_seconds);
+      if (pr.streamed)
+        std::printf(" (waited %.3f s for data; read %.3f s, decode %.3f s in the pipeline); "
+                    "cache: %zu hits, %zu misses, %zu late prefetches, %s read, peak %s",
+                    pr.wait_seconds, pr.io_seconds, pr.decode_seconds, pr.cache.hits,
+                    pr.cache.misses, pr.cache.late_prefetches,
+                    spacetime::format_bytes(pr.cache.bytes_read).c_str(),
+                    spacetime::format_bytes(pr.cache.peak_bytes).c_str());
+      std::printf(".\nWrote %s%s%s\n", args->out.c_str(), args->report.empty() ? "" : " and ",
+                  args->report.c_str());
+    }
+    if (!pr.complete) {
+      if (interrupted()) throw Error("interrupted: the surface built so far was written");
+      throw Error(pr.message + " (the surface built so far was written to " + args->out +
+                  ", marked incomplete)");
+    }
+  });
+}
+
+}  // namespace orthofront::cli

@@ -1,0 +1,62 @@
+#pragma once
+/// The space-time part of a path-surface report as JSON (c, time band per step, cache, times).
+#include <nlohmann/json.hpp>
+
+#include "orthofront/spacetime/path_surface.h"
+
+namespace orthofront::spacetime {
+
+inline nlohmann::json to_json(const CacheStatistics& s) {
+  return {{"hits", s.hits},
+          {"late_prefetches", s.late_prefetches},
+          {"misses", s.misses},
+          {"prefetches", s.prefetches},
+          {"evictions", s.evictions},
+          {"loads", s.loads},
+          {"bytes_read", s.bytes_read},
+          {"bytes_decoded", s.bytes_decoded},
+          {"read_seconds", s.read_seconds},
+          {"decode_seconds", s.decode_seconds},
+          {"wait_seconds", s.wait_seconds},
+          {"peak_bytes", s.peak_bytes},
+          {"reads_per_step", s.reads_per_step}};
+}
+
+inline nlohmann::json to_json(const PathReport& r) {
+  nlohmann::json band = nlohmann::json::array();
+  double widest = 0;
+  for (const BandRecord& b : r.band) {
+    widest = std::max(widest, b.t_max - b.t_min);
+    band.push_back({{"step", b.step},
+                    {"t_min", b.t_min},
+                    {"t_max", b.t_max},
+                    {"vertex_t_min", b.vertex_t_min},
+                    {"vertex_t_max", b.vertex_t_max},
+                    {"first_time_step", b.first_step},
+                    {"last_time_step", b.last_step}});
+  }
+  nlohmann::json j = {{"time_scale", r.time_scale},
+                      {"time_scale_source", r.time_scale_source},
+                      {"t0", r.t0},
+                      {"t1", r.t1},
+                      {"time_reached", r.time_reached},
+                      {"dimension", r.dimension},
+                      {"streamed", r.streamed},
+                      {"complete", r.complete},
+                      {"message", r.message},
+                      {"widest_band", widest},
+                      {"band", band},
+                      {"seconds",
+                       {{"total", r.total_seconds},
+                        {"compute", r.compute_seconds},
+                        {"wait", r.wait_seconds},
+                        {"io", r.io_seconds},
+                        {"decode", r.decode_seconds}}}};
+  if (r.streamed) {
+    j["cache"] = to_json(r.cache);
+    j["slow_evaluations"] = r.slow_evaluations;
+  }
+  return j;
+}
+
+}  // namespace orthofront::spacetime

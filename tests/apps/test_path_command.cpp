@@ -1,0 +1,122 @@
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/spacetime/sampled_series.h"
+
+namespace fs = std::filesystem;
+using namespace orthofront;
+
+namespace {
+
+fs::path fresh_dir() {
+  std::random_device rd;
+  const fs::path dir = fs::temp_directory_path() / ("orthofront-path-" + std::to_string(rd()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+int run(const std::string& args, const fs::path& log) {
+  const std::string command =
+      std::string(ORTHOFRONT_BINARY) + " " + args + " > " + log.string() + " 2>&1";
+  return WEXITSTATUS(std::system(command.c_str()));
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// A double-gyre time series on disk, in the project's HDF5 layout.
+fs::path write_gyre(const fs::path& dir, std::size_t steps) {
+  const auto flow = make_unsteady_field("double-gyre");
+  spacetime::SampledTimeSeries series(*flow, spacetime::uniform_grid(flow->domain(), 2, 81),
+                                      spacetime::uniform_times(0, 0.1 * static_cast<double>(steps - 1), steps - 1));
+  const fs::path file = dir / "gyre.h5";
+  io::Hdf5WriteOptions o;
+  o.gzip_level = 1;
+  o.zero_is_no_data = false;
+  std::vector<double> times;
+  for (std::size_t k = 0; k < series.step_count(); ++k) times.push_back(series.time(k));
+  io::Hdf5SeriesWriter writer(file, series.geometry(), 3, times, o);
+  std::vector<float> values(series.step_floats());
+  for (std::size_t k = 0; k < series.step_count(); ++k) {
+    series.sample(k, values.data());
+    writer.write_step(values);
+  }
+  writer.commit();
+  return file;
+}
+
+}  // namespace
+
+TEST_CASE("path command: analytic field, report with c and the time band", "[apps][path]") {
+  const fs::path dir = fresh_dir();
+  const fs::path out = dir / "gyre.vtp", report = dir / "gyre.json";
+  REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 0 "
+              "--t1 4 --edge 0.05 --spacetime-out --out " + out.string() + " --report " +
+                  report.string(),
+              dir / "log") == 0);
+  const nlohmann::json j = nlohmann::json::parse(read_text(report));
+  CHECK(j["complete"] == true);
+  CHECK(j["path"]["time_scale_source"] == "median seed speed");
+  CHECK(j["path"]["time_scale"].get<double>() > 0.1);
+  CHECK(j["path"]["time_reached"].get<double>() == Approx(4.0).epsilon(1e-3));
+  CHECK(j["path"]["band"].size() == j["steps"].get<std::size_t>());
+  const Mesh mesh = io::read_mesh(out);
+  REQUIRE(mesh.vertex_count() == j["counts"]["vertices"].get<std::size_t>());
+  double zmax = 0;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    CHECK(mesh.positions[i][2] == Approx(mesh.time[i]).margin(1e-9));  // (x, y, t)
+    zmax = std::max(zmax, mesh.positions[i][2]);
+  }
+  CHECK(zmax > 3.97);  // path lines end within one front step of t1
+  CHECK(zmax <= 4.0 + 1e-9);
+  // --time-scale overrides and is reported.
+  REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 1 "
+              "--edge 0.05 --time-scale 0.5 --out " + out.string() + " --report " +
+                  report.string(),
+              dir / "log") == 0);
+  CHECK(nlohmann::json::parse(read_text(report))["path"]["time_scale"] == 0.5);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("path command: HDF5 series through the cache; errors leave no file", "[apps][path]") {
+  const fs::path dir = fresh_dir();
+  const fs::path h5 = write_gyre(dir, 41);
+  const fs::path out = dir / "s.ply", report = dir / "s.json";
+  REQUIRE(run("path --field " + h5.string() +
+                  " --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 3 --edge 0.05 "
+                  "--cache-budget 2MiB --out " + out.string() + " --report " + report.string(),
+              dir / "log") == 0);
+  const nlohmann::json j = nlohmann::json::parse(read_text(report));
+  CHECK(j["path"]["streamed"] == true);
+  CHECK(j["path"]["cache"]["peak_bytes"].get<std::size_t>() <= (2u << 20));
+  CHECK(j["path"]["cache"]["loads"].get<std::size_t>() >= 31);
+  CHECK(j["path"]["time_reached"].get<double>() == Approx(3.0).epsilon(1e-3));
+  CHECK(io::read_mesh(out).vertex_count() == j["counts"]["vertices"].get<std::size_t>());
+
+  const fs::path none = dir / "none.vtp";
+  CHECK(run("path --field " + h5.string() +
+                " --seed line:0.3,0.25,0:0.9,0.7,0 --t1 3 --cache-budget 100KiB --out " +
+                none.string(),
+            dir / "log2") == 2);
+  CHECK_THAT(read_text(dir / "log2"), Catch::Contains("cache budget 100 KiB is too small"));
+  CHECK_FALSE(fs::exists(none));
+  CHECK(run("path --field nothing-here --seed line:0,0,0:1,1,0 --out " + none.string(),
+            dir / "log3") == 2);
+  CHECK_THAT(read_text(dir / "log3"), Catch::Contains("'nothing-here'"));
+  CHECK_FALSE(fs::exists(none));
+  fs::remove_all(dir);
+}
