@@ -10,5 +10,6 @@ void add_fields_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_path_command(CLI::App& app);
+void add_bench_path_command(CLI::App& app);
 
 }  // namespace orthofront::cli
