@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "orthofront/io/base64.h"
+#include "orthofront/io/vtk_xml.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_attributes.h"
 #include "orthofront/io/number_text.h"
@@ -67,153 +68,7 @@ void write_array(std::ostream& out, const char* type, const std::string& name, i
 }
 
 // ---------------------------------------------------------------------------------------------
-// Reading: a minimal XML scan, enough for VTK's own structure (no DTDs, no namespaces).
-
-struct XmlTag {
-  std::string name;
-  std::vector<std::pair<std::string, std::string>> attributes;
-  bool end = false;           // </name>
-  bool self_closing = false;  // <name ... />
-
-  const std::string* attribute(std::string_view key) const {
-    for (const auto& [k, v] : attributes) {
-      if (k == key) return &v;
-    }
-    return nullptr;
-  }
-};
-
-class XmlScanner {
- public:
-  XmlScanner(std::string_view text, const std::string& file) : text_(text), file_(file) {}
-
-  /// Moves to the next start or end tag, skipping declarations, comments and text. False at the
-  /// end of the text.
-  bool next(XmlTag& tag) {
-    for (;;) {
-      pos_ = text_.find('<', pos_);
-      if (pos_ == std::string_view::npos) {
-        pos_ = text_.size();
-        return false;
-      }
-      const std::string_view rest = text_.substr(pos_);
-      if (rest.starts_with("<?")) {
-        skip_past("?>");
-      } else if (rest.starts_with("<!--")) {
-        skip_past("-->");
-      } else if (rest.starts_with("<![CDATA[")) {
-        skip_past("]]>");
-      } else if (rest.starts_with("<!")) {
-        skip_past(">");
-      } else {
-        break;
-      }
-    }
-    ++pos_;
-    tag = XmlTag{};
-    if (peek() == '/') {
-      tag.end = true;
-      ++pos_;
-    }
-    tag.name = read_name();
-    if (tag.name.empty()) throw error("tag without a name");
-    for (;;) {
-      skip_spaces();
-      if (peek() == '>') {
-        ++pos_;
-        return true;
-      }
-      if (text_.substr(pos_).starts_with("/>") && !tag.end) {
-        tag.self_closing = true;
-        pos_ += 2;
-        return true;
-      }
-      if (tag.end) throw error("unexpected content in </" + tag.name + ">");
-      std::string key = read_name();
-      if (key.empty()) throw error("bad attribute in <" + tag.name + ">");
-      skip_spaces();
-      if (peek() != '=') throw error("attribute " + key + " of <" + tag.name + "> has no value");
-      ++pos_;
-      skip_spaces();
-      const char quote = peek();
-      if (quote != '"' && quote != '\'') throw error("unquoted value of attribute " + key);
-      const std::size_t close = text_.find(quote, pos_ + 1);
-      if (close == std::string_view::npos) throw error("unterminated value of attribute " + key);
-      tag.attributes.emplace_back(std::move(key),
-                                  decode_entities(text_.substr(pos_ + 1, close - pos_ - 1)));
-      pos_ = close + 1;
-    }
-  }
-
-  /// Character data from the current position up to the next tag.
-  std::string_view text() {
-    const std::size_t start = pos_;
-    pos_ = std::min(text_.find('<', pos_), text_.size());
-    return text_.substr(start, pos_ - start);
-  }
-
- private:
-  FormatError error(const std::string& what) const {
-    return FormatError(file_ + ": malformed XML at byte " + std::to_string(pos_) + ": " + what);
-  }
-  char peek() const { return pos_ < text_.size() ? text_[pos_] : '\0'; }
-  static bool is_space(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
-  void skip_spaces() {
-    while (pos_ < text_.size() && is_space(text_[pos_])) ++pos_;
-  }
-  void skip_past(std::string_view terminator) {
-    const std::size_t end = text_.find(terminator, pos_);
-    if (end == std::string_view::npos)
-      throw error("unterminated '" + std::string(terminator) + "'");
-    pos_ = end + terminator.size();
-  }
-  std::string read_name() {
-    const std::size_t start = pos_;
-    while (pos_ < text_.size() && !is_space(text_[pos_]) && text_[pos_] != '=' &&
-           text_[pos_] != '>' && text_[pos_] != '/' && text_[pos_] != '<') {
-      ++pos_;
-    }
-    return std::string(text_.substr(start, pos_ - start));
-  }
-  static std::string decode_entities(std::string_view value) {
-    std::string out;
-    for (std::size_t i = 0; i < value.size(); ++i) {
-      if (value[i] != '&') {
-        out += value[i];
-        continue;
-      }
-      const std::size_t semicolon = value.find(';', i);
-      const std::string_view entity =
-          semicolon == std::string_view::npos ? "" : value.substr(i + 1, semicolon - i - 1);
-      char c = '\0';
-      if (entity == "lt") c = '<';
-      if (entity == "gt") c = '>';
-      if (entity == "amp") c = '&';
-      if (entity == "quot") c = '"';
-      if (entity == "apos") c = '\'';
-      if (c == '\0') {
-        out += '&';  // not one of the five predefined entities: kept as written
-      } else {
-        out += c;
-        i = semicolon;
-      }
-    }
-    return out;
-  }
-
-  std::string_view text_;
-  const std::string& file_;
-  std::size_t pos_ = 0;
-};
-
-// ---------------------------------------------------------------------------------------------
 // Reading: VTK structure
-
-struct VtkLayout {
-  bool little_endian = true;
-  std::size_t header_size = 4;  // UInt32 unless header_type says otherwise
-  std::string compressor;
-};
 
 /// A decoded DataArray: integer types in `integer`, floating-point types in `real`.
 struct ArrayData {
@@ -228,20 +83,6 @@ struct ArrayData {
     return is_integer(type) ? static_cast<double>(integer[i]) : real[i];
   }
 };
-
-std::optional<ScalarType> vtk_type(std::string_view name) {
-  if (name == "Int8") return ScalarType::kInt8;
-  if (name == "UInt8") return ScalarType::kUInt8;
-  if (name == "Int16") return ScalarType::kInt16;
-  if (name == "UInt16") return ScalarType::kUInt16;
-  if (name == "Int32") return ScalarType::kInt32;
-  if (name == "UInt32") return ScalarType::kUInt32;
-  if (name == "Int64") return ScalarType::kInt64;
-  if (name == "UInt64") return ScalarType::kUInt64;
-  if (name == "Float32") return ScalarType::kFloat32;
-  if (name == "Float64") return ScalarType::kFloat64;
-  return std::nullopt;
-}
 
 struct PieceData {
   std::uint64_t points = 0;
@@ -324,17 +165,7 @@ class VtpReader {
     if (type == nullptr || *type != "PolyData") {
       throw error("VTK file type is '" + (type ? *type : std::string()) + "', expected PolyData");
     }
-    if (const std::string* order = tag.attribute("byte_order")) {
-      if (*order != "LittleEndian" && *order != "BigEndian")
-        throw error("bad byte_order " + *order);
-      layout_.little_endian = *order == "LittleEndian";
-    }
-    if (const std::string* header = tag.attribute("header_type")) {
-      if (*header != "UInt32" && *header != "UInt64") throw error("bad header_type " + *header);
-      layout_.header_size = *header == "UInt64" ? 8 : 4;
-    }
-    if (const std::string* compressor = tag.attribute("compressor"))
-      layout_.compressor = *compressor;
+    layout_ = read_vtk_layout(tag, file_);
   }
 
   void start_piece(const XmlTag& tag) {
@@ -426,29 +257,15 @@ class VtpReader {
   }
 
   void decode_binary(std::string_view content, const std::string& what, ArrayData& array) const {
-    if (!layout_.compressor.empty()) {
-      throw error(what + " is compressed (" + layout_.compressor +
-                  "), which is not supported (save uncompressed)");
-    }
-    std::string bytes;
-    if (!base64_decode(content, bytes)) throw error(what + " is not valid base64");
+    const std::string bytes = decode_vtk_base64(content, layout_, file_ + ": " + what);
     const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
-    if (bytes.size() < layout_.header_size) throw error(what + " ends inside its byte count");
-    const std::uint64_t size = layout_.header_size == 8
-                                   ? load<std::uint64_t>(data, layout_.little_endian)
-                                   : load<std::uint32_t>(data, layout_.little_endian);
-    const std::size_t available = bytes.size() - layout_.header_size;
+    const std::size_t size = bytes.size();
     const std::size_t scalar = scalar_size(array.type);
-    if (size > available) {
-      throw error(what + " declares " + std::to_string(size) + " bytes but holds " +
-                  std::to_string(available));
-    }
     if (size % scalar != 0) {
-      throw error(what + " declares " + std::to_string(size) + " bytes, not a multiple of " +
+      throw error(what + " holds " + std::to_string(size) + " bytes, not a multiple of " +
                   std::to_string(scalar));
     }
     const std::size_t count = static_cast<std::size_t>(size) / scalar;
-    data += layout_.header_size;
     if (is_integer(array.type)) {
       array.integer.resize(count);
       for (std::size_t i = 0; i < count; ++i) {

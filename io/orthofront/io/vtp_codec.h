@@ -1,6 +1,6 @@
 #pragma once
 /// VTK XML PolyData (.vtp) mesh codec (internal to mesh_io): writes inline base64 binary arrays;
-/// reads inline ascii and binary arrays (uncompressed) with a small XML scan.
+/// reads inline ascii and binary arrays (uncompressed or zlib) with a small XML scan.
 #include <ostream>
 #include <string>
 #include <string_view>
@@ -15,7 +15,7 @@ void write_vtp(const Mesh& mesh, std::ostream& out);
 
 /// Parses the whole content of a .vtp file: every Piece's points, polygons and triangle strips,
 /// and point data arrays named like Mesh attributes. `file` names the file in FormatError
-/// messages. Appended and compressed data are rejected with a FormatError.
+/// messages. Appended data is rejected with a FormatError.
 Mesh read_vtp(std::string_view data, const std::string& file);
 
 }  // namespace orthofront::io::detail

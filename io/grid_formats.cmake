@@ -1,0 +1,16 @@
+# Vector-grid readers and writers of real data formats (.vec, AmiraMesh, NRRD, VTK XML ImageData,
+# legacy VTK, ParaView collections), their shared helpers and the file-per-step time series.
+find_package(ZLIB REQUIRED)
+target_sources(orthofront_io PRIVATE
+  orthofront/io/zlib_codec.cpp
+  orthofront/io/vtk_xml.cpp
+  orthofront/io/grid_decode.cpp
+  orthofront/io/vec_reader.cpp
+  orthofront/io/amira_reader.cpp
+  orthofront/io/nrrd_reader.cpp
+  orthofront/io/vti_reader.cpp
+  orthofront/io/vtk_legacy_reader.cpp
+  orthofront/io/grid_file.cpp
+  orthofront/io/grid_series.cpp
+)
+target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB)

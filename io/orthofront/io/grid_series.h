@@ -1,0 +1,51 @@
+#pragma once
+/// Time series made of one vector-grid file per step (any format grid_file reads: a list of .vti,
+/// .vec, .am, .nrrd, .vtk or .vdb files), or described by a ParaView .pvd collection.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "orthofront/io/time_series.h"
+
+namespace orthofront::io {
+
+/// One file per step. The first file is read when the series is opened (geometry and component
+/// count); every step must match it, or decode throws FormatError naming the file and the step.
+/// read_raw reads the file's bytes (encoded); decode parses them (thread-safe).
+class GridFileSeries final : public TimeSeries {
+ public:
+  /// `files[i]` holds the step at `times[i]`. Throws InvalidArgument when the counts differ, a
+  /// list is empty or the times are not strictly increasing; IoError / FormatError from reading
+  /// the first file. `selector` picks the array / grid in each file (see grid_file.h).
+  GridFileSeries(std::vector<std::filesystem::path> files, std::vector<double> times,
+                 std::string selector = {});
+
+  std::size_t step_count() const override { return files_.size(); }
+  double time(std::size_t step) const override { return times_.at(step); }
+  const GridGeometry& geometry() const override { return geometry_; }
+  int components() const override { return components_; }
+  std::string describe() const override;
+  RawStep read_raw(std::size_t step) const override;
+  void decode(const RawStep& raw, std::span<float> values) const override;
+
+  const std::vector<std::filesystem::path>& files() const { return files_; }
+
+ private:
+  std::vector<std::filesystem::path> files_;
+  std::vector<double> times_;
+  std::string selector_;
+  GridGeometry geometry_;
+  int components_ = 3;
+};
+
+/// A ParaView collection: the <DataSet timestep="..." file="..."/> entries of a .pvd file
+/// (relative files are relative to the .pvd's folder), sorted by time. Several parts per time
+/// step are rejected. Throws IoError / FormatError naming the .pvd and the bad entry.
+std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
+                                         const std::string& selector = {});
+
+/// Times t0, t0 + dt, ... for `count` steps.
+std::vector<double> evenly_spaced_times(std::size_t count, double t0, double dt);
+
+}  // namespace orthofront::io

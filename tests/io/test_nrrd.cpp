@@ -1,0 +1,200 @@
+// NRRD reader: raw in both byte orders, gzip, ascii, detached data, component axis placement,
+// geometry fields; bad files rejected; the square-cylinder data.
+#include <cmath>
+
+#include "io/grid_test_support.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/nrrd_reader.h"
+#include "orthofront/io/zlib_codec.h"
+
+using Catch::Matchers::Contains;
+using orthofront::Vec3;
+using orthofront::VectorGrid;
+using orthofront::io::FormatError;
+using orthofront::io::read_nrrd;
+using namespace grid_test;
+
+namespace {
+
+const std::string kHeader3D =
+    "NRRD0004\n# Complete NRRD file format specification at:\n"
+    "type: float\ndimension: 4\nspace dimension: 3\nsizes: 3 5 4 3\n"
+    "space directions: none (0.5,0,0) (0,0.25,0) (0,0,2)\nkinds: 3-vector space space space\n"
+    "space origin: (1,-2,3.5)\nlabel:=ignored key/value\n";
+
+}  // namespace
+
+TEST_CASE("nrrd: synthetic files read back exactly", "[nrrd]") {
+  TempDir dir("nrrd");
+  const VectorGrid expected = sample_grid(5, 4, 3, 3, true);
+  const auto check = [&](const VectorGrid& grid) {
+    CHECK(grid.geometry.dimension == 3);
+    CHECK(grid.geometry.size == std::array<std::int64_t, 3>{5, 4, 3});
+    CHECK(grid.components == 3);
+    CHECK(grid.geometry.origin == Vec3(1, -2, 3.5));
+    CHECK(grid.geometry.spacing == Vec3(0.5, 0.25, 2));
+    CHECK(same_values(grid.values, expected.values));
+  };
+  SECTION("raw little-endian") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: raw\n\n" +
+                                   float_bytes(expected.values, true));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("raw big-endian") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: big\nencoding: raw\n\n" +
+                                   float_bytes(expected.values, false));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("gzip") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: gzip\n\n" +
+                                   orthofront::io::detail::gzip_deflate(
+                                       float_bytes(expected.values, true)));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("zlib stream under the gzip name") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: gz\n\n" +
+                                   orthofront::io::detail::zlib_deflate(
+                                       float_bytes(expected.values, true)));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("ascii") {
+    std::string text;
+    for (const float v : expected.values) text += std::to_string(v) + (std::isnan(v) ? " " : "\n");
+    // std::to_string prints 6 decimals: every sample value is a multiple of 1/16, exact.
+    write_file(dir / "a.nrrd", kHeader3D + "encoding: ascii\n\n" + text);
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("detached data") {
+    write_file(dir / "a.raw", float_bytes(expected.values, false));
+    write_file(dir / "a.nhdr", kHeader3D + "endian: big\nencoding: raw\ndata file: a.raw\n");
+    check(read_nrrd(dir / "a.nhdr"));
+  }
+  SECTION("byte skip -1 (data at the end of the file)") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: raw\nbyte skip: -1\n\n" +
+                                   "junk" + float_bytes(expected.values, true));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+}
+
+TEST_CASE("nrrd: component axis last, spacings and axis mins", "[nrrd]") {
+  TempDir dir("nrrd");
+  const VectorGrid expected = sample_grid(4, 3, 1, 2);
+  // Stored with the component axis last: value (i, j, c) at i + 4 * (j + 3 * c).
+  std::vector<float> stored(expected.values.size());
+  for (std::size_t p = 0; p < 12; ++p) {
+    for (std::size_t c = 0; c < 2; ++c) stored[p + 12 * c] = expected.values[2 * p + c];
+  }
+  write_file(dir / "b.nrrd", "NRRD0005\ntype: double\ndimension: 3\nsizes: 4 3 2\n"
+                             "kinds: space space vector\nspacings: 0.5 2 nan\n"
+                             "axis mins: 10 20 nan\ncenters: cell node none\n"
+                             "endian: little\nencoding: raw\n\n" + [&] {
+                               std::string bytes;
+                               for (const float v : stored) put(bytes, static_cast<double>(v), true);
+                               return bytes;
+                             }());
+  const VectorGrid grid = read_nrrd(dir / "b.nrrd");
+  CHECK(grid.geometry.dimension == 2);
+  CHECK(grid.geometry.size == std::array<std::int64_t, 3>{4, 3, 1});
+  CHECK(grid.components == 2);
+  CHECK(grid.geometry.spacing[0] == 0.5);
+  CHECK(grid.geometry.spacing[1] == 2.0);
+  CHECK(grid.geometry.origin[0] == 10.25);  // cell-centred: min + spacing / 2
+  CHECK(grid.geometry.origin[1] == 20.0);
+  CHECK(same_values(grid.values, expected.values));
+}
+
+TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]") {
+  TempDir dir("nrrd");
+  const VectorGrid grid = sample_grid(5, 4, 3);
+  const std::string data = float_bytes(grid.values, true);
+
+  SECTION("truncated data") {
+    write_file(dir / "short.nrrd",
+               kHeader3D + "endian: little\nencoding: raw\n\n" + data.substr(0, 100));
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "short.nrrd"); }),
+               Contains("short.nrrd") && Contains("truncated") && Contains("100"));
+  }
+  SECTION("truncated gzip data") {
+    const std::string gz = orthofront::io::detail::gzip_deflate(data);
+    write_file(dir / "short.nrrd",
+               kHeader3D + "endian: little\nencoding: gzip\n\n" + gz.substr(0, gz.size() / 2));
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "short.nrrd"); }),
+               Contains("short.nrrd") && Contains("ends early"));
+  }
+  SECTION("sizes that do not match the dimension") {
+    write_file(dir / "dims.nrrd", "NRRD0004\ntype: float\ndimension: 4\nsizes: 3 5 4\n"
+                                  "endian: little\nencoding: raw\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "dims.nrrd"); }),
+               Contains("dims.nrrd") && Contains("sizes '3 5 4'") && Contains("dimension 4"));
+  }
+  SECTION("non-vector data") {
+    write_file(dir / "scalar.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 5 4 3\n"
+                                    "kinds: space space space\nendian: little\nencoding: raw\n\n" +
+                                        data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "scalar.nrrd"); }),
+               Contains("scalar.nrrd") && Contains("non-vector data"));
+    write_file(dir / "four.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 5 3\n"
+                                  "endian: little\nencoding: raw\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "four.nrrd"); }),
+               Contains("four.nrrd") && Contains("non-vector data") && Contains("size 4"));
+  }
+  SECTION("unsupported encoding") {
+    write_file(dir / "bz.nrrd", kHeader3D + "endian: little\nencoding: bzip2\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "bz.nrrd"); }),
+               Contains("bz.nrrd") && Contains("unsupported encoding 'bzip2'"));
+  }
+  SECTION("no endian for a multi-byte type") {
+    write_file(dir / "end.nrrd", kHeader3D + "encoding: raw\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "end.nrrd"); }),
+               Contains("end.nrrd") && Contains("endian"));
+  }
+  SECTION("rotated space directions") {
+    std::string header = kHeader3D;
+    header.replace(header.find("(0.5,0,0)"), 9, "(0.5,0.5,0)");
+    write_file(dir / "rot.nrrd", header + "endian: little\nencoding: raw\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "rot.nrrd"); }),
+               Contains("rot.nrrd") && Contains("(0.5,0.5,0)") && Contains("axis-aligned"));
+  }
+  SECTION("not NRRD") {
+    write_file(dir / "no.nrrd", "P6\n");
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "no.nrrd"); }),
+               Contains("no.nrrd") && Contains("not a NRRD file"));
+  }
+}
+
+TEST_CASE("nrrd: the square-cylinder snapshots", "[nrrd][realdata]") {
+  const fs::path dir = datasets_dir("square-cylinder-2d");
+  if (dir.empty()) return;
+  for (const char* name : {"sqflow2D-1608.nrrd", "sqflow2D-3928.nrrd"}) {
+    INFO(name);
+    const VectorGrid grid = read_nrrd(dir / name);
+    REQUIRE(grid.geometry.dimension == 2);
+    REQUIRE(grid.geometry.size == std::array<std::int64_t, 3>{192, 64, 1});
+    REQUIRE(grid.components == 2);
+    CHECK(grid.geometry.origin[0] == Approx(-11.916666666666666));
+    CHECK(grid.geometry.origin[1] == Approx(-3.9375));
+    CHECK(grid.geometry.spacing[0] == Approx(1.0 / 6.0));
+    CHECK(grid.geometry.spacing[1] == Approx(0.125));
+    // The channel spans y in [-4, 4) and x from -12 to about 20.
+    const auto box = grid.geometry.bounds();
+    CHECK(box.hi[1] == Approx(3.9375));
+    CHECK(box.hi[0] == Approx(19.916666666666666));
+    double hi = 0;
+    std::size_t zeros = 0;
+    double mean_u = 0;
+    for (std::size_t p = 0; p < grid.geometry.point_count(); ++p) {
+      const double u = grid.values[2 * p];
+      const double v = grid.values[2 * p + 1];
+      REQUIRE(std::isfinite(u));
+      REQUIRE(std::isfinite(v));
+      hi = std::max(hi, std::hypot(u, v));
+      if (u == 0 && v == 0) ++zeros;
+      mean_u += u;
+    }
+    mean_u /= static_cast<double>(grid.geometry.point_count());
+    CHECK(zeros == 48);            // the square cylinder: solid cells are zero vectors
+    CHECK(hi > 1.3);               // peak speed above the inflow's mean
+    CHECK(hi < 1.4);
+    CHECK(mean_u > 0.5);           // the flow goes along +x
+  }
+}
