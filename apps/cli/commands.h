@@ -11,5 +11,6 @@ void add_demo_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_path_command(CLI::App& app);
 void add_bench_path_command(CLI::App& app);
+void add_generate_command(CLI::App& app);
 
 }  // namespace orthofront::cli

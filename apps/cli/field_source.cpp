@@ -1,9 +1,38 @@
 #include "cli/field_source.h"
 
+#include "cli/data_files.h"
+#include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
+#include "orthofront/field/grid_field.h"
 
 namespace orthofront::cli {
 
-std::unique_ptr<Field3> open_field(const std::string& spec) { return make_analytic_field(spec); }
+namespace {
+
+std::unique_ptr<Field3> open_grid_field(const std::string& spec) {
+  DataFile file = open_data_file(spec);
+  if (!file.steady || file.series->step_count() != 1)
+    throw InvalidArgument("'" + spec + "' holds a time series of " +
+                          std::to_string(file.series->step_count()) +
+                          " steps; a stream surface needs a steady field");
+  auto grid = std::make_shared<VectorGrid>();
+  grid->geometry = file.series->geometry();
+  grid->components = file.series->components();
+  grid->values.resize(file.series->step_floats());
+  file.series->read(0, grid->values);
+  GridFieldOptions options;
+  options.zero_is_no_data = file.zero_is_no_data;
+  return std::make_unique<GridField>(std::move(grid), options);
+}
+
+}  // namespace
+
+std::unique_ptr<Field3> open_field(const std::string& spec) {
+  if (find_data_file(spec)) return open_grid_field(spec);
+  if (looks_like_file(spec))
+    throw InvalidArgument("field '" + spec + "' looks like a file but has no known extension (" +
+                          data_file_extensions() + "); analytic fields: `orthofront fields`");
+  return make_analytic_field(spec);
+}
 
 }  // namespace orthofront::cli

@@ -1,0 +1,136 @@
+#include "cli/data_files.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+
+#include "orthofront/error.h"
+#include "orthofront/io/hdf5_layout.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+class SingleGridSeries final : public io::TimeSeries {
+ public:
+  SingleGridSeries(VectorGrid grid, std::string description)
+      : grid_(std::move(grid)), description_(std::move(description)) {}
+  std::size_t step_count() const override { return 1; }
+  double time(std::size_t) const override { return 0.0; }
+  const GridGeometry& geometry() const override { return grid_.geometry; }
+  int components() const override { return grid_.components; }
+  std::string describe() const override { return description_; }
+  io::RawStep read_raw(std::size_t step) const override {
+    io::RawStep raw{step, std::vector<std::byte>(grid_.bytes()), false};
+    std::memcpy(raw.bytes.data(), grid_.values.data(), grid_.bytes());
+    return raw;
+  }
+
+ private:
+  VectorGrid grid_;
+  std::string description_;
+};
+
+std::string compression_text(const io::Hdf5Description& d) {
+  if (d.filters.empty()) return "none";
+  std::string text;
+  for (const std::string& f : d.filters) {
+    if (!text.empty()) text += " + ";
+    text += f == "deflate" ? "gzip level " + std::to_string(d.gzip_level) : f;
+  }
+  return text;
+}
+
+DataFile open_hdf5(const DataFileSpec& spec) {
+  io::Hdf5ReadOptions options;
+  options.steady_as_single_step = true;
+  auto series =
+      io::open_hdf5_series(spec.path, spec.selector.empty() ? "/" : spec.selector, options);
+  const io::Hdf5Description& d = series->description();
+  DataFile file;
+  file.format = "HDF5 (orthofront layout)";
+  file.steady = d.storage == io::Hdf5Storage::steady;
+  file.zero_is_no_data = d.zero_is_no_data;
+  file.stored_bytes = d.stored_bytes;
+  file.details.emplace_back("group", d.group);
+  file.details.emplace_back("samples", d.dataset + " (" + d.stored_type + ")");
+  std::string storage = to_string(d.storage);
+  const std::int64_t slices = d.geometry.dimension == 3 ? d.geometry.size[2] : d.geometry.size[1];
+  if (d.chunk_slices >= slices)
+    storage += ", one chunk per step";
+  else if (d.chunk_slices > 0)
+    storage += ", chunks of " + std::to_string(d.chunk_slices) +
+               (d.geometry.dimension == 3 ? " z-slices" : " y-rows");
+  else
+    storage += ", contiguous";
+  file.details.emplace_back("storage", storage);
+  file.details.emplace_back("compression", compression_text(d));
+  const auto unit = [](const std::string& u) { return u.empty() ? std::string("-") : u; };
+  file.details.emplace_back("units", "length " + unit(d.units.length) + ", time " +
+                                         unit(d.units.time) + ", velocity " +
+                                         unit(d.units.velocity));
+  file.details.emplace_back("fill value", d.fill_value ? std::to_string(*d.fill_value) : "-");
+  file.details.emplace_back("zeros mean",
+                            d.zero_is_no_data ? "no data (land, solid)" : "flow (critical points)");
+  file.series = std::move(series);
+  return file;
+}
+
+}  // namespace
+
+const std::vector<DataFileFormat>& data_file_formats() {
+  static const std::vector<DataFileFormat> formats = {
+      {"HDF5", {".h5", ".hdf5", ".hdf"}, open_hdf5},
+  };
+  return formats;
+}
+
+std::string data_file_extensions() {
+  std::string text;
+  for (const DataFileFormat& f : data_file_formats())
+    for (const std::string& e : f.extensions) text += (text.empty() ? "" : ", ") + e;
+  return text;
+}
+
+std::optional<std::pair<DataFileSpec, const DataFileFormat*>> find_data_file(
+    const std::string& spec) {
+  const std::string lowered = lower(spec);
+  for (std::size_t colon = spec.find(':');; colon = spec.find(':', colon + 1)) {
+    const std::size_t end = colon == std::string::npos ? spec.size() : colon;
+    for (const DataFileFormat& format : data_file_formats()) {
+      for (const std::string& e : format.extensions) {
+        if (end > e.size() && lowered.compare(end - e.size(), e.size(), e) == 0) {
+          DataFileSpec file{spec.substr(0, end),
+                            colon == std::string::npos ? std::string() : spec.substr(colon + 1)};
+          return std::make_pair(std::move(file), &format);
+        }
+      }
+    }
+    if (colon == std::string::npos) return std::nullopt;
+  }
+}
+
+bool looks_like_file(const std::string& spec) {
+  const std::string head = spec.substr(0, spec.find(':'));
+  return head.find('/') != std::string::npos || head.find('.') != std::string::npos;
+}
+
+DataFile open_data_file(const std::string& spec) {
+  const auto found = find_data_file(spec);
+  if (!found)
+    throw InvalidArgument("'" + spec + "' is not a data file of a known format (extensions: " +
+                          data_file_extensions() + ")");
+  return found->second->open(found->first);
+}
+
+std::unique_ptr<io::TimeSeries> single_grid_series(VectorGrid grid, std::string description) {
+  return std::make_unique<SingleGridSeries>(std::move(grid), std::move(description));
+}
+
+}  // namespace orthofront::cli

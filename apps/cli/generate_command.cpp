@@ -1,0 +1,189 @@
+// `orthofront generate`: samples an analytic field (steady, or unsteady as a time series) onto a
+// uniform grid and writes the project's HDF5 layout, streaming a series step by step.
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/grid_args.h"
+#include "cli/progress_bar.h"
+#include "orthofront/error.h"
+#include "orthofront/field/analytic.h"
+#include "orthofront/field/sample_field.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/hdf5_layout.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+struct GenerateArgs {
+  std::string field;
+  std::string out;
+  std::string resolution;
+  std::string box;
+  std::string compress = "none";
+  std::string layout = "chunked";
+  std::string group = "/";
+  int steps = 0;
+  double t0 = 0;
+  double t1 = std::nan("");
+  double chunk_mib = 1024;
+  io::Hdf5Units units;
+  bool quiet = false;
+};
+
+/// The unsteady field frozen at time t, as a steady field (for sampling one step).
+class FieldAtTime final : public Field3 {
+ public:
+  FieldAtTime(const UnsteadyField& field, double t) : field_(field), t_(t) {}
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override { return field_.velocity(x, t_, v); }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override {
+    Vec3 dvdt;
+    return field_.velocity_jacobian(x, t_, v, J, dvdt);
+  }
+  Box<3> domain() const override { return field_.domain(); }
+  std::string describe() const override { return field_.describe(); }
+
+ private:
+  const UnsteadyField& field_;
+  double t_;
+};
+
+std::string mib(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MiB", bytes / (1024.0 * 1024.0));
+  return text;
+}
+
+void run_generate(const GenerateArgs& args) {
+  const std::filesystem::path out = args.out;
+  const std::string extension = out.extension().string();
+  if (extension != ".h5" && extension != ".hdf5")
+    throw InvalidArgument("output '" + args.out + "' must end in .h5 or .hdf5");
+  if (!(args.chunk_mib > 0))
+    throw InvalidArgument("--chunk-mib must be positive, got " + std::to_string(args.chunk_mib));
+
+  io::Hdf5WriteOptions options;
+  options.group = args.group;
+  options.gzip_level = parse_compression(args.compress);
+  options.storage = parse_layout(args.layout);
+  options.units = args.units;
+  options.max_chunk_bytes = static_cast<std::size_t>(args.chunk_mib * 1024 * 1024);
+  options.zero_is_no_data = false;  // zero vectors of a formula are critical points, not land
+
+  SampleOptions sampling;
+  sampling.resolution = parse_resolution(args.resolution);
+  if (!args.box.empty()) sampling.box = parse_box(args.box);
+
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t steps_written = 1;
+  GridGeometry geometry;
+  int components = 3;
+  if (is_unsteady_field_name(args.field)) {
+    const auto field = make_unsteady_field(args.field);
+    if (args.steps < 1)
+      throw InvalidArgument("field '" + args.field +
+                            "' is time-dependent: give --steps N (and --t0, --t1)");
+    if (args.steps > 1 && !std::isfinite(args.t1))
+      throw InvalidArgument("--steps " + std::to_string(args.steps) + " needs --t1 (end time)");
+    const double t1 = args.steps > 1 ? args.t1 : args.t0;
+    if (args.steps > 1 && !(t1 > args.t0))
+      throw InvalidArgument("--t1 (" + std::to_string(t1) + ") must exceed --t0 (" +
+                            std::to_string(args.t0) + ")");
+    const TimeRange range = field->time_range();
+    if (!range.contains(args.t0) || !range.contains(t1))
+      throw InvalidArgument("times [" + std::to_string(args.t0) + ", " + std::to_string(t1) +
+                            "] lie outside the time range of '" + args.field + "' [" +
+                            std::to_string(range.begin) + ", " + std::to_string(range.end) + "]");
+    std::vector<double> times(static_cast<std::size_t>(args.steps));
+    for (int i = 0; i < args.steps; ++i)
+      times[static_cast<std::size_t>(i)] =
+          args.steps == 1 ? args.t0
+                          : args.t0 + (t1 - args.t0) * i / static_cast<double>(args.steps - 1);
+    geometry = sampling_geometry(sampling, field->domain());
+    components = field->dimension() == 2 && geometry.dimension == 2 ? 2 : 3;
+    // One step in memory at a time, whatever the series' size.
+    io::Hdf5SeriesWriter writer(out, geometry, components, times, options);
+    std::vector<float> values(geometry.point_count() * static_cast<std::size_t>(components));
+    ProgressBar bar("generate " + args.field);
+    for (std::size_t s = 0; s < times.size(); ++s) {
+      sample_field_into(FieldAtTime(*field, times[s]), geometry, components, values);
+      writer.write_step(values);
+      Progress progress;
+      progress.step = static_cast<int>(s + 1);
+      progress.max_steps = args.steps;
+      progress.elapsed_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (!bar.update(progress))
+        throw Error("interrupted after " + std::to_string(s + 1) + " of " +
+                    std::to_string(times.size()) + " steps: no file written");
+    }
+    bar.finish();
+    writer.commit();
+    steps_written = times.size();
+  } else {
+    if (args.steps > 0)
+      throw InvalidArgument("field '" + args.field +
+                            "' is steady: --steps needs a time-dependent field (see `orthofront "
+                            "fields`)");
+    const auto field = make_analytic_field(args.field);
+    const VectorGrid grid = sample_field(*field, sampling);
+    geometry = grid.geometry;
+    components = grid.components;
+    io::write_hdf5_grid(grid, out, options);
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!args.quiet) {
+    const double step_bytes = static_cast<double>(geometry.point_count()) * components * 4.0;
+    std::cout << "Wrote " << args.out << " and " << io::xdmf_path(out).string() << ": "
+              << args.field << " on " << geometry.size[0] << " x " << geometry.size[1];
+    if (geometry.dimension == 3) std::cout << " x " << geometry.size[2];
+    std::cout << " points, " << components << " components, " << steps_written
+              << (steps_written == 1 ? " step" : " steps") << " of " << mib(step_bytes) << " ("
+              << mib(static_cast<double>(std::filesystem::file_size(out))) << " on disk) in "
+              << seconds << " s\n";
+  }
+}
+
+}  // namespace
+
+void add_generate_command(CLI::App& app) {
+  auto args = std::make_shared<GenerateArgs>();
+  CLI::App* c = app.add_subcommand(
+      "generate", "Sample an analytic field onto a grid and write the project's HDF5 layout");
+  c->add_option("--field", args->field,
+                "Analytic field NAME[:key=value,...]; time-dependent ones need --steps "
+                "(see `orthofront fields`)")
+      ->required();
+  c->add_option("--out", args->out, "Output file (.h5); FILE.xmf is written beside it")->required();
+  c->add_option("--resolution", args->resolution,
+                "Samples per axis NX,NY,NZ (NZ = 1 or NX,NY: a 2D grid)")
+      ->required();
+  c->add_option("--box", args->box,
+                "Sampled region xmin,ymin,zmin:xmax,ymax,zmax (default: the field's domain)");
+  c->add_option("--compress", args->compress, "none | gzip[:LEVEL] (LEVEL 1-9, default 4)")
+      ->capture_default_str();
+  c->add_option("--layout", args->layout,
+                "Time series storage: chunked (one 4D/5D dataset, a step per chunk) | per-step")
+      ->capture_default_str();
+  c->add_option("--group", args->group, "HDF5 group of the field")->capture_default_str();
+  c->add_option("--steps", args->steps, "Time steps (time-dependent fields)");
+  c->add_option("--t0", args->t0, "Time of the first step")->capture_default_str();
+  c->add_option("--t1", args->t1, "Time of the last step");
+  c->add_option("--chunk-mib", args->chunk_mib,
+                "Largest chunk in MiB; larger steps are chunked by z-slices")
+      ->capture_default_str();
+  c->add_option("--units-length", args->units.length, "Length unit, e.g. m");
+  c->add_option("--units-time", args->units.time, "Time unit, e.g. s");
+  c->add_option("--units-velocity", args->units.velocity, "Velocity unit, e.g. m/s");
+  c->add_flag("--quiet", args->quiet, "No summary on stdout");
+  c->callback([args]() { run_generate(*args); });
+}
+
+}  // namespace orthofront::cli

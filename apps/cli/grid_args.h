@@ -1,0 +1,22 @@
+#pragma once
+/// Command-line values of the grid commands (generate, bench-grid): resolutions, boxes, the
+/// compression and the HDF5 storage.
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/types.h"
+
+namespace orthofront::cli {
+
+/// "NX,NY,NZ" or "NX,NY" (NZ = 1: a 2D grid). Throws InvalidArgument naming the bad part.
+std::array<std::int64_t, 3> parse_resolution(const std::string& text);
+/// "xmin,ymin,zmin:xmax,ymax,zmax".
+Box<3> parse_box(const std::string& text);
+/// "none" -> 0, "gzip" -> 4, "gzip:LEVEL" -> LEVEL (1-9).
+int parse_compression(const std::string& text);
+/// "chunked" or "per-step".
+io::Hdf5Storage parse_layout(const std::string& text);
+
+}  // namespace orthofront::cli
