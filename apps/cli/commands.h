@@ -12,5 +12,6 @@ void add_bench_command(CLI::App& app);
 void add_path_command(CLI::App& app);
 void add_bench_path_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
+void add_info_command(CLI::App& app);
 
 }  // namespace orthofront::cli

@@ -1,0 +1,185 @@
+// `orthofront generate`, `info` and `stream --field FILE.h5`, run as a user runs them.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    path_ = fs::temp_directory_path() / ("orthofront-test-generate-" + std::to_string(::getpid()) +
+                                         "-" + std::to_string(counter++));
+    fs::create_directories(path_);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  ~TempDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+  bool empty() const { return fs::is_empty(path_); }
+
+ private:
+  fs::path path_;
+};
+
+struct Run {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+// Runs the binary with `arguments` (a shell fragment), capturing stdout and stderr together.
+Run run(const std::string& arguments) {
+  Run r;
+  const std::string command = std::string("'") + ORTHOFRONT_BINARY + "' " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) r.output += buffer;
+  const int status = ::pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+}  // namespace
+
+TEST_CASE("generate writes a steady field that info describes", "[apps][generate]") {
+  TempDir dir;
+  const Run g =
+      run("generate --field saddle3d --resolution 17,9,5 --units-length m --out " + dir / "s.h5");
+  INFO(g.output);
+  REQUIRE(g.status == 0);
+  CHECK(fs::exists(dir / "s.h5"));
+  CHECK(fs::exists(dir / "s.xmf"));
+
+  const Run info = run("info " + dir / "s.h5");
+  INFO(info.output);
+  REQUIRE(info.status == 0);
+  CHECK_THAT(info.output, Catch::Contains("uniform 3D, 17 x 9 x 5 points") &&
+                              Catch::Contains("components:   3") &&
+                              Catch::Contains("steps:        steady") &&
+                              Catch::Contains("bounds:       [-4, 4] x [-4, 4] x [-4, 4]") &&
+                              Catch::Contains("length m") &&
+                              Catch::Contains("v_x [-4, 4] v_y [-4, 4] v_z [-4, 4]") &&
+                              Catch::Contains("bytes/step:   9180 "));
+
+  const Run json = run("info --json " + dir / "s.h5" + " > " + dir / "info.json");
+  REQUIRE(json.status == 0);
+  const nlohmann::json j = read_json(dir / "info.json");
+  CHECK(j["grid"]["size"] == nlohmann::json{17, 9, 5});
+  CHECK(j["components"] == 3);
+  CHECK(j["missing_points"] == 0);
+}
+
+TEST_CASE("generate streams time series of unsteady fields in both layouts", "[apps][generate]") {
+  TempDir dir;
+  for (const char* layout : {"chunked", "per-step"}) {
+    const std::string file = dir / (std::string(layout) + ".h5");
+    const Run g = run(std::string("generate --field double-gyre --resolution 41,21,1 --steps 5 "
+                                  "--t0 0 --t1 2 --compress gzip:3 --layout ") +
+                      layout + " --group /dg --out " + file);
+    INFO(g.output);
+    REQUIRE(g.status == 0);
+    const Run info = run("info " + file + ":/dg");
+    INFO(info.output);
+    REQUIRE(info.status == 0);
+    CHECK_THAT(info.output, Catch::Contains("uniform 2D, 41 x 21 points") &&
+                                Catch::Contains("components:   2") &&
+                                Catch::Contains("steps:        5, times 0 0.5 1 1.5 2") &&
+                                Catch::Contains(std::string("storage:      ") + layout) &&
+                                Catch::Contains("shuffle + gzip level 3"));
+  }
+  const Run g3 = run("generate --field unsteady-abc --resolution 16,16,16 --steps 3 --t1 1 --out " +
+                     dir / "abc.h5");
+  INFO(g3.output);
+  REQUIRE(g3.status == 0);
+  const Run info = run("info " + dir / "abc.h5");
+  CHECK_THAT(info.output, Catch::Contains("16 x 16 x 16") && Catch::Contains("steps:        3"));
+}
+
+TEST_CASE("stream on a sampled field matches the analytic field", "[apps][generate][stream]") {
+  TempDir dir;
+  REQUIRE(run("generate --field saddle3d --resolution 81,81,81 --out " + dir / "s.h5").status == 0);
+  const std::string common =
+      " --seed line:-1,2,0.1:1,2,0.1 --seed-count 21 --edge 0.1 --steps 60 --quiet ";
+  const Run grid = run("stream --field " + dir / "s.h5" + common + "--out " + dir / "g.ply" +
+                       " --report " + dir / "g.json");
+  INFO(grid.output);
+  REQUIRE(grid.status == 0);
+  const Run exact = run("stream --field saddle3d" + common + "--out " + dir / "e.ply" +
+                        " --report " + dir / "e.json");
+  REQUIRE(exact.status == 0);
+  const double v_grid = read_json(dir / "g.json")["counts"]["vertices"].get<double>();
+  const double v_exact = read_json(dir / "e.json")["counts"]["vertices"].get<double>();
+  CHECK(v_grid > 1000);
+  CHECK(v_grid == Approx(v_exact).epsilon(0.02));
+}
+
+TEST_CASE("bad paths and values fail with a message naming them", "[apps][generate][errors]") {
+  TempDir dir;
+  SECTION("info on a missing file") {
+    const Run r = run("info " + dir / "missing.h5");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("missing.h5") && Catch::Contains("no such file"));
+  }
+  SECTION("info on a file that is not HDF5") {
+    std::ofstream(dir / "text.h5") << "not hdf5";
+    const Run r = run("info " + dir / "text.h5");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("text.h5 is not an HDF5 file"));
+  }
+  SECTION("info on an unknown format") {
+    const Run r = run("info " + dir / "field.xyz");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("field.xyz") && Catch::Contains(".h5"));
+  }
+  SECTION("stream on a missing file and on a missing group") {
+    Run r = run("stream --field " + dir / "missing.h5" + " --seed line:0,0,0:1,1,1 --out " +
+                dir / "x.ply");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("missing.h5"));
+    REQUIRE(run("generate --field saddle3d --resolution 5,5,5 --out " + dir / "s.h5").status == 0);
+    r = run("stream --field " + dir / "s.h5:/nope" + " --seed line:0,0,0:1,1,1 --out " +
+            dir / "x.ply");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("s.h5: no group or dataset '/nope'"));
+  }
+  SECTION("generate into a missing folder leaves nothing") {
+    const Run r = run("generate --field saddle3d --resolution 5,5,5 --out " + dir / "no/s.h5");
+    CHECK(r.status != 0);
+    CHECK_THAT(r.output, Catch::Contains("no/s.h5"));
+    CHECK(dir.empty());
+  }
+  SECTION("generate with bad values leaves nothing") {
+    for (const std::string& args :
+         {std::string("--field nosuch --resolution 5,5,5"),
+          std::string("--field saddle3d --resolution 5,x,5"),
+          std::string("--field saddle3d --resolution 5,5,5 --compress lzf"),
+          std::string("--field saddle3d --resolution 5,5,5 --steps 3"),
+          std::string("--field double-gyre --resolution 5,5,1"),
+          std::string("--field double-gyre --resolution 5,5,1 --steps 3 --t0 1 --t1 0"),
+          std::string("--field unsteady-abc --resolution 5,5,5 --steps 2 --t0 -1 --t1 1")}) {
+      const Run r = run("generate " + args + " --out " + dir / "s.h5");
+      INFO(args << "\n" << r.output);
+      CHECK(r.status != 0);
+      CHECK_THAT(r.output, Catch::Contains("error"));
+    }
+    CHECK(dir.empty());
+  }
+}
