@@ -737,6 +737,9 @@ class Engine {
         if (!(ww > 0)) break;
         const double delta = (guess - r.x).dot(w) / ww;
         if (std::abs(delta) * std::sqrt(ww) < 1e-6 * seg) break;
+        // A Newton step longer than the segment means the stream line runs nearly parallel to
+        // the front here (or the flow is slow): give up instead of integrating for ages.
+        if (std::abs(delta) * std::sqrt(ww) > seg) break;
         r = integrate_dopri5(field_, r.x, delta, tol_);
         report_.field_evaluations += static_cast<std::size_t>(r.evaluations + 1);
         time += delta;

@@ -17,6 +17,9 @@ struct IntegrationResult {
   int evaluations = 0;
 };
 
+/// Field evaluations after which one DOPRI5 integration gives up (status no_data).
+inline constexpr int kMaxEvaluations = 1'000'000;
+
 struct Tolerance {
   double absolute = 1e-9;  ///< world units (the engine scales it with ℓ)
   double relative = 1e-9;
@@ -85,7 +88,13 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
   double done = 0;
   int rejections_in_row = 0;
   while (done < span) {
-    if (span - done < h * (1 + 1e-12)) h = span - done;
+    // The last step lands exactly on the span end, so rounding can never leave a sliver of
+    // time that no step size covers (done + h == done would loop forever).
+    bool last = false;
+    if (span - done <= h * (1 + 1e-12)) {
+      h = span - done;
+      last = true;
+    }
     const double sh = dir * h;
     const Vec<N>& x = out.x;
     st = field.velocity(x + sh * (a21 * k1), k2);
@@ -101,6 +110,12 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
       st = field.velocity(y, k7);
     }
     out.evaluations += 6;
+    if (out.evaluations > kMaxEvaluations) {
+      // A stream line that needs this many steps is caught near a critical point: stop it.
+      out.status = FieldStatus::no_data;
+      out.reached = dir * done;
+      return out;
+    }
     if (st != FieldStatus::inside) {
       // A stage left the valid region: shrink towards the boundary, then give up there.
       h *= 0.5;
@@ -121,7 +136,7 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
     if (norm <= 1.0) {
       out.x = y;
       k1 = k7;  // first same as last
-      done += h;
+      done = last ? span : done + h;
       rejections_in_row = 0;
       const double grow = norm == 0 ? 5.0 : std::min(5.0, 0.9 * std::pow(norm, -0.2));
       h *= grow;
