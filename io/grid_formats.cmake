@@ -14,3 +14,10 @@ target_sources(orthofront_io PRIVATE
   orthofront/io/grid_series.cpp
 )
 target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB)
+
+# OpenVDB: sparse vector grids (reader, writer, time series) and the field that samples them.
+target_sources(orthofront_io PRIVATE
+  orthofront/io/vdb_grid.cpp
+  orthofront/io/vdb_field.cpp
+)
+target_link_libraries(orthofront_io PRIVATE OpenVDB::openvdb)

@@ -10,6 +10,7 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/nrrd_reader.h"
+#include "orthofront/io/vdb_grid.h"
 #include "orthofront/io/vec_reader.h"
 #include "orthofront/io/vti_reader.h"
 #include "orthofront/io/vtk_legacy_reader.h"
@@ -88,7 +89,8 @@ VectorGrid parse_vector_grid(std::string_view content, const std::filesystem::pa
       return parse_vti(content, file, selector);
     case GridFormat::kVtkLegacy:
       return parse_vtk_legacy(content, file, selector);
-    case GridFormat::kVdb:  // TODO(step 2)
+    case GridFormat::kVdb:
+      return parse_vdb_grid(content, file, selector);
     case GridFormat::kUnknown:
       break;
   }
@@ -101,6 +103,7 @@ VectorGrid read_vector_grid(const std::filesystem::path& path, const std::string
     throw InvalidArgument(path.string() + ": unknown grid file extension (expected " +
                           grid_extensions_text() + ")");
   }
+  if (grid_format_of(path) == GridFormat::kVdb) return read_vdb_grid(path, selector);
   return parse_vector_grid(detail::read_file_bytes(path), path, selector);
 }
 

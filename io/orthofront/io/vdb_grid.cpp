@@ -1,0 +1,606 @@
+#include "orthofront/io/vdb_grid.h"
+
+#include <openvdb/io/Stream.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/grid_decode.h"
+#include "orthofront/io/vdb_detail.h"
+
+namespace orthofront::io {
+
+void initialize_openvdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+namespace detail {
+namespace {
+
+constexpr const char* kComponents = "orthofront_components";
+constexpr const char* kIndexMin = "orthofront_index_min";
+constexpr const char* kIndexMax = "orthofront_index_max";
+
+bool is_vector_type(const openvdb::GridBase& g) {
+  return g.isType<openvdb::Vec3SGrid>() || g.isType<openvdb::Vec3DGrid>();
+}
+bool is_scalar_type(const openvdb::GridBase& g) {
+  return g.isType<openvdb::FloatGrid>() || g.isType<openvdb::DoubleGrid>();
+}
+
+std::string grid_list(const openvdb::GridPtrVec& grids) {
+  std::string list;
+  for (const auto& g : grids) {
+    list += (list.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ")";
+  }
+  return list.empty() ? "no grids" : list;
+}
+
+openvdb::GridBase::Ptr find_grid(const openvdb::GridPtrVec& grids, const std::string& name) {
+  for (const auto& g : grids) {
+    if (g->getName() == name) return g;
+  }
+  return nullptr;
+}
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> parts;
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', pos);
+    parts.push_back(text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return parts;
+}
+
+/// The names to load: one vector grid, or three scalar grids.
+std::vector<std::string> choose_names(const openvdb::GridPtrVec& grids, const std::string& selector,
+                                      const std::string& file) {
+  const auto fail = [&](const std::string& what) {
+    return FormatError(file + ": " + what + " (the file holds " + grid_list(grids) + ")");
+  };
+  if (!selector.empty()) {
+    const std::vector<std::string> parts = split_commas(selector);
+    if (parts.size() == 1) {
+      const auto g = find_grid(grids, selector);
+      if (!g) throw fail("no grid named '" + selector + "'");
+      if (!is_vector_type(*g)) {
+        throw fail("grid '" + selector + "' holds " + g->valueType() +
+                   " values, not vectors (name three scalar grids as FILE.vdb:x,y,z)");
+      }
+      return {selector};
+    }
+    if (parts.size() != 3) throw fail("grid selector '" + selector + "' names neither 1 nor 3 grids");
+    for (const std::string& part : parts) {
+      const auto g = find_grid(grids, part);
+      if (!g) throw fail("no grid named '" + part + "'");
+      if (!is_scalar_type(*g))
+        throw fail("grid '" + part + "' holds " + g->valueType() + " values, not float or double scalars");
+    }
+    return parts;
+  }
+  for (const auto& g : grids) {
+    if (is_vector_type(*g)) return {g->getName()};
+  }
+  std::vector<std::array<std::string, 3>> triples = {
+      {"x", "y", "z"}, {"u", "v", "w"}, {"vx", "vy", "vz"}, {"X", "Y", "Z"}, {"U", "V", "W"}};
+  for (const auto& g : grids) {
+    const std::string& n = g->getName();
+    if (n.size() > 2 && n.ends_with(".x")) {
+      const std::string stem = n.substr(0, n.size() - 2);
+      triples.push_back({stem + ".x", stem + ".y", stem + ".z"});
+    }
+  }
+  for (const auto& triple : triples) {
+    bool complete = true;
+    for (const std::string& name : triple) {
+      const auto g = find_grid(grids, name);
+      complete = complete && g && is_scalar_type(*g);
+    }
+    if (complete) return {triple[0], triple[1], triple[2]};
+  }
+  throw fail("no Vec3f/Vec3d grid and no x/y/z, u/v/w or NAME.x/.y/.z scalar grids");
+}
+
+template <typename ScalarGrid, typename VecGrid>
+typename VecGrid::Ptr combine(const std::array<openvdb::GridBase::Ptr, 3>& parts) {
+  using VecT = typename VecGrid::ValueType;
+  auto out = VecGrid::create(VecT(0));
+  out->setTransform(parts[0]->transform().copy());
+  std::array<typename ScalarGrid::Ptr, 3> typed;
+  for (std::size_t c = 0; c < 3; ++c) {
+    // Float and double scalar grids may be mixed: convert through double.
+    if (auto same = openvdb::gridPtrCast<ScalarGrid>(parts[c])) {
+      typed[c] = same;
+    } else {
+      typed[c] = ScalarGrid::create(0);
+      typed[c]->setTransform(parts[c]->transform().copy());
+      if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(parts[c])) {
+        for (auto it = f->cbeginValueOn(); it; ++it) {
+          openvdb::CoordBBox box;
+          it.getBoundingBox(box);
+          typed[c]->fill(box, static_cast<typename ScalarGrid::ValueType>(*it), true);
+        }
+      } else if (auto d = openvdb::gridPtrCast<openvdb::DoubleGrid>(parts[c])) {
+        for (auto it = d->cbeginValueOn(); it; ++it) {
+          openvdb::CoordBBox box;
+          it.getBoundingBox(box);
+          typed[c]->fill(box, static_cast<typename ScalarGrid::ValueType>(*it), true);
+        }
+      }
+    }
+  }
+  auto acc = out->getAccessor();
+  auto acc_y = typed[1]->getConstAccessor();
+  auto acc_z = typed[2]->getConstAccessor();
+  for (auto it = typed[0]->cbeginValueOn(); it; ++it) {
+    openvdb::CoordBBox box;
+    it.getBoundingBox(box);
+    for (auto ijk = box.begin(); ijk; ++ijk) {
+      typename ScalarGrid::ValueType vy{};
+      typename ScalarGrid::ValueType vz{};
+      if (acc_y.probeValue(*ijk, vy) && acc_z.probeValue(*ijk, vz))
+        acc.setValue(*ijk, VecT(*it, vy, vz));
+    }
+  }
+  return out;
+}
+
+int metadata_int(const openvdb::GridBase& g, const char* key, int fallback) {
+  if (auto m = g.getMetadata<openvdb::Int32Metadata>(key)) return m->value();
+  return fallback;
+}
+
+/// Converts an OpenVDB exception into ours.
+[[noreturn]] void rethrow_vdb(const std::string& file) {
+  try {
+    throw;
+  } catch (const openvdb::Exception& e) {
+    throw FormatError(file + ": not a readable OpenVDB file: " + e.what());
+  } catch (const std::ios_base::failure& e) {
+    throw IoError("cannot read " + file + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+LoadedVdbGrid select_vdb_grid(const openvdb::GridPtrVec& grids, const std::string& selector,
+                              const std::string& file) {
+  const std::vector<std::string> names = choose_names(grids, selector, file);
+  LoadedVdbGrid loaded;
+  if (names.size() == 1) {
+    const auto g = find_grid(grids, names[0]);
+    loaded.grid_f = openvdb::gridPtrCast<openvdb::Vec3SGrid>(g);
+    loaded.grid_d = openvdb::gridPtrCast<openvdb::Vec3DGrid>(g);
+    loaded.name = names[0];
+  } else {
+    std::array<openvdb::GridBase::Ptr, 3> parts;
+    bool any_double = false;
+    for (std::size_t c = 0; c < 3; ++c) {
+      parts[c] = find_grid(grids, names[c]);
+      any_double = any_double || parts[c]->isType<openvdb::DoubleGrid>();
+      if (parts[c]->transform() != parts[0]->transform()) {
+        throw FormatError(file + ": scalar grids '" + names[0] + "' and '" + names[c] +
+                          "' have different transforms");
+      }
+    }
+    if (any_double) {
+      loaded.grid_d = combine<openvdb::DoubleGrid, openvdb::Vec3DGrid>(parts);
+    } else {
+      loaded.grid_f = combine<openvdb::FloatGrid, openvdb::Vec3SGrid>(parts);
+    }
+    loaded.name = names[0] + "," + names[1] + "," + names[2];
+    for (const auto& part : parts) {
+      if (part->getGridClass() == openvdb::GRID_STAGGERED) loaded.staggered = true;
+    }
+    if (loaded.grid_d) loaded.grid_d->setName(loaded.name);
+    if (loaded.grid_f) loaded.grid_f->setName(loaded.name);
+    return loaded;
+  }
+  const openvdb::GridBase& base = loaded.base();
+  loaded.staggered = base.getGridClass() == openvdb::GRID_STAGGERED;
+  loaded.components = metadata_int(base, kComponents, 3) == 2 ? 2 : 3;
+  return loaded;
+}
+
+openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
+  initialize_openvdb();
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe || std::filesystem::is_directory(path))
+      throw IoError("cannot read " + path.string() + ": no such file or not readable");
+  }
+  try {
+    openvdb::io::File file(path.string());
+    file.open(false);
+    auto grids = file.getGrids();
+    file.close();
+    return grids;
+  } catch (...) {
+    rethrow_vdb(path.string());
+  }
+}
+
+openvdb::GridPtrVecPtr read_vdb_stream(std::istream& in, const std::string& file) {
+  initialize_openvdb();
+  try {
+    openvdb::io::Stream stream(in, false);
+    return stream.getGrids();
+  } catch (...) {
+    rethrow_vdb(file);
+  }
+}
+
+LoadedVdbGrid load_vdb_grid(const std::filesystem::path& path, const std::string& selector,
+                            const std::string& where) {
+  initialize_openvdb();
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe || std::filesystem::is_directory(path))
+      throw IoError("cannot read " + path.string() + ": no such file or not readable");
+  }
+  openvdb::GridPtrVec chosen;
+  try {
+    openvdb::io::File file(path.string());
+    file.open();
+    const auto metadata = file.readAllGridMetadata();
+    for (const std::string& name : choose_names(*metadata, selector, where)) {
+      chosen.push_back(file.readGrid(name));
+    }
+    file.close();
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    rethrow_vdb(where);
+  }
+  return select_vdb_grid(chosen, selector, where);
+}
+
+openvdb::CoordBBox dense_index_box(const LoadedVdbGrid& grid) {
+  const openvdb::GridBase& base = grid.base();
+  openvdb::CoordBBox box = base.evalActiveVoxelBoundingBox();
+  const auto lo = base.getMetadata<openvdb::Vec3IMetadata>(kIndexMin);
+  const auto hi = base.getMetadata<openvdb::Vec3IMetadata>(kIndexMax);
+  if (lo && hi) {
+    box.expand(openvdb::CoordBBox(openvdb::Coord(lo->value()), openvdb::Coord(hi->value())));
+  }
+  return box;
+}
+
+namespace {
+
+template <typename GridT>
+void fill_dense(const GridT& grid, bool staggered, const openvdb::CoordBBox& box,
+                int components, std::vector<float>& values) {
+  using VecT = typename GridT::ValueType;
+  auto acc = grid.getConstUnsafeAccessor();
+  const openvdb::Coord lo = box.min();
+  const openvdb::Coord dim = box.dim();
+  const auto nc = static_cast<std::size_t>(components);
+  std::size_t at = 0;
+  for (int k = 0; k < dim.z(); ++k) {
+    for (int j = 0; j < dim.y(); ++j) {
+      for (int i = 0; i < dim.x(); ++i, at += nc) {
+        const openvdb::Coord ijk = lo + openvdb::Coord(i, j, k);
+        VecT v;
+        if (!staggered) {
+          if (!acc.probeValue(ijk, v)) continue;
+          for (std::size_t c = 0; c < nc; ++c) values[at + c] = static_cast<float>(v[static_cast<int>(c)]);
+          continue;
+        }
+        // Staggered: component c is stored at the face ijk - e_c / 2; the centre value is the
+        // mean of the faces at ijk and ijk + e_c (what StaggeredBoxSampler gives at ijk).
+        std::array<double, 3> centre{};
+        bool ok = true;
+        for (int c = 0; c < 3 && ok; ++c) {
+          openvdb::Coord next = ijk;
+          next[c] += 1;
+          VecT a;
+          VecT b;
+          ok = acc.probeValue(ijk, a) && acc.probeValue(next, b);
+          centre[static_cast<std::size_t>(c)] = 0.5 * (static_cast<double>(a[c]) + static_cast<double>(b[c]));
+        }
+        if (!ok) continue;
+        for (std::size_t c = 0; c < nc; ++c) values[at + c] = static_cast<float>(centre[c]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+VectorGrid densify(const LoadedVdbGrid& grid, const openvdb::CoordBBox& box, const std::string& file) {
+  const openvdb::GridBase& base = grid.base();
+  const openvdb::math::Transform& xform = base.transform();
+  const std::string what = file + ": grid '" + grid.name + "'";
+  if (!xform.isLinear()) throw FormatError(what + " has a non-linear (frustum) transform");
+  const openvdb::Mat4d m = xform.baseMap()->getAffineMap()->getMat4();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      if (r != c && m(r, c) != 0.0) {
+        throw FormatError(what + " has a rotated or sheared transform; a dense grid needs "
+                                 "axis-aligned voxels (sample it as a field instead)");
+      }
+    }
+  }
+  if (box.empty()) throw FormatError(what + " has no active voxels");
+  VectorGrid out;
+  GridGeometry& g = out.geometry;
+  const openvdb::Coord dim = box.dim();
+  g.size = {dim.x(), dim.y(), dim.z()};
+  g.dimension = dim.z() == 1 ? 2 : 3;
+  const openvdb::Vec3d origin = xform.indexToWorld(box.min());
+  for (int a = 0; a < 3; ++a) {
+    g.origin[a] = origin[a];
+    g.spacing[a] = m(a, a);
+  }
+  out.components = grid.components;
+  const std::size_t points = checked_point_count(g.size, out.components, file, "VDB box");
+  out.values.assign(points * static_cast<std::size_t>(out.components),
+                    std::numeric_limits<float>::quiet_NaN());
+  if (grid.grid_f) {
+    fill_dense(*grid.grid_f, grid.staggered, box, out.components, out.values);
+  } else {
+    fill_dense(*grid.grid_d, grid.staggered, box, out.components, out.values);
+  }
+  validate_grid(out, file);
+  return out;
+}
+
+openvdb::Vec3SGrid::Ptr to_vdb(const VectorGrid& grid, const std::string& name) {
+  initialize_openvdb();
+  const GridGeometry& g = grid.geometry;
+  if (g.rectilinear()) {
+    throw InvalidArgument("grid '" + name +
+                          "' is rectilinear; OpenVDB stores uniform voxels only (resample it first)");
+  }
+  if (grid.components != 2 && grid.components != 3)
+    throw InvalidArgument("grid '" + name + "' has " + std::to_string(grid.components) + " components");
+  if (grid.values.size() != g.point_count() * static_cast<std::size_t>(grid.components))
+    throw InvalidArgument("grid '" + name + "' has a value count that does not match its size");
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (g.size[a] > std::numeric_limits<std::int32_t>::max())
+      throw InvalidArgument("grid '" + name + "' is too large for OpenVDB's 32-bit coordinates");
+  }
+  auto out = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+  auto xform = openvdb::math::Transform::createLinearTransform(1.0);
+  xform->preScale(openvdb::Vec3d(g.spacing[0], g.spacing[1], g.spacing[2]));
+  xform->postTranslate(openvdb::Vec3d(g.origin[0], g.origin[1], g.origin[2]));
+  out->setTransform(xform);
+  out->setName(name);
+  auto acc = out->getAccessor();
+  const auto nc = static_cast<std::size_t>(grid.components);
+  for (std::int64_t k = 0; k < g.size[2]; ++k) {
+    for (std::int64_t j = 0; j < g.size[1]; ++j) {
+      for (std::int64_t i = 0; i < g.size[0]; ++i) {
+        const float* v = grid.values.data() + g.index(i, j, k) * nc;
+        openvdb::Vec3s value(v[0], v[1], nc == 3 ? v[2] : 0.0f);
+        if (std::isnan(value[0]) || std::isnan(value[1]) || std::isnan(value[2])) continue;
+        acc.setValue(openvdb::Coord(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k)), value);
+      }
+    }
+  }
+  out->insertMeta(kComponents, openvdb::Int32Metadata(grid.components));
+  out->insertMeta(kIndexMin, openvdb::Vec3IMetadata(openvdb::Vec3i(0, 0, 0)));
+  out->insertMeta(kIndexMax, openvdb::Vec3IMetadata(openvdb::Vec3i(static_cast<int>(g.size[0] - 1),
+                                                                   static_cast<int>(g.size[1] - 1),
+                                                                   static_cast<int>(g.size[2] - 1))));
+  return out;
+}
+
+}  // namespace detail
+
+std::vector<VdbGridInfo> list_vdb_grids(const std::filesystem::path& path) {
+  initialize_openvdb();
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe || std::filesystem::is_directory(path))
+      throw IoError("cannot read " + path.string() + ": no such file or not readable");
+  }
+  openvdb::GridPtrVecPtr grids;
+  try {
+    openvdb::io::File file(path.string());
+    file.open();
+    grids = file.readAllGridMetadata();
+    file.close();
+  } catch (...) {
+    detail::rethrow_vdb(path.string());
+  }
+  std::vector<VdbGridInfo> infos;
+  for (const auto& g : *grids) {
+    VdbGridInfo info;
+    info.name = g->getName();
+    info.value_type = g->valueType();
+    info.grid_class = openvdb::GridBase::gridClassToString(g->getGridClass());
+    const openvdb::Vec3d voxel = g->transform().voxelSize();
+    info.voxel_size = Vec3(voxel[0], voxel[1], voxel[2]);
+    const auto lo = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
+    const auto hi = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+    if (lo && hi) {
+      info.index_box = {lo->value()[0], lo->value()[1], lo->value()[2],
+                        hi->value()[0], hi->value()[1], hi->value()[2]};
+    }
+    if (const auto n = g->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT))
+      info.active_voxels = static_cast<std::uint64_t>(n->value());
+    if (const auto t = g->getMetadata<openvdb::DoubleMetadata>("time")) info.time = t->value();
+    if (const auto t = g->getMetadata<openvdb::FloatMetadata>("time")) info.time = t->value();
+    infos.push_back(info);
+  }
+  return infos;
+}
+
+VectorGrid read_vdb_grid(const std::filesystem::path& path, const std::string& selector) {
+  const detail::LoadedVdbGrid grid = detail::load_vdb_grid(path, selector, path.string());
+  return detail::densify(grid, detail::dense_index_box(grid), path.string());
+}
+
+VectorGrid parse_vdb_grid(std::string_view content, const std::string& file,
+                          const std::string& selector) {
+  std::istringstream in{std::string(content)};
+  const auto grids = detail::read_vdb_stream(in, file);
+  const detail::LoadedVdbGrid grid = detail::select_vdb_grid(*grids, selector, file);
+  return detail::densify(grid, detail::dense_index_box(grid), file);
+}
+
+void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGrid>& grids) {
+  initialize_openvdb();
+  check_writable(path);
+  openvdb::GridPtrVec out;
+  std::set<std::string> names;
+  for (const VdbOutputGrid& entry : grids) {
+    if (entry.grid == nullptr) throw InvalidArgument("write_vdb: grid '" + entry.name + "' is null");
+    if (entry.name.empty()) throw InvalidArgument("write_vdb: a grid needs a name");
+    if (!names.insert(entry.name).second)
+      throw InvalidArgument("write_vdb: two grids are named '" + entry.name + "'");
+    auto grid = detail::to_vdb(*entry.grid, entry.name);
+    if (entry.time) grid->insertMeta("time", openvdb::DoubleMetadata(*entry.time));
+    out.push_back(grid);
+  }
+  std::filesystem::path temp = path;
+  temp += ".tmp-" + std::to_string(::getpid());
+  try {
+    openvdb::io::File file(temp.string());
+    file.write(out);
+    file.close();
+    std::filesystem::rename(temp, path);
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+    throw IoError("cannot write " + path.string() + ": " + e.what());
+  }
+}
+
+void write_vdb(const VectorGrid& grid, const std::filesystem::path& path, const std::string& name) {
+  write_vdb(path, {VdbOutputGrid{name, &grid, std::nullopt}});
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time series
+
+namespace {
+
+class VdbSeries final : public TimeSeries {
+ public:
+  VdbSeries(std::vector<VdbStep> steps, std::vector<double> times)
+      : steps_(std::move(steps)), times_(std::move(times)) {
+    if (steps_.empty()) throw InvalidArgument("a VDB time series needs at least one step");
+    if (steps_.size() != times_.size()) {
+      throw InvalidArgument(std::to_string(steps_.size()) + " VDB steps but " +
+                            std::to_string(times_.size()) + " times");
+    }
+    for (std::size_t i = 0; i < times_.size(); ++i) {
+      if (!std::isfinite(times_[i]) || (i > 0 && !(times_[i] > times_[i - 1])))
+        throw InvalidArgument("times must be finite and strictly increasing (step " + std::to_string(i) + ")");
+    }
+    // Every step's box and transform, from its grid (loaded once here).
+    openvdb::CoordBBox box;
+    for (std::size_t s = 0; s < steps_.size(); ++s) {
+      const detail::LoadedVdbGrid grid = load(s);
+      const openvdb::CoordBBox step_box = detail::dense_index_box(grid);
+      if (step_box.empty()) throw FormatError(where(s) + ": grid '" + grid.name + "' has no active voxels");
+      box.expand(step_box);
+      if (s == 0) {
+        transform_ = grid.base().transform().copy();
+        components_ = grid.components;
+      } else if (grid.base().transform() != *transform_) {
+        throw FormatError(where(s) + ": grid '" + grid.name +
+                          "' has a different transform (voxel size or origin) than step 0");
+      } else if (grid.components != components_) {
+        throw FormatError(where(s) + ": grid '" + grid.name + "' has a different component count");
+      }
+    }
+    box_ = box;
+    // The geometry, from a densified (empty) box: the same code path as every step.
+    detail::LoadedVdbGrid empty;
+    empty.grid_f = openvdb::Vec3SGrid::create();
+    empty.grid_f->setTransform(transform_->copy());
+    empty.components = components_;
+    empty.name = "geometry";
+    geometry_ = detail::densify(empty, box_, steps_.front().file.string()).geometry;
+  }
+
+  std::size_t step_count() const override { return steps_.size(); }
+  double time(std::size_t step) const override { return times_.at(step); }
+  const GridGeometry& geometry() const override { return geometry_; }
+  int components() const override { return components_; }
+  std::string describe() const override {
+    std::ostringstream out;
+    out << steps_.size() << " OpenVDB grid" << (steps_.size() == 1 ? "" : "s") << " ("
+        << steps_.front().file.filename().string();
+    if (!steps_.front().selector.empty()) out << ":" << steps_.front().selector;
+    if (steps_.size() > 1) {
+      out << " .. " << steps_.back().file.filename().string();
+      if (!steps_.back().selector.empty()) out << ":" << steps_.back().selector;
+    }
+    out << "), " << detail::size_text(geometry_) << " x " << components_;
+    return out.str();
+  }
+
+  RawStep read_raw(std::size_t step) const override {
+    if (step >= steps_.size()) throw InvalidArgument("step " + std::to_string(step) + " out of range");
+    const VectorGrid dense = detail::densify(load(step), box_, where(step));
+    RawStep raw;
+    raw.step = step;
+    raw.encoded = false;
+    raw.bytes.resize(dense.bytes());
+    std::memcpy(raw.bytes.data(), dense.values.data(), dense.bytes());
+    return raw;
+  }
+
+ private:
+  std::string where(std::size_t s) const {
+    return steps_[s].file.string() + " (step " + std::to_string(s) + ")";
+  }
+
+  detail::LoadedVdbGrid load(std::size_t s) const {
+    return detail::load_vdb_grid(steps_[s].file, steps_[s].selector, where(s));
+  }
+
+  std::vector<VdbStep> steps_;
+  std::vector<double> times_;
+  openvdb::math::Transform::Ptr transform_;
+  openvdb::CoordBBox box_;
+  GridGeometry geometry_;
+  int components_ = 3;
+};
+
+}  // namespace
+
+std::unique_ptr<TimeSeries> open_vdb_series(std::vector<VdbStep> steps, std::vector<double> times) {
+  return std::make_unique<VdbSeries>(std::move(steps), std::move(times));
+}
+
+std::unique_ptr<TimeSeries> open_vdb_file_series(const std::filesystem::path& path) {
+  std::vector<std::pair<std::optional<double>, std::string>> entries;
+  for (const VdbGridInfo& info : list_vdb_grids(path)) {
+    if (info.value_type == "vec3s" || info.value_type == "vec3d") entries.emplace_back(info.time, info.name);
+  }
+  if (entries.empty()) throw FormatError(path.string() + ": no Vec3f/Vec3d grids for a time series");
+  const auto timed = std::count_if(entries.begin(), entries.end(), [](const auto& e) { return e.first.has_value(); });
+  if (timed != 0 && timed != static_cast<std::ptrdiff_t>(entries.size()))
+    throw FormatError(path.string() + ": some vector grids have \"time\" metadata and some do not");
+  if (timed != 0) {
+    std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return *a.first < *b.first; });
+  }
+  std::vector<VdbStep> steps;
+  std::vector<double> times;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    steps.push_back(VdbStep{path, entries[i].second});
+    times.push_back(timed != 0 ? *entries[i].first : static_cast<double>(i));
+  }
+  return open_vdb_series(std::move(steps), std::move(times));
+}
+
+}  // namespace orthofront::io
