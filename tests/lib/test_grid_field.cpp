@@ -344,6 +344,32 @@ TEST_CASE("NaN and zero corners give no_data; an engine run across them stays fi
   }
 }
 
+TEST_CASE("no-data cells on 2D and rectilinear grids", "[grid][nodata]") {
+  const auto saddle = make_analytic_field("saddle");
+  auto grid = std::make_shared<VectorGrid>(*sampled(*saddle, 25, 25, 1));  // spacing 0.25, 2D
+  const std::size_t p = grid->geometry.index(12, 16, 0);                   // (0, 1)
+  grid->values[2 * p] = kNaN;
+  Vec3 v;
+  const GridField field(grid, analytic_samples());
+  for (const Vec3& x :
+       {Vec3(0.1, 1.1, 0), Vec3(-0.1, 1.1, 2), Vec3(0.1, 0.9, -2), Vec3(-0.1, 0.9, 0)})
+    CHECK(field.velocity(x, v) == FieldStatus::no_data);
+  CHECK(field.velocity(Vec3(0.3, 1.1, 0), v) == FieldStatus::inside);
+  CHECK(field.velocity(Vec3(0.1, 1.3, 0), v) == FieldStatus::inside);
+
+  VectorGrid rect;
+  rect.geometry.dimension = 3;
+  rect.geometry.axes = {std::vector<double>{0, 1, 3, 6}, std::vector<double>{0, 2, 3},
+                        std::vector<double>{-1, 0, 5}};
+  rect.geometry.size = {4, 3, 3};
+  rect.values.assign(rect.geometry.point_count() * 3, 1.0f);
+  rect.values[3 * rect.geometry.index(3, 2, 2) + 2] = std::numeric_limits<float>::infinity();
+  const GridField rect_field(std::make_shared<const VectorGrid>(std::move(rect)));
+  CHECK(rect_field.velocity(Vec3(5, 2.5, 4), v) == FieldStatus::no_data);  // last cell
+  CHECK(rect_field.velocity(Vec3(2, 2.5, 4), v) == FieldStatus::inside);
+  CHECK(v.isApprox(Vec3(1, 1, 1)));
+}
+
 TEST_CASE("GridField rejects inconsistent grids, naming the problem", "[grid]") {
   VectorGrid good;
   good.geometry.size = {2, 2, 2};

@@ -1,5 +1,9 @@
 #include "orthofront/field/grid_field.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,40 +22,6 @@ std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", value);
   return text;
-}
-
-// Multilinear interpolation of the corners c (bit 0: +x, bit 1: +y, bit 2: +z) at local
-// coordinates t, and its derivative with respect to t (columns of dt).
-template <int Axes, bool WithDerivative>
-inline void interpolate(const std::array<Vec3, 8>& c, const std::array<double, 3>& t, Vec3& v,
-                        Mat3& dt) {
-  const double tx = t[0], ty = t[1];
-  if constexpr (Axes == 2) {
-    const Vec3 dx0 = c[1] - c[0];
-    const Vec3 dx1 = c[3] - c[2];
-    const Vec3 a0 = c[0] + tx * dx0;
-    const Vec3 a1 = c[2] + tx * dx1;
-    v = a0 + ty * (a1 - a0);
-    if constexpr (WithDerivative) {
-      dt.col(0) = dx0 + ty * (dx1 - dx0);
-      dt.col(1) = a1 - a0;
-      dt.col(2).setZero();
-    }
-  } else {
-    const double tz = t[2];
-    const Vec3 d00 = c[1] - c[0], d10 = c[3] - c[2], d01 = c[5] - c[4], d11 = c[7] - c[6];
-    const Vec3 a00 = c[0] + tx * d00, a10 = c[2] + tx * d10;
-    const Vec3 a01 = c[4] + tx * d01, a11 = c[6] + tx * d11;
-    const Vec3 b0 = a00 + ty * (a10 - a00), b1 = a01 + ty * (a11 - a01);
-    v = b0 + tz * (b1 - b0);
-    if constexpr (WithDerivative) {
-      const Vec3 e0 = d00 + ty * (d10 - d00), e1 = d01 + ty * (d11 - d01);
-      const Vec3 f0 = a10 - a00, f1 = a11 - a01;
-      dt.col(0) = e0 + tz * (e1 - e0);
-      dt.col(1) = f0 + tz * (f1 - f0);
-      dt.col(2) = b1 - b0;
-    }
-  }
 }
 
 }  // namespace
@@ -122,6 +92,10 @@ GridField::GridField(std::shared_ptr<const VectorGrid> grid, const GridFieldOpti
     }
   }
   values_ = grid_->values.data();
+  kind_ = 4 * (axes_ == 3) + 2 * (components_ == 3) + (rectilinear_ ? 1 : 0);
+  cell_stride_ = {1, static_cast<std::size_t>(cells_[0]),
+                  static_cast<std::size_t>(cells_[0] * std::max<std::int64_t>(cells_[1], 1))};
+  build_no_data_mask();
 
   domain_ = g.bounds();
   if (axes_ == 2) {
@@ -134,78 +108,153 @@ GridField::GridField(std::shared_ptr<const VectorGrid> grid, const GridFieldOpti
   }
 }
 
-bool GridField::locate(const Vec3& x, Cell& cell) const {
-  if (!domain_.contains(x)) return false;  // also rejects NaN coordinates
-  cell.base = 0;
-  for (int a = 0; a < axes_; ++a) {
+void GridField::build_no_data_mask() {
+  const GridGeometry& g = grid_->geometry;
+  const std::size_t points = g.point_count();
+  const auto c = static_cast<std::size_t>(components_);
+  const bool zero_is_no_data = options_.zero_is_no_data;
+  // Pass 1: points without data.
+  std::vector<std::uint8_t> bad(points, 0);
+  const bool any = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points, 1 << 14), false,
+      [&](const tbb::blocked_range<std::size_t>& r, bool found) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          const float* v = values_ + p * c;
+          bool finite = true, zero = true;
+          for (std::size_t k = 0; k < c; ++k) {
+            finite = finite && std::isfinite(v[k]);
+            zero = zero && v[k] == 0.0f;
+          }
+          if (!finite || (zero_is_no_data && zero)) {
+            bad[p] = 1;
+            found = true;
+          }
+        }
+        return found;
+      },
+      [](bool a, bool b) { return a || b; });
+  if (!any) return;
+  // Pass 2: a cell has no data when one of its corners has none; one task per run of 64 cells.
+  const std::size_t cx = static_cast<std::size_t>(cells_[0]),
+                    cy = static_cast<std::size_t>(cells_[1]);
+  const std::size_t cz = axes_ == 3 ? static_cast<std::size_t>(cells_[2]) : 1;
+  const std::size_t cells = cx * cy * cz;
+  const std::size_t px = stride_[1] / c, pxy = axes_ == 3 ? stride_[2] / c : 0;
+  no_data_cells_.assign((cells + 63) / 64, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, no_data_cells_.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& words) {
+                      for (std::size_t w = words.begin(); w != words.end(); ++w) {
+                        std::uint64_t bits = 0;
+                        for (std::size_t b = 0; b < 64 && 64 * w + b < cells; ++b) {
+                          const std::size_t cell = 64 * w + b;
+                          const std::size_t i = cell % cx, j = (cell / cx) % cy,
+                                            k = cell / (cx * cy);
+                          const std::size_t p = i + px * j + pxy * k;
+                          bool no_data = bad[p] || bad[p + 1] || bad[p + px] || bad[p + px + 1];
+                          if (axes_ == 3)
+                            no_data = no_data || bad[p + pxy] || bad[p + pxy + 1] ||
+                                      bad[p + pxy + px] || bad[p + pxy + px + 1];
+                          if (no_data) bits |= std::uint64_t{1} << b;
+                        }
+                        no_data_cells_[w] = bits;
+                      }
+                    });
+}
+
+template <int Axes, int Components, bool Rectilinear, bool WithJacobian>
+FieldStatus GridField::evaluate(const Vec3& x, Vec3& v, Mat3* J) const {
+  if (!domain_.contains(x)) return FieldStatus::outside;  // also rejects NaN coordinates
+  std::size_t base = 0, cell = 0;
+  double t[3] = {0, 0, 0}, w[3] = {0, 0, 0};
+  for (int a = 0; a < Axes; ++a) {
     const auto ua = static_cast<std::size_t>(a);
     std::int64_t i;
-    double t;
-    if (rectilinear_) {
+    if constexpr (Rectilinear) {
       const std::vector<double>& axis = grid_->geometry.axes[ua];
       i = std::upper_bound(axis.begin(), axis.end(), x[a]) - axis.begin() - 1;
       i = std::clamp<std::int64_t>(i, 0, cells_[ua] - 1);
-      t = (x[a] - axis[static_cast<std::size_t>(i)]) *
-          inverse_width_[ua][static_cast<std::size_t>(i)];
+      w[a] = inverse_width_[ua][static_cast<std::size_t>(i)];
+      t[a] = (x[a] - axis[static_cast<std::size_t>(i)]) * w[a];
     } else {
       const double u = (x[a] - origin_[ua]) * inverse_spacing_[ua];
-      // u >= 0 up to rounding, and truncation sends tiny negatives to 0.
+      // u >= 0 up to rounding, and truncation sends tiny negatives to 0. A point on the last
+      // sample belongs to the last cell (t = 1).
       i = std::min(static_cast<std::int64_t>(u), cells_[ua] - 1);
       i = std::max<std::int64_t>(i, 0);
-      t = u - static_cast<double>(i);
+      t[a] = u - static_cast<double>(i);
+      w[a] = inverse_spacing_[ua];
     }
-    cell.t[ua] = t;
-    cell.inverse_width[ua] =
-        rectilinear_ ? inverse_width_[ua][static_cast<std::size_t>(i)] : inverse_spacing_[ua];
-    cell.base += static_cast<std::size_t>(i) * stride_[ua];
+    base += static_cast<std::size_t>(i) * stride_[ua];
+    cell += static_cast<std::size_t>(i) * cell_stride_[ua];
   }
-  if (axes_ == 2) {
-    cell.t[2] = 0.0;
-    cell.inverse_width[2] = 0.0;
+  if (!no_data_cells_.empty() && ((no_data_cells_[cell >> 6] >> (cell & 63)) & 1u) != 0)
+    return FieldStatus::no_data;
+
+  const float* p = values_ + base;
+  const std::size_t sx = Components, sy = stride_[1], sz = stride_[2];
+  const double tx = t[0], ty = t[1], tz = t[2];
+  for (int c = 0; c < Components; ++c) {
+    const double c000 = p[c], c100 = p[sx + c], c010 = p[sy + c], c110 = p[sy + sx + c];
+    const double d00 = c100 - c000, d10 = c110 - c010;
+    const double a00 = c000 + tx * d00, a10 = c010 + tx * d10;
+    if constexpr (Axes == 2) {
+      v[c] = a00 + ty * (a10 - a00);
+      if constexpr (WithJacobian) {
+        (*J)(c, 0) = (d00 + ty * (d10 - d00)) * w[0];
+        (*J)(c, 1) = (a10 - a00) * w[1];
+        (*J)(c, 2) = 0.0;
+      }
+    } else {
+      const double c001 = p[sz + c], c101 = p[sz + sx + c], c011 = p[sz + sy + c],
+                   c111 = p[sz + sy + sx + c];
+      const double d01 = c101 - c001, d11 = c111 - c011;
+      const double a01 = c001 + tx * d01, a11 = c011 + tx * d11;
+      const double b0 = a00 + ty * (a10 - a00), b1 = a01 + ty * (a11 - a01);
+      v[c] = b0 + tz * (b1 - b0);
+      if constexpr (WithJacobian) {
+        const double e0 = d00 + ty * (d10 - d00), e1 = d01 + ty * (d11 - d01);
+        const double f0 = a10 - a00, f1 = a11 - a01;
+        (*J)(c, 0) = (e0 + tz * (e1 - e0)) * w[0];
+        (*J)(c, 1) = (f0 + tz * (f1 - f0)) * w[1];
+        (*J)(c, 2) = (b1 - b0) * w[2];
+      }
+    }
   }
-  return true;
+  if constexpr (Components == 2) {
+    v[2] = 0.0;
+    if constexpr (WithJacobian) J->row(2).setZero();
+  }
+  return FieldStatus::inside;
 }
 
-bool GridField::load_corners(const Cell& cell, std::array<Vec3, 8>& c) const {
-  const int corners = axes_ == 2 ? 4 : 8;
-  const bool zero_is_no_data = options_.zero_is_no_data;
-  for (int n = 0; n < corners; ++n) {
-    const float* p = values_ + cell.base + ((n & 1) ? stride_[0] : 0) + ((n & 2) ? stride_[1] : 0) +
-                     ((n & 4) ? stride_[2] : 0);
-    const float vx = p[0], vy = p[1], vz = components_ == 3 ? p[2] : 0.0f;
-    if (std::isnan(vx) || std::isnan(vy) || std::isnan(vz)) return false;
-    if (zero_is_no_data && vx == 0.0f && vy == 0.0f && vz == 0.0f) return false;
-    c[static_cast<std::size_t>(n)] = Vec3(vx, vy, vz);
+template <bool WithJacobian>
+FieldStatus GridField::dispatch(const Vec3& x, Vec3& v, Mat3* J) const {
+  switch (kind_) {
+    case 0:
+      return evaluate<2, 2, false, WithJacobian>(x, v, J);
+    case 1:
+      return evaluate<2, 2, true, WithJacobian>(x, v, J);
+    case 2:
+      return evaluate<2, 3, false, WithJacobian>(x, v, J);
+    case 3:
+      return evaluate<2, 3, true, WithJacobian>(x, v, J);
+    case 4:
+      return evaluate<3, 2, false, WithJacobian>(x, v, J);
+    case 5:
+      return evaluate<3, 2, true, WithJacobian>(x, v, J);
+    case 6:
+      return evaluate<3, 3, false, WithJacobian>(x, v, J);
+    default:
+      return evaluate<3, 3, true, WithJacobian>(x, v, J);
   }
-  return true;
 }
 
 FieldStatus GridField::velocity(const Vec3& x, Vec3& v) const {
-  Cell cell;
-  if (!locate(x, cell)) return FieldStatus::outside;
-  std::array<Vec3, 8> c;
-  if (!load_corners(cell, c)) return FieldStatus::no_data;
-  Mat3 unused;
-  if (axes_ == 2)
-    interpolate<2, false>(c, cell.t, v, unused);
-  else
-    interpolate<3, false>(c, cell.t, v, unused);
-  return FieldStatus::inside;
+  return dispatch<false>(x, v, nullptr);
 }
 
 FieldStatus GridField::velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const {
-  Cell cell;
-  if (!locate(x, cell)) return FieldStatus::outside;
-  std::array<Vec3, 8> c;
-  if (!load_corners(cell, c)) return FieldStatus::no_data;
-  Mat3 dt;
-  if (axes_ == 2)
-    interpolate<2, true>(c, cell.t, v, dt);
-  else
-    interpolate<3, true>(c, cell.t, v, dt);
-  // dv/dx_a = dv/dt_a · dt_a/dx_a, with dt_a/dx_a = 1 / (width of the cell along a).
-  J = dt * Eigen::Map<const Vec3>(cell.inverse_width.data()).asDiagonal();
-  return FieldStatus::inside;
+  return dispatch<true>(x, v, &J);
 }
 
 std::string GridField::describe() const {

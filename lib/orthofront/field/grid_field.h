@@ -55,29 +55,30 @@ class GridField final : public Field3 {
   const GridFieldOptions& options() const { return options_; }
 
  private:
-  struct Cell {
-    std::size_t base = 0;                   // index of the first float of corner (i, j, k)
-    std::array<double, 3> t{};              // local coordinates in [0, 1]
-    std::array<double, 3> inverse_width{};  // 1 / cell width per axis (0 on the z axis of 2D)
-  };
-  // Finds the cell of x; false when x lies outside the grid's bounds.
-  bool locate(const Vec3& x, Cell& cell) const;
-  // Loads the corners of `cell` into c (corner index bit 0: +x, bit 1: +y, bit 2: +z);
-  // false when one of them has no data.
-  bool load_corners(const Cell& cell, std::array<Vec3, 8>& c) const;
+  // The evaluation, compiled once per kind of grid (2D/3D, 2/3 components, uniform/rectilinear)
+  // so that the per-axis and per-component loops unroll.
+  template <int Axes, int Components, bool Rectilinear, bool WithJacobian>
+  FieldStatus evaluate(const Vec3& x, Vec3& v, Mat3* J) const;
+  template <bool WithJacobian>
+  FieldStatus dispatch(const Vec3& x, Vec3& v, Mat3* J) const;
+  // Marks the cells with a non-finite corner (or a zero corner, see the options).
+  void build_no_data_mask();
 
   std::shared_ptr<const VectorGrid> grid_;
   GridFieldOptions options_;
   Box<3> domain_;
   int axes_ = 3;  // axes interpolated: the grid's dimension
   int components_ = 3;
+  int kind_ = 0;  // 4 * (axes == 3) + 2 * (components == 3) + rectilinear
   const float* values_ = nullptr;
-  std::array<std::int64_t, 3> cells_{};  // cells per axis (0 on the z axis of 2D grids)
-  std::array<std::size_t, 3> stride_{};  // floats between neighbours along each axis
+  std::array<std::int64_t, 3> cells_{};       // cells per axis (0 on the z axis of 2D grids)
+  std::array<std::size_t, 3> stride_{};       // floats between neighbours along each axis
+  std::array<std::size_t, 3> cell_stride_{};  // cell index step along each axis
   bool rectilinear_ = false;
   std::array<double, 3> origin_{};                    // uniform: first sample; rectilinear: unused
   std::array<double, 3> inverse_spacing_{};           // uniform
   std::array<std::vector<double>, 3> inverse_width_;  // rectilinear: 1 / cell width per cell
+  std::vector<std::uint64_t> no_data_cells_;          // a bit per cell; empty: every cell has data
 };
 
 }  // namespace orthofront

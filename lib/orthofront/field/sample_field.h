@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "orthofront/field/field.h"
 #include "orthofront/field/grid.h"
@@ -20,6 +21,11 @@ struct SampleOptions {
   /// Floats per point: 2 or 3; 0 chooses 3, or 2 for a 2D grid whose v_z is 0 at every sample.
   int components = 0;
 };
+
+/// Reserves `count` floats in `values` backed by transparent huge pages where the system offers
+/// them (Linux; a no-op elsewhere): call before filling a large grid. Interpolating a grid of
+/// hundreds of MiB is TLB-bound with 4 KiB pages.
+void reserve_huge_pages(std::vector<float>& values, std::size_t count);
 
 /// The uniform geometry SampleOptions describe: origin = box.lo, spacing = extent / (n - 1).
 /// Throws InvalidArgument for a resolution below 2 (1 on z only), an empty or non-finite box.
