@@ -213,7 +213,9 @@ class Engine {
 
   std::int32_t emit(const FrontVertex<N>& fv, double alpha, std::int32_t front, int step) {
     const Vec3 p = fv.x.template head<3>();
-    return mesh_.add_vertex(p, fv.t, alpha, fv.s - std::floor(fv.s), 0.0, front, step);
+    // Closed seeds wrap s into [0, 1); on open seeds s = 1 is the end of the curve.
+    const double s = seed_.closed ? fv.s - std::floor(fv.s) : fv.s;
+    return mesh_.add_vertex(p, fv.t, alpha, s, 0.0, front, step);
   }
 
   std::vector<Front<N>> initial_fronts() {
@@ -660,9 +662,15 @@ class Engine {
     std::vector<FrontVertex<N>> out;
     out.reserve(n);
     out.push_back(f.v[0]);
+    // A vertex that keeps its mesh vertex between two others that keep theirs is not merged:
+    // the three old mesh vertices would close a flat triangle on the previous front.
+    const double still = opt_.row_skip == RowSkip::off ? 0.0 : opt_.skip_fraction * opt_.edge;
+    const auto waiting = [still](const FrontVertex<N>& fv) {
+      return fv.origin >= 0 && (fv.x - fv.anchor).norm() <= still;
+    };
     for (std::size_t i = 1; i + 1 < n; ++i) {
       const double joined = (f.v[i].x - out.back().x).norm() + (f.v[i + 1].x - f.v[i].x).norm();
-      if (joined < limit) {
+      if (joined < limit && !(waiting(out.back()) && waiting(f.v[i]) && waiting(f.v[i + 1]))) {
         ++report_.merges;
         continue;
       }
