@@ -21,3 +21,7 @@ target_sources(orthofront_io PRIVATE
   orthofront/io/vdb_field.cpp
 )
 target_link_libraries(orthofront_io PRIVATE OpenVDB::openvdb)
+
+# OpenEXR: per-front quantities of a surface over (s, step) as a multi-channel float image.
+target_sources(orthofront_io PRIVATE orthofront/io/exr_front_image.cpp)
+target_link_libraries(orthofront_io PRIVATE OpenEXR::OpenEXR)

@@ -6,6 +6,7 @@
 #include "cli/surface_job.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
+#include "orthofront/io/exr_front_image.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/report_json.h"
 
@@ -16,6 +17,8 @@ struct StreamArgs {
   SurfaceJob job;
   std::string out;
   std::string report;
+  std::string exr;
+  int exr_bins = 0;
   bool quiet = false;
 };
 }  // namespace
@@ -34,6 +37,13 @@ void add_stream_command(CLI::App& app) {
   add_engine_flags(*c, args->job.options);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
+  c->add_option("--exr", args->exr,
+                "Also write the per-front quantities over (s, step) as an OpenEXR image "
+                "(channels alpha, error, speed, dtime, time, front_id, coverage)");
+  c->add_option("--exr-bins", args->exr_bins,
+                "Columns (s bins) of the --exr image; 0: the widest front's vertex count")
+      ->check(CLI::Range(0, 1 << 16))
+      ->capture_default_str();
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
   c->callback([args]() {
     const std::filesystem::path out = args->out;
@@ -42,8 +52,18 @@ void add_stream_command(CLI::App& app) {
                             "' has an unknown extension (expected .vtp, .ply or .obj)");
     io::check_writable(out);
     if (!args->report.empty()) io::check_writable(args->report);
+    if (!args->exr.empty()) {
+      if (std::filesystem::path(args->exr).extension() != ".exr")
+        throw InvalidArgument("--exr '" + args->exr + "' must end in .exr");
+      io::check_writable(args->exr);
+    }
     const SurfaceResult result = run_surface(args->job, true);
     io::write_mesh(result.mesh, out);
+    if (!args->exr.empty()) {
+      io::FrontImageOptions image;
+      image.s_bins = args->exr_bins;
+      io::write_front_image(result.mesh, args->exr, image);
+    }
     if (!args->report.empty()) {
       nlohmann::json report = io::to_json(result.report);
       report["field"] = args->job.field;
@@ -55,6 +75,7 @@ void add_stream_command(CLI::App& app) {
     if (!args->quiet) {
       std::cout << summarize(args->job, result.report) << "\nWrote " << args->out;
       if (!args->report.empty()) std::cout << " and " << args->report;
+      if (!args->exr.empty()) std::cout << " and " << args->exr;
       std::cout << "\n";
     }
     if (!result.report.complete) throw Error("interrupted: the surface built so far was written");
