@@ -6,7 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <charconv>
 #include <utility>
 
 #include "orthofront/error.h"
@@ -19,9 +19,10 @@ std::string axis_name(int axis) {
 }
 
 std::string number(double value) {
+  // Shortest text that reads back as the same double.
   char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
+  const auto result = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, result.ptr);
 }
 
 }  // namespace

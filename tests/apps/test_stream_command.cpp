@@ -1,0 +1,109 @@
+// The `stream` subcommand end to end: files it writes, the summary, and bad input.
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "orthofront/io/mesh_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Outcome {
+  int status = 0;
+  std::string output;  // stdout and stderr together
+};
+
+Outcome run(const std::string& args) {
+  const fs::path log = fs::temp_directory_path() / "orthofront-stream-test.log";
+  const std::string command = std::string(ORTHOFRONT_BINARY) + " " + args + " > " + log.string() +
+                              " 2>&1 < /dev/null";
+  Outcome o;
+  o.status = WEXITSTATUS(std::system(command.c_str()));
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  o.output = text.str();
+  return o;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("orthofront-test-" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+bool folder_is_empty(const fs::path& dir) { return fs::is_empty(dir); }
+
+}  // namespace
+
+TEST_CASE("stream writes the mesh, the report and a summary", "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-ok");
+  const Outcome o = run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 20 "
+                        "--edge 0.1 --steps 30 --out " + (dir / "s.ply").string() + " --report " +
+                        (dir / "s.json").string());
+  REQUIRE(o.status == 0);
+  CHECK(o.output.find("quads") != std::string::npos);
+  CHECK(o.output.find((dir / "s.ply").string()) != std::string::npos);
+  const orthofront::Mesh mesh = orthofront::io::read_mesh(dir / "s.ply");
+  CHECK(mesh.vertex_count() > 300);
+  for (const auto& p : mesh.positions) CHECK(std::abs(p.y() * p.z() - 0.2) < 1e-4);
+  std::ifstream report(dir / "s.json");
+  std::stringstream text;
+  text << report.rdbuf();
+  CHECK(text.str().find("\"stop_reason\"") != std::string::npos);
+  CHECK(text.str().find("\"saddle3d\"") != std::string::npos);
+  // Nothing but the two outputs (no temporary files left behind).
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir)) ++files;
+  CHECK(files == 2);
+}
+
+TEST_CASE("stream rejects bad input naming the value, with no output file", "[cli][stream]") {
+  struct Case {
+    const char* what;
+    std::string args;
+    std::string named;  // must appear in the message
+  };
+  const fs::path dir = fresh_dir("stream-bad");
+  const std::string out = " --out " + (dir / "x.vtp").string();
+  const std::string good_seed = " --seed line:-1,2,0.1:1,2,0.1";
+  const Case cases[] = {
+      {"unknown field", "stream --field nosuchfield" + good_seed + out, "nosuchfield"},
+      {"unknown parameter", "stream --field lorenz:rhoo=3" + good_seed + out, "rhoo"},
+      {"malformed seed", "stream --field saddle3d --seed line:1,2:3" + out, "line:1,2:3"},
+      {"unknown seed kind", "stream --field saddle3d --seed spiral:1" + out, "spiral"},
+      {"zero seeds", "stream --field saddle3d --seed-count 0" + good_seed + out, "0"},
+      {"seed outside the domain", "stream --field saddle3d --seed line:50,50,50:60,60,60" + out,
+       "outside"},
+      {"negative edge", "stream --field saddle3d --edge -0.1" + good_seed + out, "-0.1"},
+      {"unwritable output", "stream --field saddle3d" + good_seed + " --out /nonexistent/dir/x.vtp",
+       "/nonexistent/dir"},
+      {"unknown extension", "stream --field saddle3d" + good_seed + " --out " +
+                                (dir / "x.stl").string(), "x.stl"},
+      {"missing seed file", "stream --field saddle3d --seed file:/nonexistent/seed.csv" + out,
+       "/nonexistent/seed.csv"},
+  };
+  for (const Case& c : cases) {
+    const Outcome o = run(c.args);
+    INFO(c.what << ": " << o.output);
+    CHECK(o.status != 0);
+    CHECK(o.output.find(c.named) != std::string::npos);
+    CHECK(folder_is_empty(dir));
+  }
+}
+
+TEST_CASE("fields lists every analytic field with its domain", "[cli][fields]") {
+  const Outcome o = run("fields");
+  REQUIRE(o.status == 0);
+  for (const char* name : {"saddle", "saddle3d", "sinus", "focus-sink", "lorenz", "stalling",
+                           "repelling-node-saddle", "abc", "double-gyre"})
+    CHECK(o.output.find(std::string(name) + "\n") != std::string::npos);
+  CHECK(o.output.find("domain") != std::string::npos);
+}
