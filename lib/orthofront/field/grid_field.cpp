@@ -259,14 +259,29 @@ FieldStatus GridField::velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const 
 }
 
 std::string GridField::describe() const {
+  // Built by appending: GCC 12 warns (-Wrestrict, a false positive) on long "a" + b chains.
   const GridGeometry& g = grid_->geometry;
-  std::string text = "grid(" + std::string(rectilinear_ ? "rectilinear " : "uniform ") +
-                     std::to_string(g.size[0]) + "x" + std::to_string(g.size[1]);
-  if (axes_ == 3) text += "x" + std::to_string(g.size[2]);
-  text += ", " + std::to_string(components_) + " components, bounds [" + number(domain_.lo.x()) +
-          "," + number(domain_.hi.x()) + "]x[" + number(domain_.lo.y()) + "," +
-          number(domain_.hi.y()) + "]x[" + number(domain_.lo.z()) + "," + number(domain_.hi.z()) +
-          "]" + (options_.zero_is_no_data ? ", zero vectors = no data" : "") + ")";
+  std::string text = "grid(";
+  text += rectilinear_ ? "rectilinear " : "uniform ";
+  text += std::to_string(g.size[0]);
+  text += 'x';
+  text += std::to_string(g.size[1]);
+  if (axes_ == 3) {
+    text += 'x';
+    text += std::to_string(g.size[2]);
+  }
+  text += ", ";
+  text += std::to_string(components_);
+  text += " components, bounds";
+  for (int a = 0; a < 3; ++a) {
+    text += a == 0 ? " [" : "x[";
+    text += number(domain_.lo[a]);
+    text += ',';
+    text += number(domain_.hi[a]);
+    text += ']';
+  }
+  if (options_.zero_is_no_data) text += ", zero vectors = no data";
+  text += ')';
   return text;
 }
 
