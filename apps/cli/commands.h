@@ -13,5 +13,6 @@ void add_path_command(CLI::App& app);
 void add_bench_path_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_info_command(CLI::App& app);
+void add_convert_command(CLI::App& app);
 
 }  // namespace orthofront::cli

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstring>
 
+#include "cli/grid_data_files.h"
 #include "orthofront/error.h"
 #include "orthofront/io/hdf5_layout.h"
 
@@ -87,6 +88,13 @@ DataFile open_hdf5(const DataFileSpec& spec) {
 const std::vector<DataFileFormat>& data_file_formats() {
   static const std::vector<DataFileFormat> formats = {
       {"HDF5", {".h5", ".hdf5", ".hdf"}, open_hdf5},
+      {"OSUFlow .vec", {".vec"}, open_grid_file},
+      {"AmiraMesh", {".am"}, open_grid_file},
+      {"NRRD", {".nrrd", ".nhdr"}, open_grid_file},
+      {"VTK XML ImageData", {".vti"}, open_grid_file},
+      {"legacy VTK", {".vtk"}, open_grid_file},
+      {"ParaView collection", {".pvd"}, open_pvd_file},
+      {"OpenVDB", {".vdb"}, open_vdb_file},
   };
   return formats;
 }

@@ -1,6 +1,7 @@
 #include "cli/field_source.h"
 
 #include "cli/data_files.h"
+#include "cli/grid_data_files.h"
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/grid_field.h"
@@ -28,7 +29,11 @@ std::unique_ptr<Field3> open_grid_field(const std::string& spec) {
 }  // namespace
 
 std::unique_ptr<Field3> open_field(const std::string& spec) {
-  if (find_data_file(spec)) return open_grid_field(spec);
+  if (const auto found = find_data_file(spec)) {
+    // OpenVDB is sampled sparsely, straight from its tree (inactive voxels: no data).
+    if (found->second->open == open_vdb_file) return open_vdb_field(found->first);
+    return open_grid_field(spec);
+  }
   if (looks_like_file(spec))
     throw InvalidArgument("field '" + spec + "' looks like a file but has no known extension (" +
                           data_file_extensions() + "); analytic fields: `orthofront fields`");

@@ -454,25 +454,38 @@ VectorGrid parse_vdb_grid(std::string_view content, const std::string& file,
   return detail::densify(grid, detail::dense_index_box(grid), file);
 }
 
-void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGrid>& grids) {
+struct VdbFileWriter::Impl {
+  std::filesystem::path path;
+  openvdb::GridPtrVec grids;
+  std::set<std::string> names;
+};
+
+VdbFileWriter::VdbFileWriter(std::filesystem::path path) : impl_(std::make_unique<Impl>()) {
   initialize_openvdb();
   check_writable(path);
-  openvdb::GridPtrVec out;
-  std::set<std::string> names;
-  for (const VdbOutputGrid& entry : grids) {
-    if (entry.grid == nullptr) throw InvalidArgument("write_vdb: grid '" + entry.name + "' is null");
-    if (entry.name.empty()) throw InvalidArgument("write_vdb: a grid needs a name");
-    if (!names.insert(entry.name).second)
-      throw InvalidArgument("write_vdb: two grids are named '" + entry.name + "'");
-    auto grid = detail::to_vdb(*entry.grid, entry.name);
-    if (entry.time) grid->insertMeta("time", openvdb::DoubleMetadata(*entry.time));
-    out.push_back(grid);
-  }
+  impl_->path = std::move(path);
+}
+
+VdbFileWriter::~VdbFileWriter() = default;
+
+void VdbFileWriter::add(const std::string& name, const VectorGrid& grid, std::optional<double> time) {
+  if (name.empty()) throw InvalidArgument("write_vdb: a grid needs a name");
+  if (!impl_->names.insert(name).second)
+    throw InvalidArgument("write_vdb: two grids are named '" + name + "'");
+  auto vdb = detail::to_vdb(grid, name);
+  if (time) vdb->insertMeta("time", openvdb::DoubleMetadata(*time));
+  impl_->grids.push_back(vdb);
+}
+
+std::size_t VdbFileWriter::grids() const { return impl_->grids.size(); }
+
+void VdbFileWriter::commit() {
+  const std::filesystem::path& path = impl_->path;
   std::filesystem::path temp = path;
   temp += ".tmp-" + std::to_string(::getpid());
   try {
     openvdb::io::File file(temp.string());
-    file.write(out);
+    file.write(impl_->grids);
     file.close();
     std::filesystem::rename(temp, path);
   } catch (const std::exception& e) {
@@ -480,6 +493,15 @@ void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGri
     std::filesystem::remove(temp, ignored);
     throw IoError("cannot write " + path.string() + ": " + e.what());
   }
+}
+
+void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGrid>& grids) {
+  VdbFileWriter writer(path);
+  for (const VdbOutputGrid& entry : grids) {
+    if (entry.grid == nullptr) throw InvalidArgument("write_vdb: grid '" + entry.name + "' is null");
+    writer.add(entry.name, *entry.grid, entry.time);
+  }
+  writer.commit();
 }
 
 void write_vdb(const VectorGrid& grid, const std::filesystem::path& path, const std::string& name) {

@@ -57,6 +57,25 @@ void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGri
 void write_vdb(const VectorGrid& grid, const std::filesystem::path& path,
                const std::string& name = "velocity");
 
+/// Collects grids one at a time (each converted to a sparse OpenVDB grid right away, so that the
+/// dense samples need not stay in memory) and writes them into one .vdb file on commit(),
+/// atomically. Destroying it before commit() writes nothing.
+class VdbFileWriter {
+ public:
+  explicit VdbFileWriter(std::filesystem::path path);
+  ~VdbFileWriter();
+  VdbFileWriter(const VdbFileWriter&) = delete;
+  VdbFileWriter& operator=(const VdbFileWriter&) = delete;
+  /// Throws InvalidArgument for rectilinear grids, an empty or duplicate name.
+  void add(const std::string& name, const VectorGrid& grid, std::optional<double> time = {});
+  std::size_t grids() const;
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 /// One step of a VDB time series: a file and the grid in it.
 struct VdbStep {
   std::filesystem::path file;

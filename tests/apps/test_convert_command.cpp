@@ -1,0 +1,182 @@
+// `orthofront convert`, `info` on the real-data formats, `stream --field FILE.am|.vdb` and
+// `stream --exr`, run as a user runs them.
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/grid_test_support.h"
+#include "orthofront/io/grid_file.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/vdb_grid.h"
+
+using Catch::Matchers::Contains;
+using orthofront::VectorGrid;
+using namespace grid_test;
+
+namespace {
+
+struct Run {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+Run run(const std::string& arguments) {
+  Run r;
+  const std::string command = std::string("'") + ORTHOFRONT_BINARY + "' " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  REQUIRE(pipe != nullptr);
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) r.output += buffer;
+  const int status = ::pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+nlohmann::json info_json(const fs::path& file) {
+  const Run r = run("info --json " + q(file));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  return nlohmann::json::parse(r.output);
+}
+
+/// A legacy VTK file of `grid` (ASCII), the simplest to write here.
+void write_vtk(const fs::path& path, const VectorGrid& grid) {
+  const auto& n = grid.geometry.size;
+  std::string text = "# vtk DataFile Version 3.0\nstep\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS " +
+                     std::to_string(n[0]) + " " + std::to_string(n[1]) + " " + std::to_string(n[2]) +
+                     "\nORIGIN 0 0 0\nSPACING 1 1 1\nPOINT_DATA " + std::to_string(grid.geometry.point_count()) +
+                     "\nVECTORS v float\n";
+  for (const float v : grid.values) text += std::to_string(v) + "\n";
+  write_file(path, text);
+}
+
+std::vector<float> read_h5_step(const fs::path& file, std::size_t step) {
+  orthofront::io::Hdf5ReadOptions options;
+  options.steady_as_single_step = true;
+  const auto series = orthofront::io::open_hdf5_series(file, "/", options);
+  std::vector<float> values(series->step_floats());
+  series->read(step, values);
+  return values;
+}
+
+}  // namespace
+
+TEST_CASE("convert: several files make a time series in natural order", "[apps][convert]") {
+  TempDir dir("convert");
+  std::vector<VectorGrid> steps;
+  for (int s = 0; s < 11; ++s) {
+    VectorGrid g = sample_grid(4, 3, 2);
+    for (float& v : g.values) v += static_cast<float>(s);
+    write_vtk(dir / ("step" + std::to_string(s) + ".vtk"), g);
+    steps.push_back(g);
+  }
+  // A glob, expanded and sorted by convert itself: step2 before step10.
+  const Run r = run("convert " + q(dir / "step*.vtk") + " --dt 0.5 --t0 1 --compress gzip --out " +
+                    q(dir / "s.h5"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK_THAT(r.output, Contains("11 steps at t = 1 .. 6"));
+  const nlohmann::json j = info_json(dir / "s.h5");
+  CHECK(j["steps"] == 11);
+  CHECK(j["times"][10].get<double>() == 6.0);
+  CHECK(j["grid"]["size"] == nlohmann::json{4, 3, 2});
+  for (const std::size_t s : {std::size_t{0}, std::size_t{2}, std::size_t{10}})
+    CHECK(same_values(read_h5_step(dir / "s.h5", s), steps[s].values));
+
+  // Explicit times, and to OpenVDB and back.
+  const Run v = run("convert " + q(dir / "step0.vtk") + " " + q(dir / "step1.vtk") + " " +
+                    q(dir / "step2.vtk") + " --times 0,0.25,1 --out " + q(dir / "s.vdb"));
+  INFO(v.output);
+  REQUIRE(v.status == 0);
+  const Run back = run("convert " + q(dir / "s.vdb") + " --out " + q(dir / "from_vdb.h5"));
+  INFO(back.output);
+  REQUIRE(back.status == 0);
+  const nlohmann::json k = info_json(dir / "from_vdb.h5");
+  CHECK(k["times"] == nlohmann::json{0.0, 0.25, 1.0});
+  CHECK(same_values(read_h5_step(dir / "from_vdb.h5", 1), steps[1].values));
+
+  // A steady input with --origin/--spacing.
+  const Run steady = run("convert " + q(dir / "step3.vtk") + " --origin 1,2,3 --spacing 0.5,0.5,2 --out " +
+                         q(dir / "one.h5"));
+  INFO(steady.output);
+  REQUIRE(steady.status == 0);
+  const nlohmann::json o = info_json(dir / "one.h5");
+  CHECK(o["steady"] == true);
+  CHECK(o["grid"]["origin"] == nlohmann::json{1.0, 2.0, 3.0});
+  CHECK(o["grid"]["spacing"] == nlohmann::json{0.5, 0.5, 2.0});
+}
+
+TEST_CASE("convert: bad arguments are refused with a message", "[apps][convert]") {
+  TempDir dir("convert");
+  write_vtk(dir / "a.vtk", sample_grid(3, 3, 3));
+  write_vtk(dir / "b.vtk", sample_grid(3, 3, 3));
+  write_vtk(dir / "c.vtk", sample_grid(4, 3, 3));
+  Run r = run("convert " + q(dir / "a.vtk") + " " + q(dir / "b.vtk") + " --times 0,1,2 --out " + q(dir / "x.h5"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("3 times for 2 input files"));
+  r = run("convert " + q(dir / "a.vtk") + " " + q(dir / "c.vtk") + " --out " + q(dir / "x.h5"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("c.vtk") && Contains("differs from the first step"));
+  r = run("convert " + q(dir / "a.txt") + " --out " + q(dir / "x.h5"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("a.txt") && Contains("unknown extension"));
+  r = run("convert " + q(dir / "a.vtk") + " --out " + q(dir / "x.png"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("must end in .h5, .hdf5 or .vdb"));
+  r = run("convert " + q(dir / "nothing*.vtk") + " --out " + q(dir / "x.h5"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("matches no file"));
+  CHECK_FALSE(fs::exists(dir / "x.h5"));
+}
+
+TEST_CASE("convert and info on the real data", "[apps][convert][realdata]") {
+  const fs::path data = datasets_dir("");
+  if (data.empty() || !fs::exists(data / "tornado")) return;
+  TempDir dir("convert");
+  Run r = run("convert " + q(data / "tornado/*.vec") + " --dt 0.1 --out " + q(dir / "tornado.h5"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const nlohmann::json j = info_json(dir / "tornado.h5");
+  CHECK(j["steps"] == 10);
+  CHECK(j["grid"]["size"] == nlohmann::json{48, 48, 48});
+  CHECK(j["missing_points"] == 0);
+  // Step 0 is 1.vec, step 9 is 10.vec (natural order).
+  CHECK(same_values(read_h5_step(dir / "tornado.h5", 0), orthofront::io::read_vector_grid(data / "tornado/1.vec").values));
+  CHECK(same_values(read_h5_step(dir / "tornado.h5", 9), orthofront::io::read_vector_grid(data / "tornado/10.vec").values));
+
+  for (const char* file : {"bubble-chamber/BubbleChamber_11x11x10_T0.am", "square-cylinder-2d/sqflow2D-1608.nrrd",
+                           "tornado/1.vti"}) {
+    INFO(file);
+    const nlohmann::json k = info_json(data / file);
+    CHECK(k["steady"] == true);
+  }
+  CHECK(info_json(data / "bubble-chamber/BubbleChamber_11x11x10_T0.am")["zero_vectors"] == 400);
+  CHECK(info_json(data / "square-cylinder-2d/sqflow2D-1608.nrrd")["grid"]["dimension"] == 2);
+}
+
+TEST_CASE("stream on real-data files and VDB, with a front image", "[apps][stream][realdata]") {
+  const fs::path data = datasets_dir("bubble-chamber");
+  if (data.empty()) return;
+  TempDir dir("convert");
+  const fs::path am = data / "BubbleChamber_11x11x10_T0.am";
+  Run r = run("stream --field " + q(am) + " --seed line:-0.03,0,0.02:0.03,0,0.02 --edge 0.004 --steps 30 --out " +
+              q(dir / "a.vtp") + " --exr " + q(dir / "a.exr") + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK(fs::exists(dir / "a.exr"));
+  REQUIRE(run("convert " + q(am) + " --out " + q(dir / "b.vdb") + " --quiet").status == 0);
+  r = run("stream --field " + q(dir / "b.vdb") + " --seed line:-0.03,0,0.02:0.03,0,0.02 --edge 0.004 --steps 30 --out " +
+          q(dir / "b.vtp"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK_THAT(r.output, Contains("b.vdb"));
+  r = run("stream --field " + q(am) + " --seed line:0,0,0:1,1,1 --out " + q(dir / "c.vtp") + " --exr " +
+          q(dir / "c.png"));
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("must end in .exr"));
+}
