@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   orthofront::cli::add_generate_command(app);
   orthofront::cli::add_info_command(app);
   orthofront::cli::add_convert_command(app);
+  orthofront::cli::add_bench_grid_command(app);
   orthofront::cli::install_interrupt_handler();
   try {
     app.parse(argc, argv);

@@ -14,5 +14,6 @@ void add_bench_path_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_info_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
+void add_bench_grid_command(CLI::App& app);
 
 }  // namespace orthofront::cli

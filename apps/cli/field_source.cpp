@@ -5,6 +5,7 @@
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/grid_field.h"
+#include "orthofront/field/huge_pages.h"
 
 namespace orthofront::cli {
 
@@ -19,6 +20,7 @@ std::unique_ptr<Field3> open_grid_field(const std::string& spec) {
   auto grid = std::make_shared<VectorGrid>();
   grid->geometry = file.series->geometry();
   grid->components = file.series->components();
+  reserve_huge_pages(grid->values, file.series->step_floats());
   grid->values.resize(file.series->step_floats());
   file.series->read(0, grid->values);
   GridFieldOptions options;

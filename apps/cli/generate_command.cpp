@@ -32,7 +32,7 @@ struct GenerateArgs {
   int steps = 0;
   double t0 = 0;
   double t1 = std::nan("");
-  double chunk_mib = 1024;
+  double chunk_mib = 16;
   io::Hdf5Units units;
   bool quiet = false;
 };
@@ -176,8 +176,9 @@ void add_generate_command(CLI::App& app) {
   c->add_option("--steps", args->steps, "Time steps (time-dependent fields)");
   c->add_option("--t0", args->t0, "Time of the first step")->capture_default_str();
   c->add_option("--t1", args->t1, "Time of the last step");
-  c->add_option("--chunk-mib", args->chunk_mib,
-                "Largest chunk in MiB; larger steps are chunked by z-slices")
+  c->add_option(
+       "--chunk-mib", args->chunk_mib,
+       "Largest chunk in MiB: steps are chunked by whole z-slices (2D: y-rows) up to this size")
       ->capture_default_str();
   c->add_option("--units-length", args->units.length, "Length unit, e.g. m");
   c->add_option("--units-time", args->units.time, "Time unit, e.g. s");

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "orthofront/error.h"
+#include "orthofront/field/huge_pages.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_detail.h"
 
@@ -395,6 +396,7 @@ struct Hdf5TimeSeries::Impl {
   RawStep read_plain(std::size_t step, hid_t set) const {
     RawStep out{step, {}, false};
     const auto shape = detail::step_shape(d.geometry, d.components);
+    reserve_huge_pages(out.bytes, d.step_bytes());
     out.bytes.resize(d.step_bytes());
     H5Id memory(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), H5Sclose);
     H5Id file_space(H5Dget_space(set), H5Sclose);
@@ -442,6 +444,7 @@ struct Hdf5TimeSeries::Impl {
     }
     RawStep out{step, {}, true};
     const std::size_t header = sizeof(std::uint64_t) + records.size() * sizeof(ChunkRecord);
+    reserve_huge_pages(out.bytes, header + payload);
     out.bytes.resize(header + payload);
     std::size_t at = header;
     for (std::size_t c = 0; c < records.size(); ++c) {
@@ -471,6 +474,7 @@ struct Hdf5TimeSeries::Impl {
       std::vector<std::byte>& scratch = buffers[k % 2];
       std::byte* target = out.data();
       if (!last) {
+        reserve_huge_pages(scratch, out.size());
         scratch.resize(out.size());
         target = scratch.data();
       }
@@ -626,6 +630,7 @@ VectorGrid read_hdf5_grid(const std::filesystem::path& file, const std::string& 
   VectorGrid grid;
   grid.geometry = series->geometry();
   grid.components = series->components();
+  reserve_huge_pages(grid.values, series->step_floats());
   grid.values.resize(series->step_floats());
   series->read(step, grid.values);
   return grid;

@@ -1,8 +1,5 @@
 #include "orthofront/field/sample_field.h"
 
-#ifdef __linux__
-#include <sys/mman.h>
-#endif
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -13,22 +10,9 @@
 #include <string>
 
 #include "orthofront/error.h"
+#include "orthofront/field/huge_pages.h"
 
 namespace orthofront {
-
-void reserve_huge_pages(std::vector<float>& values, std::size_t count) {
-  values.reserve(count);
-#ifdef __linux__
-  // Ask for transparent huge pages before the first touch: a grid of hundreds of MiB in 4 KiB
-  // pages makes every trilinear lookup of a long front a TLB miss (the two z-slices of a cell lie
-  // nx * ny * 12 bytes apart).
-  constexpr std::uintptr_t huge = std::uintptr_t{2} << 20;
-  const auto begin = reinterpret_cast<std::uintptr_t>(values.data());
-  const std::uintptr_t first = (begin + huge - 1) & ~(huge - 1);
-  const std::uintptr_t last = (begin + count * sizeof(float)) & ~(huge - 1);
-  if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
-}
 
 GridGeometry sampling_geometry(const SampleOptions& options, const Box<3>& field_domain) {
   const Box<3> box = options.box.value_or(field_domain);

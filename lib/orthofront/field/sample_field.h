@@ -22,11 +22,6 @@ struct SampleOptions {
   int components = 0;
 };
 
-/// Reserves `count` floats in `values` backed by transparent huge pages where the system offers
-/// them (Linux; a no-op elsewhere): call before filling a large grid. Interpolating a grid of
-/// hundreds of MiB is TLB-bound with 4 KiB pages.
-void reserve_huge_pages(std::vector<float>& values, std::size_t count);
-
 /// The uniform geometry SampleOptions describe: origin = box.lo, spacing = extent / (n - 1).
 /// Throws InvalidArgument for a resolution below 2 (1 on z only), an empty or non-finite box.
 GridGeometry sampling_geometry(const SampleOptions& options, const Box<3>& field_domain);
