@@ -802,8 +802,11 @@ class Engine {
     const double min_move = opt_.skip_fraction * opt_.edge;
     for (std::size_t i = 0; i < n; ++i) {
       if (f.v[i].origin < 0) continue;  // inserted: already a mesh vertex
-      const bool moved = (f.v[i].x - f.v[i].anchor).norm() >= min_move;
-      fresh[i] = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline || moved;
+      const double distance = (f.v[i].x - f.v[i].anchor).norm();
+      // Without row skipping every vertex that moved at all gets a new mesh vertex; one whose α
+      // was clamped to 0 did not move and keeps its own (a copy would make a zero-area face).
+      const bool every_row = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline;
+      fresh[i] = every_row ? distance > 1e-12 * opt_.edge : distance >= min_move;
     }
     if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) smooth_rows(f, fresh);
     for (std::size_t i = 0; i < n; ++i) {
