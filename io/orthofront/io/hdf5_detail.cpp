@@ -146,7 +146,10 @@ SliceLayout slice_layout(const GridGeometry& geometry, int components,
   if (fit < 1)
     throw InvalidArgument("one slice of the grid (" + std::to_string(slice_bytes) +
                           " bytes) exceeds the chunk limit of " + std::to_string(limit) + " bytes");
-  layout.chunk_slices = std::min(layout.slices, fit);
+  // As few chunks as the limit allows, of equal size: the padding of the last chunk (HDF5 stores
+  // whole chunks) stays below one slice per chunk.
+  const std::int64_t chunks = (layout.slices + fit - 1) / fit;
+  layout.chunk_slices = (layout.slices + chunks - 1) / chunks;
   return layout;
 }
 
