@@ -349,3 +349,37 @@ TEST_CASE("vdb: the bubble-chamber data through OpenVDB", "[vdb][realdata]") {
   REQUIRE(field->velocity(x, v) == FieldStatus::inside);
   for (int c = 0; c < 3; ++c) CHECK(v[c] == Approx(grid.values[3 * p + static_cast<std::size_t>(c)]).margin(1e-9));
 }
+
+TEST_CASE("vdb field: a single voxel layer is a planar field", "[vdb]") {
+  // v = (x - 2 y, 0.5 x + y), 2 components, on one z layer at z = 3.
+  VectorGrid grid;
+  grid.geometry.dimension = 2;
+  grid.geometry.size = {5, 4, 1};
+  grid.geometry.origin = Vec3(-1, 0, 3);
+  grid.geometry.spacing = Vec3(0.5, 0.25, 1);
+  grid.components = 2;
+  for (std::int64_t j = 0; j < 4; ++j) {
+    for (std::int64_t i = 0; i < 5; ++i) {
+      const double x = -1 + 0.5 * static_cast<double>(i);
+      const double y = 0.25 * static_cast<double>(j);
+      grid.values.push_back(static_cast<float>(x - 2 * y));
+      grid.values.push_back(static_cast<float>(0.5 * x + y));
+    }
+  }
+  const auto field = VdbField::from_grid(grid);
+  const auto box = field->domain();
+  CHECK(box.lo[2] < 3.0);
+  CHECK(box.hi[2] > 3.0);
+  for (const double z : {3.0, 3.4, 2.2}) {
+    const Vec3 x(0.3, 0.6, z);
+    Vec3 v;
+    Mat3 J;
+    REQUIRE(field->velocity_jacobian(x, v, J) == FieldStatus::inside);
+    CHECK((v - Vec3(0.3 - 1.2, 0.15 + 0.6, 0)).norm() < 1e-12);
+    const Mat3 expected = (Mat3() << 1, -2, 0, 0.5, 1, 0, 0, 0, 0).finished();
+    CHECK((J - expected).norm() < 1e-12);
+  }
+  Vec3 v;
+  CHECK(field->velocity(Vec3(0.3, 0.6, 100.0), v) == FieldStatus::outside);
+  CHECK(field->velocity(Vec3(2.0, 0.6, 3.0), v) == FieldStatus::outside);
+}
