@@ -589,6 +589,10 @@ TEST_CASE("no output file is left behind on failure", "[hdf5][errors]") {
     grid.values = samples(g, 3, 1);
     CHECK_THAT(error_of([&] { write_hdf5_grid(grid, dir / "missing" / "a.h5"); }),
                Catch::Contains("missing"));
+    grid.geometry = rectilinear(3, 3, 3, 3);
+    grid.geometry.axes[1][2] = grid.geometry.axes[1][1];
+    CHECK_THAT(error_of([&] { write_hdf5_grid(grid, dir / "a.h5"); }),
+               Catch::Contains("axis 1 must be finite and strictly increasing; entry 2"));
     CHECK(dir.entries().empty());
   }
 }

@@ -53,7 +53,16 @@ void check_grid(const GridGeometry& g, int components) {
                             std::to_string(g.axes[static_cast<std::size_t>(a)].size()) +
                             " coordinates for " + std::to_string(n) + " samples");
   }
-  if (!(g.rectilinear())) {
+  if (g.rectilinear()) {
+    for (int a = 0; a < 3; ++a) {
+      const auto& axis = g.axes[static_cast<std::size_t>(a)];
+      for (std::size_t i = 0; i < axis.size(); ++i)
+        if (!std::isfinite(axis[i]) || (i > 0 && !(axis[i] > axis[i - 1])))
+          throw InvalidArgument("HDF5 layout: rectilinear axis " + std::to_string(a) +
+                                " must be finite and strictly increasing; entry " +
+                                std::to_string(i) + " is " + std::to_string(axis[i]));
+    }
+  } else {
     for (int a = 0; a < g.dimension; ++a)
       if (!std::isfinite(g.spacing[a]) || !(g.spacing[a] > 0) || !std::isfinite(g.origin[a]))
         throw InvalidArgument("HDF5 layout: origin and spacing must be finite, spacing positive");
