@@ -1,5 +1,6 @@
 // The `stream` subcommand end to end: files it writes, the summary, and bad input.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
@@ -20,7 +21,9 @@ struct Outcome {
 };
 
 Outcome run(const std::string& args) {
-  const fs::path log = fs::temp_directory_path() / "orthofront-stream-test.log";
+  // One log per process: ctest runs the test cases of this file in parallel processes.
+  const fs::path log =
+      fs::temp_directory_path() / ("orthofront-stream-test-" + std::to_string(::getpid()) + ".log");
   const std::string command = std::string(ORTHOFRONT_BINARY) + " " + args + " > " + log.string() +
                               " 2>&1 < /dev/null";
   Outcome o;
