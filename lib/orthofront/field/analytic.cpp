@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_spec.h"
 
 namespace orthofront {
 namespace {
@@ -195,21 +196,8 @@ struct Abc {
 
 // --- registry --------------------------------------------------------------------------------
 
-enum class Kind : unsigned char {
-  real,      // any finite number
-  positive,  // finite and > 0
-  integer,   // integer in [lo, hi]
-  flag,      // 0 or 1
-};
-
-struct ParamSpec {
-  const char* name;
-  double default_value;
-  const char* help;
-  Kind kind = Kind::real;
-  double lo = 0;
-  double hi = 0;
-};
+using Kind = ParameterKind;
+using ParamSpec = ParameterSpec;
 
 using Factory = std::unique_ptr<Field3> (*)(std::span<const double> p, std::string description);
 
@@ -224,14 +212,6 @@ struct FieldSpec {
 template <class Model>
 std::unique_ptr<Field3> wrap(const Model& model, const Box<3>& box, std::string description) {
   return std::make_unique<AnalyticField<Model>>(model, box, std::move(description));
-}
-
-// Six significant digits, as %g: short, readable descriptions ("beta=2.66667").
-std::string format_number(double value) {
-  std::array<char, 64> buffer{};
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value,
-                                    std::chars_format::general, 6);
-  return std::string(buffer.data(), result.ptr);
 }
 
 double stalling_saddle_x(double u, double m, double eps) {
@@ -295,8 +275,8 @@ const std::vector<FieldSpec>& registry() {
        [](std::span<const double> p, std::string d) {
          const double u = p[0], m = p[1], eps = p[2];
          if (!(m / u > 2.0 * eps)) {
-           throw InvalidArgument("analytic field 'stalling': m/u = " + format_number(m / u) +
-                                 " must exceed 2 eps = " + format_number(2.0 * eps) +
+           throw InvalidArgument("analytic field 'stalling': m/u = " + format_parameter(m / u) +
+                                 " must exceed 2 eps = " + format_parameter(2.0 * eps) +
                                  ", otherwise there is no saddle");
          }
          const double l = m / u;
@@ -329,68 +309,6 @@ const std::vector<FieldSpec>& registry() {
   return fields;
 }
 
-std::string known_names() {
-  std::string names;
-  for (const FieldSpec& field : registry()) {
-    if (!names.empty()) names += ", ";
-    names += field.name;
-  }
-  return names;
-}
-
-std::string accepted_keys(const FieldSpec& field) {
-  if (field.params.empty()) return "none";
-  std::string keys;
-  for (const ParamSpec& param : field.params) {
-    if (!keys.empty()) keys += ", ";
-    keys += param.name;
-  }
-  return keys;
-}
-
-std::string_view trim(std::string_view s) {
-  const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
-  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-  return s;
-}
-
-// A finite number spelled entirely by `text` (an optional leading '+' is accepted).
-bool parse_finite(std::string_view text, double& value) {
-  if (!text.empty() && text.front() == '+') {
-    text.remove_prefix(1);
-    if (!text.empty() && (text.front() == '+' || text.front() == '-')) return false;
-  }
-  if (text.empty()) return false;
-  const char* end = text.data() + text.size();
-  const auto result = std::from_chars(text.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end && std::isfinite(value);
-}
-
-double parse_value(const FieldSpec& field, const ParamSpec& param, std::string_view text) {
-  const std::string where = "analytic field '" + std::string(field.name) + "': parameter '" +
-                            param.name + "' has value '" + std::string(text) + "'";
-  double value = 0;
-  if (!parse_finite(text, value)) throw InvalidArgument(where + ", expected a finite number");
-  switch (param.kind) {
-    case Kind::real:
-      break;
-    case Kind::positive:
-      if (!(value > 0)) throw InvalidArgument(where + ", expected a number > 0");
-      break;
-    case Kind::integer:
-      if (value != std::floor(value) || value < param.lo || value > param.hi) {
-        throw InvalidArgument(where + ", expected an integer from " + format_number(param.lo) +
-                              " to " + format_number(param.hi));
-      }
-      break;
-    case Kind::flag:
-      if (value != 0 && value != 1) throw InvalidArgument(where + ", expected 0 or 1");
-      break;
-  }
-  return value;
-}
-
 }  // namespace
 
 const std::vector<AnalyticFieldInfo>& analytic_fields() {
@@ -409,62 +327,18 @@ const std::vector<AnalyticFieldInfo>& analytic_fields() {
 }
 
 std::unique_ptr<Field3> make_analytic_field(std::string_view spec) {
-  const std::size_t colon = spec.find(':');
-  const std::string_view name = trim(spec.substr(0, colon));
-
+  const std::string_view name = field_spec_name(spec);
   const FieldSpec* field = nullptr;
   for (const FieldSpec& candidate : registry()) {
     if (name == candidate.name) field = &candidate;
   }
   if (field == nullptr) {
     throw InvalidArgument("unknown analytic field '" + std::string(name) +
-                          "'; known fields: " + known_names());
+                          "'; known fields: " + field_names(registry()));
   }
-
-  std::vector<double> values;
-  std::vector<bool> given(field->params.size(), false);
-  for (const ParamSpec& param : field->params) values.push_back(param.default_value);
-
-  if (colon != std::string_view::npos) {
-    std::string_view rest = spec.substr(colon + 1);
-    while (true) {
-      const std::size_t comma = rest.find(',');
-      const std::string_view item = trim(rest.substr(0, comma));
-      const std::size_t equals = item.find('=');
-      if (equals == std::string_view::npos) {
-        throw InvalidArgument("analytic field '" + std::string(field->name) + "': parameter '" +
-                              std::string(item) + "' is not of the form key=value");
-      }
-      const std::string_view key = trim(item.substr(0, equals));
-      const std::string_view text = trim(item.substr(equals + 1));
-      std::size_t index = field->params.size();
-      for (std::size_t i = 0; i < field->params.size(); ++i) {
-        if (key == field->params[i].name) index = i;
-      }
-      if (index == field->params.size()) {
-        throw InvalidArgument("analytic field '" + std::string(field->name) +
-                              "' has no parameter '" + std::string(key) +
-                              "'; accepted: " + accepted_keys(*field));
-      }
-      if (given[index]) {
-        throw InvalidArgument("analytic field '" + std::string(field->name) + "': parameter '" +
-                              std::string(key) + "' given twice");
-      }
-      given[index] = true;
-      values[index] = parse_value(*field, field->params[index], text);
-      if (comma == std::string_view::npos) break;
-      rest = rest.substr(comma + 1);
-    }
-  }
-
-  std::string description = field->name;
-  for (std::size_t i = 0; i < field->params.size(); ++i) {
-    description += (i == 0 ? ':' : ',');
-    description += field->params[i].name;
-    description += '=';
-    description += format_number(values[i]);
-  }
-  return field->make(values, std::move(description));
+  ParsedParameters parsed =
+      parse_field_parameters(spec, "analytic field", field->name, field->params);
+  return field->make(parsed.values, std::move(parsed.description));
 }
 
 }  // namespace orthofront

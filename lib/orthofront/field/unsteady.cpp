@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_spec.h"
 
 namespace orthofront {
 namespace {
@@ -77,7 +78,7 @@ struct DoubleGyre {
   double A;
   double eps;
   double omega;
-  double B;      // 0 for the 2D field
+  double B;  // 0 for the 2D field
   bool three_d;
 
   void velocity(const Vec3& x, double t, Vec3& v) const {
@@ -204,16 +205,8 @@ struct MovingSpiral {
 
 // --- registry (the spec syntax of make_analytic_field) ----------------------------------------
 
-enum class Kind : unsigned char { real, positive, integer };
-
-struct ParamSpec {
-  const char* name;
-  double default_value;
-  const char* help;
-  Kind kind = Kind::real;
-  double lo = 0;
-  double hi = 0;
-};
+using Kind = ParameterKind;
+using ParamSpec = ParameterSpec;
 
 using Factory = std::unique_ptr<UnsteadyField> (*)(std::span<const double> p, std::string d);
 
@@ -237,13 +230,6 @@ std::unique_ptr<UnsteadyField> wrap(const Model& model, int dimension, const Box
                                     TimeRange times, std::string description) {
   return std::make_unique<AnalyticUnsteadyField<Model>>(model, dimension, box, times,
                                                         std::move(description));
-}
-
-std::string format_number(double value) {
-  std::array<char, 64> buffer{};
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value,
-                                    std::chars_format::general, 6);
-  return std::string(buffer.data(), result.ptr);
 }
 
 const std::vector<FieldSpec>& registry() {
@@ -307,57 +293,6 @@ const std::vector<FieldSpec>& registry() {
   return fields;
 }
 
-std::string known_names() {
-  std::string names;
-  for (const FieldSpec& field : registry()) {
-    if (!names.empty()) names += ", ";
-    names += field.name;
-  }
-  return names;
-}
-
-std::string accepted_keys(const FieldSpec& field) {
-  std::string keys;
-  for (const ParamSpec& param : field.params) {
-    if (!keys.empty()) keys += ", ";
-    keys += param.name;
-  }
-  return keys.empty() ? "none" : keys;
-}
-
-std::string_view trim(std::string_view s) {
-  const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
-  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-  return s;
-}
-
-bool parse_finite(std::string_view text, double& value) {
-  if (!text.empty() && text.front() == '+') {
-    text.remove_prefix(1);
-    if (!text.empty() && (text.front() == '+' || text.front() == '-')) return false;
-  }
-  if (text.empty()) return false;
-  const char* end = text.data() + text.size();
-  const auto result = std::from_chars(text.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end && std::isfinite(value);
-}
-
-double parse_value(const FieldSpec& field, const ParamSpec& param, std::string_view text) {
-  const std::string where = "unsteady field '" + std::string(field.name) + "': parameter '" +
-                            param.name + "' has value '" + std::string(text) + "'";
-  double value = 0;
-  if (!parse_finite(text, value)) throw InvalidArgument(where + ", expected a finite number");
-  if (param.kind == Kind::positive && !(value > 0))
-    throw InvalidArgument(where + ", expected a number > 0");
-  if (param.kind == Kind::integer &&
-      (value != std::floor(value) || value < param.lo || value > param.hi)) {
-    throw InvalidArgument(where + ", expected an integer from " + format_number(param.lo) +
-                          " to " + format_number(param.hi));
-  }
-  return value;
-}
-
 const FieldSpec* find(std::string_view name) {
   for (const FieldSpec& candidate : registry())
     if (name == candidate.name) return &candidate;
@@ -381,57 +316,19 @@ const std::vector<AnalyticFieldInfo>& unsteady_fields() {
 }
 
 bool is_unsteady_field_name(std::string_view spec) {
-  return find(trim(spec.substr(0, spec.find(':')))) != nullptr;
+  return find(field_spec_name(spec)) != nullptr;
 }
 
 std::unique_ptr<UnsteadyField> make_unsteady_field(std::string_view spec) {
-  const std::size_t colon = spec.find(':');
-  const std::string_view name = trim(spec.substr(0, colon));
+  const std::string_view name = field_spec_name(spec);
   const FieldSpec* field = find(name);
   if (field == nullptr) {
     throw InvalidArgument("unknown unsteady field '" + std::string(name) +
-                          "'; known unsteady fields: " + known_names());
+                          "'; known unsteady fields: " + field_names(registry()));
   }
-  std::vector<double> values;
-  std::vector<bool> given(field->params.size(), false);
-  for (const ParamSpec& param : field->params) values.push_back(param.default_value);
-  if (colon != std::string_view::npos) {
-    std::string_view rest = spec.substr(colon + 1);
-    while (true) {
-      const std::size_t comma = rest.find(',');
-      const std::string_view item = trim(rest.substr(0, comma));
-      const std::size_t equals = item.find('=');
-      if (equals == std::string_view::npos) {
-        throw InvalidArgument("unsteady field '" + std::string(field->name) + "': parameter '" +
-                              std::string(item) + "' is not of the form key=value");
-      }
-      const std::string_view key = trim(item.substr(0, equals));
-      std::size_t index = field->params.size();
-      for (std::size_t i = 0; i < field->params.size(); ++i)
-        if (key == field->params[i].name) index = i;
-      if (index == field->params.size()) {
-        throw InvalidArgument("unsteady field '" + std::string(field->name) +
-                              "' has no parameter '" + std::string(key) +
-                              "'; accepted: " + accepted_keys(*field));
-      }
-      if (given[index]) {
-        throw InvalidArgument("unsteady field '" + std::string(field->name) + "': parameter '" +
-                              std::string(key) + "' given twice");
-      }
-      given[index] = true;
-      values[index] = parse_value(*field, field->params[index], trim(item.substr(equals + 1)));
-      if (comma == std::string_view::npos) break;
-      rest = rest.substr(comma + 1);
-    }
-  }
-  std::string description = field->name;
-  for (std::size_t i = 0; i < field->params.size(); ++i) {
-    description += (i == 0 ? ':' : ',');
-    description += field->params[i].name;
-    description += '=';
-    description += format_number(values[i]);
-  }
-  return field->make(values, std::move(description));
+  ParsedParameters parsed =
+      parse_field_parameters(spec, "unsteady field", field->name, field->params);
+  return field->make(parsed.values, std::move(parsed.description));
 }
 
 }  // namespace orthofront
