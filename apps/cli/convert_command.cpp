@@ -66,7 +66,8 @@ bool natural_less(const std::string& a, const std::string& b) {
   std::size_t i = 0;
   std::size_t j = 0;
   while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) &&
+        std::isdigit(static_cast<unsigned char>(b[j]))) {
       std::size_t ie = i;
       std::size_t je = j;
       while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
@@ -114,7 +115,8 @@ std::vector<double> parse_times(const std::string& text) {
   std::size_t start = 0;
   for (;;) {
     const std::size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     double t = 0.0;
     const auto r = std::from_chars(part.data(), part.data() + part.size(), t);
     if (r.ec != std::errc() || r.ptr != part.data() + part.size() || !std::isfinite(t))
@@ -133,7 +135,8 @@ Vec3 parse_triple(const std::string& text, const std::string& what) {
     const std::size_t comma = text.find(',', start);
     if ((a < 2) == (comma == std::string::npos))
       throw InvalidArgument(what + " '" + text + "' must be three numbers x,y,z");
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     const auto r = std::from_chars(part.data(), part.data() + part.size(), v[a]);
     if (r.ec != std::errc() || r.ptr != part.data() + part.size() || !std::isfinite(v[a]))
       throw InvalidArgument(what + " '" + text + "': '" + part + "' is not a finite number");
@@ -188,27 +191,6 @@ struct Input {
   bool has_times = false;  // the input stated its times (.pvd, HDF5 series, VDB 'time' metadata)
 };
 
-/// A single grid in memory as a series of one step.
-class OneGrid final : public io::TimeSeries {
- public:
-  explicit OneGrid(VectorGrid grid, std::string description)
-      : grid_(std::move(grid)), description_(std::move(description)) {}
-  std::size_t step_count() const override { return 1; }
-  double time(std::size_t) const override { return 0.0; }
-  const GridGeometry& geometry() const override { return grid_.geometry; }
-  int components() const override { return grid_.components; }
-  std::string describe() const override { return description_; }
-  io::RawStep read_raw(std::size_t step) const override {
-    io::RawStep raw{step, std::vector<std::byte>(grid_.bytes()), false};
-    std::memcpy(raw.bytes.data(), grid_.values.data(), grid_.bytes());
-    return raw;
-  }
-
- private:
-  VectorGrid grid_;
-  std::string description_;
-};
-
 /// "FILE.ext[:SELECTOR]" split at the first ':' after a known data-file extension.
 DataFileSpec split_spec(const std::string& spec) {
   const auto found = find_data_file(spec);
@@ -239,7 +221,8 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
     if (is_hdf5(spec.path)) {
       io::Hdf5ReadOptions options;
       options.steady_as_single_step = true;
-      auto series = io::open_hdf5_series(spec.path, spec.selector.empty() ? "/" : spec.selector, options);
+      auto series =
+          io::open_hdf5_series(spec.path, spec.selector.empty() ? "/" : spec.selector, options);
       input.steady = series->description().storage == io::Hdf5Storage::steady;
       input.has_times = !input.steady;
       input.series = std::move(series);
@@ -260,8 +243,8 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
         return input;
       }
     }
-    input.series = std::make_unique<OneGrid>(io::read_vector_grid(spec.path, spec.selector),
-                                             files.front());
+    input.series = std::make_unique<io::SingleGridSeries>(
+        io::read_vector_grid(spec.path, spec.selector), files.front());
     return input;
   }
   // Several files: one step each, the same array of each.
@@ -289,7 +272,8 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
   } else {
     std::vector<std::filesystem::path> paths;
     for (const auto& spec : specs) paths.push_back(spec.path);
-    input.series = std::make_unique<io::GridFileSeries>(std::move(paths), step_times, specs.front().selector);
+    input.series =
+        std::make_unique<io::GridFileSeries>(std::move(paths), step_times, specs.front().selector);
   }
   input.steady = false;
   input.has_times = !times.empty();
@@ -331,10 +315,12 @@ void run_convert(const ConvertArgs& args) {
   bool steady = input.steady && times.empty();
   if (files.size() == 1 && !times.empty()) {
     // New times for a single input's steps (a steady input becomes a series of one step).
-    if (std::isfinite(args.dt)) times = io::evenly_spaced_times(input.series->step_count(), args.t0, args.dt);
+    if (std::isfinite(args.dt))
+      times = io::evenly_spaced_times(input.series->step_count(), args.t0, args.dt);
     if (times.size() != input.series->step_count()) {
       throw InvalidArgument("--times gives " + std::to_string(times.size()) + " times for the " +
-                            std::to_string(input.series->step_count()) + " steps of " + files.front());
+                            std::to_string(input.series->step_count()) + " steps of " +
+                            files.front());
     }
     input.series = std::make_unique<RetimedSeries>(std::move(input.series), times);
     input.has_times = true;
@@ -423,11 +409,13 @@ void run_convert(const ConvertArgs& args) {
       writer.commit();
     }
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     std::cout << "Wrote " << args.out;
     if (!to_vdb) std::cout << " and " << io::xdmf_path(out).string();
-    std::cout << ": " << series.describe() << " -> " << geometry.size[0] << " x " << geometry.size[1];
+    std::cout << ": " << series.describe() << " -> " << geometry.size[0] << " x "
+              << geometry.size[1];
     if (geometry.dimension == 3) std::cout << " x " << geometry.size[2];
     std::cout << " points, " << series.components() << " components, ";
     if (steady) {
@@ -438,8 +426,8 @@ void run_convert(const ConvertArgs& args) {
       if (default_times) std::cout << " (no --times or --dt: steps at t = 0, 1, 2, ...)";
     }
     std::cout << ", " << mib(static_cast<double>(series.step_bytes()) * static_cast<double>(steps))
-              << " (" << mib(static_cast<double>(std::filesystem::file_size(out))) << " on disk) in "
-              << seconds << " s\n";
+              << " (" << mib(static_cast<double>(std::filesystem::file_size(out)))
+              << " on disk) in " << seconds << " s\n";
   }
 }
 
@@ -455,7 +443,8 @@ void add_convert_command(CLI::App& app) {
                 "Input files (FILE or FILE:ARRAY; globs like 'data/*.vec' are expanded). Several "
                 "files make a time series, in natural order (2 before 10) unless --keep-order")
       ->required();
-  c->add_option("--out", args->out, "Output: OUT.h5 (HDF5 layout + OUT.xmf) or OUT.vdb")->required();
+  c->add_option("--out", args->out, "Output: OUT.h5 (HDF5 layout + OUT.xmf) or OUT.vdb")
+      ->required();
   c->add_option("--times", args->times, "Times of the steps t0,t1,... (strictly increasing)");
   c->add_option("--dt", args->dt, "Time between steps (times t0 + i dt)");
   c->add_option("--t0", args->t0, "Time of the first step with --dt")->capture_default_str();
@@ -467,12 +456,14 @@ void add_convert_command(CLI::App& app) {
   c->add_option("--layout", args->layout, "HDF5 time series storage: chunked | per-step")
       ->capture_default_str();
   c->add_option("--group", args->group, "HDF5 group of the field")->capture_default_str();
-  c->add_option("--chunk-mib", args->chunk_mib,
-                "HDF5: largest chunk in MiB (default: the writer's; steps are chunked by z-slices)");
+  c->add_option(
+      "--chunk-mib", args->chunk_mib,
+      "HDF5: largest chunk in MiB (default: the writer's; steps are chunked by z-slices)");
   c->add_option("--units-length", args->units.length, "Length unit, e.g. m");
   c->add_option("--units-time", args->units.time, "Time unit, e.g. s");
   c->add_option("--units-velocity", args->units.velocity, "Velocity unit, e.g. m/s");
-  c->add_option("--fill-value", args->fill_value, "HDF5: store missing samples (NaN) as this value");
+  c->add_option("--fill-value", args->fill_value,
+                "HDF5: store missing samples (NaN) as this value");
   c->add_flag("--zeros-are-flow", args->zeros_are_flow,
               "Zero vectors are flow (critical points), not land/solid (HDF5 attribute)");
   c->add_option("--grid-name", args->grid_name,

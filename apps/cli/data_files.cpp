@@ -6,6 +6,7 @@
 
 #include "cli/grid_data_files.h"
 #include "orthofront/error.h"
+#include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_layout.h"
 
 namespace orthofront::cli {
@@ -17,26 +18,6 @@ std::string lower(std::string text) {
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return text;
 }
-
-class SingleGridSeries final : public io::TimeSeries {
- public:
-  SingleGridSeries(VectorGrid grid, std::string description)
-      : grid_(std::move(grid)), description_(std::move(description)) {}
-  std::size_t step_count() const override { return 1; }
-  double time(std::size_t) const override { return 0.0; }
-  const GridGeometry& geometry() const override { return grid_.geometry; }
-  int components() const override { return grid_.components; }
-  std::string describe() const override { return description_; }
-  io::RawStep read_raw(std::size_t step) const override {
-    io::RawStep raw{step, std::vector<std::byte>(grid_.bytes()), false};
-    std::memcpy(raw.bytes.data(), grid_.values.data(), grid_.bytes());
-    return raw;
-  }
-
- private:
-  VectorGrid grid_;
-  std::string description_;
-};
 
 std::string compression_text(const io::Hdf5Description& d) {
   if (d.filters.empty()) return "none";
@@ -138,7 +119,7 @@ DataFile open_data_file(const std::string& spec) {
 }
 
 std::unique_ptr<io::TimeSeries> single_grid_series(VectorGrid grid, std::string description) {
-  return std::make_unique<SingleGridSeries>(std::move(grid), std::move(description));
+  return std::make_unique<io::SingleGridSeries>(std::move(grid), std::move(description));
 }
 
 }  // namespace orthofront::cli

@@ -1,6 +1,7 @@
 #pragma once
 /// Time series made of one vector-grid file per step (any format grid_file reads: a list of .vti,
 /// .vec, .am, .nrrd, .vtk or .vdb files), or described by a ParaView .pvd collection.
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -9,6 +10,28 @@
 #include "orthofront/io/time_series.h"
 
 namespace orthofront::io {
+
+/// One grid held in memory, seen as a series of one step (time 0): lets a steady grid go where a
+/// time series is expected (convert, info).
+class SingleGridSeries final : public TimeSeries {
+ public:
+  SingleGridSeries(VectorGrid grid, std::string description)
+      : grid_(std::move(grid)), description_(std::move(description)) {}
+  std::size_t step_count() const override { return 1; }
+  double time(std::size_t) const override { return 0.0; }
+  const GridGeometry& geometry() const override { return grid_.geometry; }
+  int components() const override { return grid_.components; }
+  std::string describe() const override { return description_; }
+  RawStep read_raw(std::size_t step) const override {
+    RawStep raw{step, std::vector<std::byte>(grid_.bytes()), false};
+    std::memcpy(raw.bytes.data(), grid_.values.data(), grid_.bytes());
+    return raw;
+  }
+
+ private:
+  VectorGrid grid_;
+  std::string description_;
+};
 
 /// One file per step. The first file is read when the series is opened (geometry and component
 /// count); every step must match it, or decode throws FormatError naming the file and the step.
