@@ -16,36 +16,51 @@ namespace orthofront {
 
 const char* to_string(StopReason reason) {
   switch (reason) {
-    case StopReason::none: return "none";
-    case StopReason::steps: return "steps";
-    case StopReason::vertex_budget: return "vertex_budget";
-    case StopReason::time_budget: return "time_budget";
-    case StopReason::fronts_exhausted: return "fronts_exhausted";
-    case StopReason::left_domain: return "left_domain";
-    case StopReason::cancelled: return "cancelled";
+    case StopReason::none:
+      return "none";
+    case StopReason::steps:
+      return "steps";
+    case StopReason::vertex_budget:
+      return "vertex_budget";
+    case StopReason::time_budget:
+      return "time_budget";
+    case StopReason::fronts_exhausted:
+      return "fronts_exhausted";
+    case StopReason::left_domain:
+      return "left_domain";
+    case StopReason::cancelled:
+      return "cancelled";
   }
   return "?";
 }
 const char* to_string(Method method) {
   return method == Method::orthogonal ? "orthogonal" : "timeline";
 }
-const char* to_string(MuMode mode) { return mode == MuMode::damping ? "damping" : "paper"; }
+const char* to_string(MuMode mode) {
+  return mode == MuMode::damping ? "damping" : "paper";
+}
 const char* to_string(NegativeAlpha mode) {
   return mode == NegativeAlpha::clamp ? "clamp" : "keep";
 }
 const char* to_string(Insertion mode) {
   switch (mode) {
-    case Insertion::linear: return "linear";
-    case Insertion::cubic: return "cubic";
-    case Insertion::streamline: return "streamline";
+    case Insertion::linear:
+      return "linear";
+    case Insertion::cubic:
+      return "cubic";
+    case Insertion::streamline:
+      return "streamline";
   }
   return "?";
 }
 const char* to_string(RowSkip mode) {
   switch (mode) {
-    case RowSkip::off: return "off";
-    case RowSkip::vertex: return "vertex";
-    case RowSkip::run: return "run";
+    case RowSkip::off:
+      return "off";
+    case RowSkip::vertex:
+      return "vertex";
+    case RowSkip::run:
+      return "run";
   }
   return "?";
 }
@@ -73,23 +88,24 @@ class StageTimer {
   Clock::time_point start_;
 };
 
-/// Runs body(begin, end) over [0, n): one functor for the serial and the parallel path.
+/// Runs body(begin, end) over [0, n): one functor for the serial and the parallel path. `grain`:
+/// the smallest chunk worth a task (64 cheap vertex updates; 1 for costly items).
 template <typename Body>
-void for_range(std::size_t n, std::size_t threshold, const Body& body) {
+void for_range(std::size_t n, std::size_t threshold, const Body& body, std::size_t grain = 64) {
   if (n < threshold) {
     body(std::size_t{0}, n);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
 template <int N>
 struct FrontVertex {
-  Vec<N> x;              ///< current position on its stream line
-  Vec<N> anchor;         ///< position of the mesh vertex that stands for it
-  double s = 0;          ///< seed parameter (may exceed 1 on closed fronts: taken modulo 1)
-  double t = 0;          ///< integration time in v since the seed
+  Vec<N> x;       ///< current position on its stream line
+  Vec<N> anchor;  ///< position of the mesh vertex that stands for it
+  double s = 0;   ///< seed parameter (may exceed 1 on closed fronts: taken modulo 1)
+  double t = 0;   ///< integration time in v since the seed
   std::int32_t mesh = -1;
   std::int32_t origin = -1;  ///< index in the previous front (-1: inserted this step)
 };
@@ -175,10 +191,8 @@ class Engine {
     report_.steps = step;
     report_.vertices = mesh_.vertex_count();
     report_.faces = mesh_.face_count();
-    report_.quads = static_cast<std::size_t>(
-        std::count_if(mesh_.faces.begin(), mesh_.faces.end(), [](const Face& f) {
-          return f.is_quad();
-        }));
+    report_.quads = static_cast<std::size_t>(std::count_if(
+        mesh_.faces.begin(), mesh_.faces.end(), [](const Face& f) { return f.is_quad(); }));
     report_.triangles = report_.faces - report_.quads;
     if (opt_.measure_quality) {
       StageTimer timer(report_.times.quality);
@@ -557,9 +571,8 @@ class Engine {
     }
     double mu = opt_.mu;
     if (opt_.mu_mode == MuMode::damping) {
-      const DampingChoice choice =
-          choose_damping_mu(aln_, kernel_, std::span<const double>(speed_.data(), n),
-                            opt_.edge / h_star_);
+      const DampingChoice choice = choose_damping_mu(
+          aln_, kernel_, std::span<const double>(speed_.data(), n), opt_.edge / h_star_);
       if (!choice.feasible) ++report_.infeasible_damping_steps;
       // An unbounded μ means the kernel vanishes on every moving vertex: advance along α^L.
       mu = std::isfinite(choice.mu) ? choice.mu : 0.0;
@@ -689,15 +702,21 @@ class Engine {
     f.v = std::move(out);
   }
 
+  /// A vertex to insert at fraction λ of segment i, and where it went.
+  struct InsertionJob {
+    std::size_t segment = 0;
+    double lambda = 0, s = 0, t = 0;
+    Vec<N> x = Vec<N>::Zero();
+    int evaluations = 0;
+    enum class Outcome : unsigned char { seed, streamline, fallback, interpolated } outcome{};
+  };
+
   void split_long(Front<N>& f, int step) {
     const std::size_t n = f.v.size();
     const double limit = opt_.split_factor * opt_.edge;
     const std::size_t segments = f.closed ? n : n - 1;
-    std::vector<FrontVertex<N>> out;
-    out.reserve(n + n / 4 + 2);
-    for (std::size_t i = 0; i < n; ++i) {
-      out.push_back(f.v[i]);
-      if (i >= segments) break;
+    jobs_.clear();
+    for (std::size_t i = 0; i < segments; ++i) {
       const std::size_t j = (i + 1) % n;
       const double length = (f.v[j].x - f.v[i].x).norm();
       if (!(length > limit)) continue;
@@ -705,14 +724,42 @@ class Engine {
       double s_next = f.v[j].s;
       if (f.closed && j == 0) s_next += 1.0;  // wrap the seed parameter on the closing segment
       for (int k = 1; k < pieces; ++k) {
-        const double lambda = static_cast<double>(k) / pieces;
+        InsertionJob job;
+        job.segment = i;
+        job.lambda = static_cast<double>(k) / pieces;
+        job.s = f.v[i].s + job.lambda * (s_next - f.v[i].s);
+        job.t = f.v[i].t + job.lambda * (f.v[j].t - f.v[i].t);
+        jobs_.push_back(job);
+      }
+    }
+    if (jobs_.empty()) return;
+    // Each insertion integrates a stream line from the seed: independent and costly, so they run
+    // in parallel; the mesh vertices are then emitted in front order, as a serial run would.
+    for_range(
+        jobs_.size(), 2,
+        [&](std::size_t b, std::size_t e) {
+          for (std::size_t k = b; k < e; ++k) insertion_point(f, jobs_[k]);
+        },
+        1);
+    std::vector<FrontVertex<N>> out;
+    out.reserve(n + jobs_.size());
+    std::size_t next_job = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      out.push_back(f.v[i]);
+      const std::size_t j = (i + 1) % n;
+      for (; next_job < jobs_.size() && jobs_[next_job].segment == i; ++next_job) {
+        const InsertionJob& job = jobs_[next_job];
+        report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
+        if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
+        if (job.outcome == InsertionJob::Outcome::fallback) ++report_.insertion_fallbacks;
         FrontVertex<N> nv;
-        nv.s = f.v[i].s + lambda * (s_next - f.v[i].s);
-        nv.t = f.v[i].t + lambda * (f.v[j].t - f.v[i].t);
-        nv.x = insertion_point(f, i, lambda, nv.s, nv.t);
+        nv.s = job.s;
+        nv.t = job.t;
+        nv.x = job.x;
         nv.anchor = nv.x;
         nv.origin = -1;
-        const double a = mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
+        const double a =
+            mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
         nv.mesh = emit(nv, a, f.id, step);
         out.push_back(nv);
         ++report_.splits;
@@ -725,19 +772,26 @@ class Engine {
     return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
   }
 
-  /// Position of a vertex inserted at fraction λ of segment i; `t` (its time in v) is updated
-  /// when the point is put on its true stream line.
-  Vec<N> insertion_point(const Front<N>& f, std::size_t i, double lambda, double s, double& t) {
+  /// Fills job.x (and job.t when the point is put on its true stream line). Thread-safe.
+  void insertion_point(const Front<N>& f, InsertionJob& job) const {
+    using Outcome = typename InsertionJob::Outcome;
+    const std::size_t i = job.segment;
     const std::size_t j = (i + 1) % f.v.size();
-    if (t == 0) return seed_.point(s - std::floor(s));
-    const Vec<N> guess = cubic_point(f, i, lambda);
+    const double s = job.s;
+    if (job.t == 0) {
+      job.x = seed_.point(s - std::floor(s));
+      job.outcome = Outcome::seed;
+      return;
+    }
+    const Vec<N> guess = cubic_point(f, i, job.lambda);
     if (opt_.insertion == Insertion::streamline) {
       // The stream line of parameter s, followed for the interpolated time, then moved along
       // itself onto the front: the plane through the cubic guess normal to the flow.
       const double seg = (f.v[j].x - f.v[i].x).norm();
-      IntegrationResult<N> r = integrate_dopri5(field_, seed_.point(s - std::floor(s)), t, tol_);
-      report_.field_evaluations += static_cast<std::size_t>(r.evaluations);
-      double time = t;
+      IntegrationResult<N> r =
+          integrate_dopri5(field_, seed_.point(s - std::floor(s)), job.t, tol_);
+      job.evaluations += r.evaluations;
+      double time = job.t;
       for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
         Vec<N> w;
         if (field_.velocity(r.x, w) != FieldStatus::inside) break;
@@ -749,19 +803,23 @@ class Engine {
         // the front here (or the flow is slow): give up instead of integrating for ages.
         if (std::abs(delta) * std::sqrt(ww) > seg) break;
         r = integrate_dopri5(field_, r.x, delta, tol_);
-        report_.field_evaluations += static_cast<std::size_t>(r.evaluations + 1);
+        job.evaluations += r.evaluations + 1;
         time += delta;
       }
       if (r.status == FieldStatus::inside && (r.x - guess).norm() < 0.25 * seg) {
-        ++report_.streamline_insertions;
-        t = time;
-        return r.x;
+        job.outcome = Outcome::streamline;
+        job.t = time;
+        job.x = r.x;
+        return;
       }
-      ++report_.insertion_fallbacks;
-      return guess;
+      job.outcome = Outcome::fallback;
+      job.x = guess;
+      return;
     }
-    if (opt_.insertion == Insertion::cubic) return guess;
-    return f.v[i].x + lambda * (f.v[j].x - f.v[i].x);
+    job.outcome = Outcome::interpolated;
+    job.x = opt_.insertion == Insertion::cubic
+                ? guess
+                : Vec<N>(f.v[i].x + job.lambda * (f.v[j].x - f.v[i].x));
   }
 
   /// Row skipping leaves one triangle wherever a waiting vertex neighbours a moving one. Grow
@@ -826,7 +884,8 @@ class Engine {
     int m = 0;
     for (int k = 0; k < count; ++k) {
       bool seen = false;
-      for (int l = 0; l < m; ++l) seen = seen || u[static_cast<std::size_t>(l)] == ids[static_cast<std::size_t>(k)];
+      for (int l = 0; l < m; ++l)
+        seen = seen || u[static_cast<std::size_t>(l)] == ids[static_cast<std::size_t>(k)];
       if (!seen) u[static_cast<std::size_t>(m++)] = ids[static_cast<std::size_t>(k)];
     }
     if (m == 4)
@@ -890,7 +949,7 @@ class Engine {
       chain_b.clear();
       // Old chain: forward from oa to ob (wrapping on closed old fronts).
       std::size_t steps_old = ob >= oa ? ob - oa : ob + n_old - oa;
-      if (ob < oa && !old.closed) continue;  // no old segment joins them
+      if (ob < oa && !old.closed) continue;   // no old segment joins them
       if (steps_old == 0) steps_old = n_old;  // a closed front with a single anchor
       for (std::size_t s = 0; s <= steps_old; ++s) chain_a.push_back(old.v[(oa + s) % n_old].mesh);
       std::size_t steps_new = jb >= ja ? jb - ja : jb + n - ja;
@@ -918,6 +977,7 @@ class Engine {
   std::vector<Vec<N>> vel_;
   std::vector<double> speed_, alpha_, p_, q_, r_, aln_, kernel_, seg_err_;
   std::vector<char> seg_ok_;
+  std::vector<InsertionJob> jobs_;
   std::vector<VertexState> state_;
 };
 
