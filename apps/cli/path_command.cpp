@@ -26,7 +26,7 @@ namespace {
 struct PathArgs {
   std::string field, seed, out, report, budget = "512MiB";
   int seed_count = 20;
-  double t0 = 0, t1 = 1, time_scale = 0;
+  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0;
   bool spacetime_out = false, quiet = false, no_prefetch = false;
   StreamSurfaceOptions options;
 };
@@ -91,6 +91,10 @@ void add_path_command(CLI::App& app) {
                 "Memory for resident and in-flight time steps (e.g. 512MiB, 2GiB)")
       ->capture_default_str();
   c->add_flag("--no-prefetch", args->no_prefetch, "Load steps on demand only (no read-ahead)");
+  c->add_option("--max-band", args->max_band,
+                "Bound the front's time band (time units; 0: none): vertices further behind keep "
+                "pace, so long runs fit a small cache")
+      ->check(CLI::NonNegativeNumber);
   c->add_flag("--spacetime-out", args->spacetime_out,
               "2D flows: write positions (x, y, t) instead of (x, y, 0)");
   add_engine_flags(*c, args->options);
@@ -113,6 +117,7 @@ void add_path_command(CLI::App& app) {
     o.t0 = args->t0;
     o.t1 = args->t1;
     o.time_scale = args->time_scale;
+    o.max_band = args->max_band;
     PathStatus status;
     o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
 

@@ -302,3 +302,26 @@ TEST_CASE("path surface: a band that cannot fit fails before any work", "[spacet
                         Catch::Contains("raise --cache-budget"));
   CHECK(cache.statistics().loads <= 8);
 }
+
+TEST_CASE("max_band keeps the front's time band bounded", "[spacetime][band]") {
+  // The double gyre's stagnation points hold vertices back: without a bound the band widens.
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.1, 0.5, 0), Vec3(0.6, 0.5, 0));
+  const auto widest = [](const PathSurfaceResult& r) {
+    double w = 0;
+    for (const BandRecord& b : r.path.band) w = std::max(w, b.vertex_t_max - b.vertex_t_min);
+    return w;
+  };
+  PathSurfaceOptions o = path_options(0.0, 10.0, 0.02);
+  const PathSurfaceResult free = build_path_surface(*flow, seed, 20, o);
+  o.max_band = 0.5;
+  const PathSurfaceResult bounded = build_path_surface(*flow, seed, 20, o);
+  INFO("widest vertex-time band: free " << widest(free) << ", bounded " << widest(bounded));
+  CHECK(widest(free) > 1.0);
+  CHECK(bounded.report.lag_raised_alpha > 0);
+  CHECK(free.report.lag_raised_alpha == 0);
+  // A step adds at most ℓ/c of time to a vertex: the band stays within one step of the bound.
+  CHECK(widest(bounded) <= 0.5 + 0.02 / bounded.path.time_scale + 1e-9);
+  CHECK(bounded.path.complete);
+  CHECK(bounded.report.quality.non_manifold_edges == 0);
+}

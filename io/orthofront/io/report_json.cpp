@@ -84,6 +84,7 @@ nlohmann::json to_json(const SurfaceReport& r) {
         {"rips", r.rips},
         {"negative_alpha", r.negative_alpha},
         {"clamped_alpha", r.clamped_alpha},
+        {"lag_raised_alpha", r.lag_raised_alpha},
         {"splits", r.splits},
         {"merges", r.merges},
         {"streamline_insertions", r.streamline_insertions},

@@ -413,8 +413,10 @@ class Engine {
             ++report_.clamped_alpha;
           }
         }
-        max_speed = std::max(max_speed, std::abs(alpha_[i]) * speed_[i]);
       }
+      if (opt_.lag_axis >= 0 && opt_.lag_axis < N && opt_.max_lag > 0) raise_lagging(f);
+      for (std::size_t i = 0; i < n; ++i)
+        max_speed = std::max(max_speed, std::abs(alpha_[i]) * speed_[i]);
       if (!(max_speed > 0)) {
         ++report_.fronts_stalled;  // α vanished everywhere: this front cannot advance
         return;
@@ -473,6 +475,24 @@ class Engine {
         continue;
       }
       next.push_back(std::move(part));
+    }
+  }
+
+  /// The lag bound: vertices far behind the lead along lag_axis take the front's largest α, so
+  /// they keep pace instead of falling further behind (see StreamSurfaceOptions::max_lag).
+  void raise_lagging(const Front<N>& f) {
+    const std::size_t n = f.v.size();
+    double lead = -std::numeric_limits<double>::infinity();
+    double alpha_max = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      lead = std::max(lead, f.v[i].x[opt_.lag_axis]);
+      alpha_max = std::max(alpha_max, alpha_[i]);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (f.v[i].x[opt_.lag_axis] < lead - opt_.max_lag && alpha_[i] < alpha_max) {
+        alpha_[i] = alpha_max;
+        ++report_.lag_raised_alpha;
+      }
     }
   }
 

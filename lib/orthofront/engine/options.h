@@ -54,6 +54,12 @@ struct StreamSurfaceOptions {
   RowSkip row_skip = RowSkip::run;
   double skip_fraction = 0.5;  ///< see RowSkip
 
+  /// Lag bound (path surfaces): a vertex more than max_lag behind the front's lead along
+  /// coordinate lag_axis advances with the front's largest α, so the front's spread along that
+  /// axis (the time band of a lifted field) stays near max_lag. lag_axis < 0: off.
+  int lag_axis = -1;
+  double max_lag = 0;
+
   bool rip = true;
   double rip_sharpness = 0.5;        ///< 1 - (α_{i-1} + α_{i+1}) / (2 α_i) above this ...
   double rip_speed_fraction = 0.05;  ///< ... and |v_i| below this share of the median speed

@@ -56,6 +56,7 @@ struct SurfaceReport {
   std::size_t rips = 0;
   std::size_t negative_alpha = 0;      ///< vertex-steps with α < 0 (before clamping)
   std::size_t clamped_alpha = 0;       ///< vertex-steps whose α was clamped to 0
+  std::size_t lag_raised_alpha = 0;    ///< vertex-steps whose α the lag bound raised
   std::size_t splits = 0, merges = 0;
   std::size_t streamline_insertions = 0, insertion_fallbacks = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex

@@ -195,7 +195,12 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     }
     return true;
   };
-  SurfaceResult sr = build_stream_surface<N>(lifted, seed, o.engine, callback);
+  StreamSurfaceOptions engine = o.engine;
+  if (o.max_band > 0) {
+    engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
+    engine.max_lag = c * o.max_band;
+  }
+  SurfaceResult sr = build_stream_surface<N>(lifted, seed, engine, callback);
   // The last step has no callback after it: record its band here.
   if (const auto [lo, hi] = tracked.take(); lo <= hi && sr.report.steps > 0 &&
                                             pr.band.size() < static_cast<std::size_t>(sr.report.steps)) {

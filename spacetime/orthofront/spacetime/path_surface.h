@@ -31,6 +31,10 @@ struct PathSurfaceOptions {
   /// c (length per time unit) of the lifted coordinate τ = c t; 0 derives it: the median speed
   /// |v(x, t0)| over the seed vertices (fallback: domain diagonal / (t1 - t0) where v = 0).
   double time_scale = 0;
+  /// Bound on the front's time band, in time units (0: none). Vertices that wait near
+  /// stagnation lag ever further behind in time and widen the band the cache must hold; with a
+  /// bound, vertices more than max_band behind the lead keep pace (the front tilts in time there).
+  double max_band = 0;
   std::function<bool(const PathProgress&)> progress;  ///< false stops (the surface is kept)
 };
 
