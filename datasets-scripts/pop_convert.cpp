@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "orthofront/io/grid_series.h"
 #include "orthofront/error.h"
 #include "orthofront/field/grid.h"
 #include "orthofront/field/grid_field.h"
@@ -545,27 +546,6 @@ Loss measure_loss(const PopGrid& g, const PopFile& f, const Mapping& map, const 
   return loss;
 }
 
-bool natural_less(const std::string& a, const std::string& b) {
-  std::size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
-      std::size_t ie = i, je = j;
-      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
-      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
-      const std::string x = a.substr(i, ie - i), y = b.substr(j, je - j);
-      if (x.size() != y.size()) return x.size() < y.size();
-      if (x != y) return x < y;
-      i = ie;
-      j = je;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i;
-      ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
-
 struct Args {
   std::vector<std::string> inputs;
   std::string out;
@@ -601,7 +581,7 @@ std::array<std::int64_t, 3> parse_resolution(const std::string& text, const PopG
 
 int run(const Args& args) {
   std::vector<std::string> files = args.inputs;
-  std::stable_sort(files.begin(), files.end(), natural_less);
+  std::stable_sort(files.begin(), files.end(), orthofront::io::natural_less);
   const std::string ext = fs::path(args.out).extension().string();
   if (ext != ".h5" && ext != ".hdf5") throw InvalidArgument("--out '" + args.out + "' must end in .h5");
   if (args.coords != "degrees" && args.coords != "metres" && args.coords != "meters")

@@ -61,34 +61,6 @@ std::string extension_of(const std::string& path) {
   return lower(std::filesystem::path(path).extension().string());
 }
 
-/// "a2.vec" < "a10.vec": digit runs compare as numbers.
-bool natural_less(const std::string& a, const std::string& b) {
-  std::size_t i = 0;
-  std::size_t j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) &&
-        std::isdigit(static_cast<unsigned char>(b[j]))) {
-      std::size_t ie = i;
-      std::size_t je = j;
-      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
-      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
-      std::string x = a.substr(i, ie - i);
-      std::string y = b.substr(j, je - j);
-      x.erase(0, std::min(x.find_first_not_of('0'), x.size()));
-      y.erase(0, std::min(y.find_first_not_of('0'), y.size()));
-      if (x.size() != y.size()) return x.size() < y.size();
-      if (x != y) return x < y;
-      i = ie;
-      j = je;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i;
-      ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
-
 /// Inputs with glob patterns expanded (a pattern that names an existing file is kept as is).
 std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<std::string> files;
@@ -302,7 +274,7 @@ void run_convert(const ConvertArgs& args) {
 
   std::vector<std::string> files = expand_inputs(args.inputs);
   if (files.empty()) throw InvalidArgument("no input files");
-  if (!args.keep_order) std::stable_sort(files.begin(), files.end(), natural_less);
+  if (!args.keep_order) std::stable_sort(files.begin(), files.end(), io::natural_less);
 
   std::vector<double> times;
   if (!args.times.empty()) times = parse_times(args.times);

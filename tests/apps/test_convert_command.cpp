@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "apps/cli_run.h"
 #include "io/grid_test_support.h"
 #include "orthofront/io/grid_file.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -16,24 +17,10 @@ using Catch::Matchers::Contains;
 using orthofront::VectorGrid;
 using namespace grid_test;
 
+using cli_test::Run;
+using cli_test::run;
+
 namespace {
-
-struct Run {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-Run run(const std::string& arguments) {
-  Run r;
-  const std::string command = std::string("'") + ORTHOFRONT_BINARY + "' " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) r.output += buffer;
-  const int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 

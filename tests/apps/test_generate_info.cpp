@@ -9,7 +9,12 @@
 #include <sstream>
 #include <string>
 
+#include "apps/cli_run.h"
+
 namespace fs = std::filesystem;
+
+using cli_test::Run;
+using cli_test::run;
 
 namespace {
 
@@ -33,24 +38,6 @@ class TempDir {
  private:
   fs::path path_;
 };
-
-struct Run {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-// Runs the binary with `arguments` (a shell fragment), capturing stdout and stderr together.
-Run run(const std::string& arguments) {
-  Run r;
-  const std::string command = std::string("'") + ORTHOFRONT_BINARY + "' " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) r.output += buffer;
-  const int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);

@@ -71,4 +71,8 @@ std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
 /// Times t0, t0 + dt, ... for `count` steps.
 std::vector<double> evenly_spaced_times(std::size_t count, double t0, double dt);
 
+/// Natural file order for the steps of a series: "a2.vec" < "a10.vec" (digit runs compare as
+/// numbers, leading zeros ignored).
+bool natural_less(const std::string& a, const std::string& b);
+
 }  // namespace orthofront::io
