@@ -1,21 +1,28 @@
-// `orthofront bench-path`: a path surface through a time series many times larger than the
-// cache budget, against the I/O floor, the in-memory compute time and load-on-demand.
+// `orthofront bench-path`: a path surface through a series far larger than the cache budget,
+// streamed through the space-time brick cache (with and without prefetch), against the old
+// whole-step cache, the I/O floor (read + decode of exactly the bricks the surface needs) and the
+// compute time with every needed brick in memory. Each run is a child `orthofront path` process,
+// so its peak RSS is its own, and the meshes they write are compared byte for byte.
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/resource.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "cli/commands.h"
 #include "orthofront/error.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/report_json.h"
-#include "orthofront/spacetime/path_command_json.h"
-#include "orthofront/spacetime/path_surface.h"
+#include "orthofront/spacetime/brick_cache.h"
 #include "orthofront/spacetime/sampled_series.h"
+
+extern char** environ;
 
 namespace orthofront::cli {
 
@@ -24,181 +31,283 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-double peak_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_maxrss) / 1024.0;
-}
-
 struct BenchArgs {
-  std::string dir = "/tmp";
-  std::string budget = "64MiB";
+  std::string dir = ".";
+  std::string budget = "256MiB";
   std::string json;
-  std::int64_t grid = 64;
-  std::size_t steps = 330;
-  double dt = 0.1;
-  double t1 = 0;  // 0: the whole series
-  double edge = 0.06;
-  int seed_count = 10;
-  int gzip = 1;
+  std::string series;  // reuse an existing series (not deleted)
+  std::vector<std::int64_t> grid{512, 256, 256};
+  std::size_t steps = 48;
+  double dt = 0.25;
+  double t1 = 0;  // 0: the last step
+  double edge = 0.004;
+  int seed_count = 40;
+  std::string codec = "lz4";
+  std::int64_t brick = 32;
   bool keep = false;
 };
 
-struct Row {
-  std::string name;
-  double total = 0, wait = 0, io = 0, decode = 0;
-  std::size_t bytes_read = 0, peak_cache = 0, vertices = 0;
-  double rss_mib = 0;
+struct Run {
+  std::string name, note;
+  int exit_code = 0;
+  double rss_mib = 0, wall = 0;
+  nlohmann::json report;
+  std::string mesh;
 };
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  if (!in) return text;
+  in.seekg(0, std::ios::end);
+  text.resize(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)));
+  in.seekg(0);
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  return text;
+}
+
+// Runs `orthofront path ARGS` as a child process; returns its exit code and peak RSS.
+Run run_child(const std::string& name, const std::vector<std::string>& args,
+              const std::filesystem::path& work) {
+  Run r;
+  r.name = name;
+  const std::filesystem::path report = work / (name + ".json");
+  const std::filesystem::path mesh = work / (name + ".vtp");
+  const std::filesystem::path log = work / (name + ".log");
+  std::vector<std::string> argv{"/proc/self/exe", "path"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  for (const char* extra : {"--quiet", "--out"}) argv.emplace_back(extra);
+  argv.push_back(mesh.string());
+  argv.emplace_back("--report");
+  argv.push_back(report.string());
+  std::vector<char*> cargv;
+  for (auto& a : argv) cargv.push_back(a.data());
+  cargv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = 0;
+  const auto t0 = Clock::now();
+  if (posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, cargv.data(), environ) != 0)
+    throw Error("bench-path: cannot start a child process for run '" + name + "'");
+  posix_spawn_file_actions_destroy(&actions);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  r.wall = since(t0);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.rss_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  r.note = read_file(log);
+  while (!r.note.empty() && (r.note.back() == '\n' || r.note.back() == '\r')) r.note.pop_back();
+  if (const auto cut = r.note.rfind('\r'); cut != std::string::npos) r.note = r.note.substr(cut + 1);
+  if (std::filesystem::exists(report)) r.report = nlohmann::json::parse(read_file(report));
+  r.mesh = read_file(mesh);
+  return r;
+}
+
+io::Hdf5Codec parse_codec(const std::string& text) {
+  if (text == "none") return io::Hdf5Codec::none;
+  if (text == "gzip") return io::Hdf5Codec::gzip;
+  if (text == "lz4") return io::Hdf5Codec::lz4;
+  if (text == "zstd") return io::Hdf5Codec::zstd;
+  throw InvalidArgument("--codec '" + text + "' is not none, gzip, lz4 or zstd");
+}
 
 }  // namespace
 
 void add_bench_path_command(CLI::App& app) {
   auto a = std::make_shared<BenchArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-path", "Benchmark path surfaces streamed through the cache (writes, then deletes, "
-                    "a double-gyre-3d HDF5 series)");
-  c->add_option("--dir", a->dir, "Folder for the generated series")->capture_default_str();
-  c->add_option("--grid", a->grid, "Samples per axis")->capture_default_str();
+      "bench-path", "Benchmark path surfaces streamed through the brick cache: writes a "
+                    "double-gyre-3d series (18 GiB of floats by default), runs brick cache with "
+                    "and without prefetch, the whole-step cache and in-memory compute, then "
+                    "deletes the series");
+  c->add_option("--dir", a->dir, "Folder for the generated series and the runs' outputs")
+      ->capture_default_str();
+  c->add_option("--grid", a->grid, "Samples along x, y, z")->expected(3)->capture_default_str();
   c->add_option("--steps", a->steps, "Time steps")->capture_default_str();
   c->add_option("--dt", a->dt, "Time between steps")->capture_default_str();
   c->add_option("--t1", a->t1, "End time of the surface (0: the last step)")->capture_default_str();
-  c->add_option("--cache-budget", a->budget, "Cache budget")->capture_default_str();
+  c->add_option("--cache-budget", a->budget, "Cache budget of the streamed runs")
+      ->capture_default_str();
   c->add_option("--edge", a->edge, "Edge length")->capture_default_str();
   c->add_option("--seed-count", a->seed_count, "Seed vertices")->capture_default_str();
-  c->add_option("--gzip", a->gzip, "gzip level of the series (0: none)")->capture_default_str();
+  c->add_option("--codec", a->codec, "Compression of the series: none, gzip, lz4, zstd")
+      ->capture_default_str();
+  c->add_option("--brick", a->brick, "Brick edge in points")->capture_default_str();
+  c->add_option("--series", a->series, "Use this existing series instead of generating one");
   c->add_option("--json", a->json, "Write the results as JSON here");
-  c->add_flag("--keep", a->keep, "Keep the generated series");
+  c->add_flag("--keep", a->keep, "Keep the generated series and the runs' outputs");
   c->callback([a]() {
     const auto flow = make_unsteady_field("double-gyre-3d");
-    const GridGeometry grid = spacetime::uniform_grid(flow->domain(), 3, a->grid);
+    GridGeometry grid = spacetime::uniform_grid(flow->domain(), 3, 2);
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (a->grid[i] < 2) throw InvalidArgument("--grid needs at least 2 samples per axis");
+      grid.size[i] = a->grid[i];
+      grid.spacing[static_cast<int>(i)] =
+          flow->domain().extent()[static_cast<int>(i)] / static_cast<double>(a->grid[i] - 1);
+    }
+    if (a->steps < 2) throw InvalidArgument("--steps must be at least 2");
     const std::vector<double> times =
         spacetime::uniform_times(0, a->dt * static_cast<double>(a->steps - 1), a->steps - 1);
     const spacetime::SampledTimeSeries source(*flow, grid, times);
     const std::size_t budget = spacetime::parse_bytes(a->budget);
-    const std::filesystem::path file =
-        std::filesystem::path(a->dir) / ("orthofront-bench-path-" + std::to_string(::getpid()) + ".h5");
+    const std::filesystem::path dir = a->dir;
+    std::filesystem::create_directories(dir);
+    const std::filesystem::path work = dir / ("orthofront-bench-path-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(work);
+    const bool generated = a->series.empty();
+    const std::filesystem::path file = generated ? work / "series.h5" : std::filesystem::path(a->series);
     const std::size_t data_bytes = source.step_bytes() * a->steps;
-    std::printf("series: %zu steps of %s (%s in all, %.1fx the %s budget), gzip %d\n", a->steps,
-                spacetime::format_bytes(source.step_bytes()).c_str(),
-                spacetime::format_bytes(data_bytes).c_str(),
-                static_cast<double>(data_bytes) / static_cast<double>(budget),
-                spacetime::format_bytes(budget).c_str(), a->gzip);
-    auto t = Clock::now();
-    {
-      io::Hdf5WriteOptions w;
-      w.gzip_level = a->gzip;
-      w.zero_is_no_data = false;
-      w.xdmf = false;
-      io::Hdf5SeriesWriter writer(file, grid, 3, times, w);
-      std::vector<float> values(source.step_floats());
-      for (std::size_t k = 0; k < a->steps; ++k) {
-        source.sample(k, values.data());
-        writer.write_step(values);
-      }
-      writer.commit();
-    }
-    const double generate = since(t);
-    const auto stored = std::filesystem::file_size(file);
-    std::printf("generated %s on disk in %.1f s\n", spacetime::format_bytes(stored).c_str(), generate);
     nlohmann::json out;
-    std::vector<Row> rows;
+    auto cleanup = [&] {
+      if (a->keep) return;
+      std::error_code ignored;
+      if (generated) std::filesystem::remove(file, ignored);
+      std::filesystem::remove_all(work, ignored);
+    };
     try {
-      const auto series = io::open_hdf5_series(file);
-      const double t1 = a->t1 > 0 ? a->t1 : times.back();
-      spacetime::PathSurfaceOptions o;
-      o.t0 = 0;
-      o.t1 = t1;
-      o.engine.edge = a->edge;
-      o.engine.max_steps = 1'000'000;
-      o.engine.insertion = Insertion::cubic;
-      const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0.3), Vec3(0.9, 0.7, 0.6));
-      std::size_t needed_steps = 0;
-      for (double time : times) needed_steps += time <= t1 + a->dt ? 1 : 0;
-      needed_steps = std::min(needed_steps, a->steps);
-
-      // I/O floor: read the needed steps serially; decode serially and in parallel.
-      double read = 0, decode_serial = 0, decode_parallel = 0;
-      std::size_t raw_bytes = 0;
-      {
-        std::vector<float> values(series->step_floats());
-        for (std::size_t k = 0; k < needed_steps; ++k) {
-          t = Clock::now();
-          const io::RawStep raw = series->read_raw(k);
-          read += since(t);
-          raw_bytes += raw.bytes.size();
-          if (k < 8) {  // decoding: a sample of steps each way
-            t = Clock::now();
-            tbb::task_arena(1).execute([&] { series->decode(raw, values); });
-            decode_serial += since(t);
-            t = Clock::now();
-            series->decode(raw, values);
-            decode_parallel += since(t);
-          }
+      double generate = 0;
+      if (generated) {
+        const auto space = std::filesystem::space(dir);
+        const io::Hdf5Codec codec = parse_codec(a->codec);
+        // Compressed size is unknown before writing: ask for the raw size (the worst case).
+        if (space.available < data_bytes + (std::size_t{1} << 30))
+          throw InvalidArgument("bench-path: " + dir.string() + " has " +
+                                spacetime::format_bytes(space.available) + " free; the series needs up to " +
+                                spacetime::format_bytes(data_bytes) +
+                                " (choose --dir, or a smaller --grid/--steps)");
+        std::printf("series: %zu steps of %lldx%lldx%lld (%s each, %s of floats, %.1fx the %s "
+                    "budget), %s, bricks of %lld^3\n",
+                    a->steps, static_cast<long long>(grid.size[0]),
+                    static_cast<long long>(grid.size[1]), static_cast<long long>(grid.size[2]),
+                    spacetime::format_bytes(source.step_bytes()).c_str(),
+                    spacetime::format_bytes(data_bytes).c_str(),
+                    static_cast<double>(data_bytes) / static_cast<double>(budget),
+                    spacetime::format_bytes(budget).c_str(), a->codec.c_str(),
+                    static_cast<long long>(a->brick));
+        std::fflush(stdout);
+        const auto t = Clock::now();
+        io::Hdf5WriteOptions w;
+        w.codec = codec;
+        w.brick_size = a->brick;
+        w.zero_is_no_data = false;
+        w.xdmf = false;
+        io::Hdf5SeriesWriter writer(file, grid, 3, times, w);
+        std::vector<float> values(source.step_floats());
+        for (std::size_t k = 0; k < a->steps; ++k) {
+          source.sample(k, values.data());
+          writer.write_step(values);
         }
-        const double sampled = static_cast<double>(std::min<std::size_t>(8, needed_steps));
-        decode_serial *= static_cast<double>(needed_steps) / sampled;
-        decode_parallel *= static_cast<double>(needed_steps) / sampled;
+        writer.commit();
+        generate = since(t);
       }
-      std::printf("I/O floor: read %zu steps (%s) in %.2f s; decode serial %.2f s, parallel "
-                  "%.2f s (%d threads)\n",
-                  needed_steps, spacetime::format_bytes(raw_bytes).c_str(), read, decode_serial,
-                  decode_parallel, tbb::this_task_arena::max_concurrency());
-      out["io_floor"] = {{"steps", needed_steps},   {"raw_bytes", raw_bytes},
-                         {"read_seconds", read},    {"decode_serial_seconds", decode_serial},
-                         {"decode_parallel_seconds", decode_parallel},
-                         {"threads", tbb::this_task_arena::max_concurrency()}};
-
-      auto run = [&](const char* name, bool prefetch, std::size_t run_budget, bool preload) {
-        spacetime::CacheOptions co;
-        co.budget_bytes = run_budget;
-        co.prefetch = prefetch;
-        spacetime::TimeStepCache cache(*series, co);
-        std::vector<spacetime::TimeStepCache::Handle> all;
-        if (preload) all = cache.acquire_range(0, needed_steps - 1);
-        const spacetime::PathSurfaceResult r = spacetime::build_path_surface(cache, seed, a->seed_count, o);
-        Row row;
-        row.name = name;
-        row.total = r.path.total_seconds;
-        row.wait = r.path.wait_seconds;
-        row.io = r.path.io_seconds;
-        row.decode = r.path.decode_seconds;
-        row.bytes_read = r.path.cache.bytes_read;
-        row.peak_cache = r.path.cache.peak_bytes;
-        row.vertices = r.mesh.vertex_count();
-        row.rss_mib = peak_rss_mib();
-        rows.push_back(row);
-        nlohmann::json j = spacetime::to_json(r.path);
-        j.erase("band");
-        j["cache"].erase("reads_per_step");
-        j["vertices"] = r.mesh.vertex_count();
-        j["steps"] = r.report.steps;
-        j["peak_rss_mib"] = row.rss_mib;
-        out["runs"][name] = j;
-        if (!r.path.complete) throw Error(std::string(name) + ": " + r.path.message);
+      const auto stored = std::filesystem::file_size(file);
+      const auto series = io::open_hdf5_series(file);
+      std::printf("series %s: %s on disk (%.2fx smaller than the floats)%s\n", file.c_str(),
+                  spacetime::format_bytes(stored).c_str(),
+                  static_cast<double>(series->step_bytes() * series->step_count()) /
+                      static_cast<double>(stored),
+                  generated ? (", generated in " + std::to_string(generate) + " s").c_str() : "");
+      const double t1 = a->t1 > 0 ? a->t1 : series->time(series->step_count() - 1);
+      char seed[160];
+      std::snprintf(seed, sizeof seed, "line:0.3,0.25,0.3:0.9,0.7,0.6");
+      const std::vector<std::string> common{
+          "--field", file.string(), "--seed", seed, "--seed-count", std::to_string(a->seed_count),
+          "--t0", "0", "--t1", std::to_string(t1), "--edge", std::to_string(a->edge),
+          "--steps", "1000000"};
+      std::vector<Run> runs;
+      auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> v = common;
+        v.insert(v.end(), extra.begin(), extra.end());
+        return v;
       };
-      run("streamed", true, budget, false);
-      run("on-demand", false, budget, false);
-      run("in-memory", false, (needed_steps + 4) * series->step_bytes(), true);
-      std::printf("\n%-10s %9s %9s %9s %9s %12s %12s %10s %9s\n", "run", "total s", "wait s",
-                  "read s", "decode s", "read", "peak cache", "peak RSS", "vertices");
-      for (const Row& r : rows)
-        std::printf("%-10s %9.2f %9.2f %9.2f %9.2f %12s %12s %7.0f MiB %9zu\n", r.name.c_str(),
-                    r.total, r.wait, r.io, r.decode, spacetime::format_bytes(r.bytes_read).c_str(),
-                    spacetime::format_bytes(r.peak_cache).c_str(), r.rss_mib, r.vertices);
-      std::printf("bytes read / bytes needed (streamed): %.3f; in-memory compute %.2f s vs "
-                  "streamed total %.2f s vs I/O floor %.2f s\n",
-                  static_cast<double>(rows[0].bytes_read) / static_cast<double>(raw_bytes),
-                  rows[2].total - rows[2].wait, rows[0].total, read + decode_parallel);
-      out["series"] = {{"steps", a->steps},         {"step_bytes", source.step_bytes()},
-                       {"data_bytes", data_bytes},  {"stored_bytes", stored},
-                       {"budget_bytes", budget},    {"gzip", a->gzip},
-                       {"generate_seconds", generate}};
+      std::printf("running: brick cache + prefetch, brick cache on demand, whole-step cache, "
+                  "in memory ...\n");
+      std::fflush(stdout);
+      runs.push_back(run_child("brick+prefetch", with({"--cache-budget", a->budget}), work));
+      runs.push_back(
+          run_child("brick on-demand", with({"--cache-budget", a->budget, "--no-prefetch"}), work));
+      runs.push_back(
+          run_child("whole-step", with({"--cache-budget", a->budget, "--cache-unit", "step"}), work));
+      // In memory: every brick the surface touches, kept; the second build reads nothing.
+      const double touched_bytes =
+          runs[0].report.contains("path")
+              ? runs[0].report["path"]["cache"].value("units_touched", 0.0) *
+                    runs[0].report["path"]["cache"].value("unit_bytes", 0.0)
+              : 0.0;
+      const auto memory_budget = static_cast<std::size_t>(touched_bytes * 1.2) + (std::size_t{1} << 30);
+      runs.push_back(run_child(
+          "in-memory", with({"--cache-budget", std::to_string(memory_budget), "--warm"}), work));
+
+      // The I/O floor: read + decode of exactly the bricks the surface needs, from the streamed
+      // run's own measurement of each brick read once.
+      const nlohmann::json& first = runs[0].report;
+      std::printf("\n%-16s %8s %8s %8s %8s %8s %8s %10s %8s %10s %10s %9s  %s\n", "run", "total s",
+                  "I/O fl.", "compute", "wait s", "read s", "decode s", "read/need", "bricks",
+                  "peak cache", "peak RSS", "vertices", "mesh");
+      for (Run& r : runs) {
+        nlohmann::json row = {{"name", r.name}, {"exit_code", r.exit_code},
+                              {"peak_rss_mib", r.rss_mib}, {"wall_seconds", r.wall}};
+        if (r.exit_code != 0 || !r.report.contains("path")) {
+          std::printf("%-16s failed (exit %d): %s\n", r.name.c_str(), r.exit_code, r.note.c_str());
+          row["error"] = r.note;
+          out["runs"].push_back(row);
+          continue;
+        }
+        const nlohmann::json& p = r.report["path"];
+        const nlohmann::json& cache = p["cache"];
+        const double total = p["seconds"]["total"], wait = p["seconds"]["wait"];
+        const double io_s = p["seconds"]["io"], decode = p["seconds"]["decode"];
+        const double floor = io_s + decode;  // of the units read, each read once when read/need = 1
+        const std::string same =
+            runs[0].mesh.empty() ? "-" : (r.mesh == runs[0].mesh ? "identical" : "DIFFERS");
+        std::printf("%-16s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %10.3f %8zu %10s %7.0f MiB %9zu  %s\n",
+                    r.name.c_str(), total, floor, total - wait, wait, io_s, decode,
+                    cache["read_amplification"].get<double>(), cache["units_touched"].get<std::size_t>(),
+                    spacetime::format_bytes(cache["peak_bytes"].get<std::size_t>()).c_str(),
+                    r.rss_mib, r.report["vertices"].get<std::size_t>(), same.c_str());
+        row["total_seconds"] = total;
+        row["io_floor_seconds"] = floor;
+        row["compute_seconds"] = total - wait;
+        row["wait_seconds"] = wait;
+        row["read_seconds"] = io_s;
+        row["decode_seconds"] = decode;
+        row["bytes_read"] = cache["bytes_read"];
+        row["bytes_needed"] = cache["bytes_needed"];
+        row["read_amplification"] = cache["read_amplification"];
+        row["bricks_touched"] = cache["units_touched"];
+        row["peak_cache_bytes"] = cache["peak_bytes"];
+        row["vertices"] = r.report["vertices"];
+        row["time_reached"] = p["time_reached"];
+        row["complete"] = p["complete"];
+        row["mesh_identical_to_first"] = same == "identical";
+        out["runs"].push_back(row);
+      }
+      if (first.contains("path")) {
+        const nlohmann::json& p = first["path"];
+        const double floor = p["seconds"]["io"].get<double>() + p["seconds"]["decode"].get<double>();
+        const double compute = runs[3].report.contains("path")
+                                   ? runs[3].report["path"]["seconds"]["total"].get<double>()
+                                   : 0.0;
+        std::printf("\nbrick+prefetch: reached t = %.4g of %.4g; total %.2f s = %.2fx max(I/O floor "
+                    "%.2f s, in-memory compute %.2f s); peak RSS %.0f MiB vs budget %s + 200 MiB\n",
+                    p["time_reached"].get<double>(), t1, p["seconds"]["total"].get<double>(),
+                    p["seconds"]["total"].get<double>() / std::max({floor, compute, 1e-9}), floor,
+                    compute, runs[0].rss_mib, spacetime::format_bytes(budget).c_str());
+      }
+      out["series"] = {{"file", file.string()},      {"steps", series->step_count()},
+                       {"step_bytes", series->step_bytes()},
+                       {"data_bytes", series->step_bytes() * series->step_count()},
+                       {"stored_bytes", stored},     {"codec", a->codec},
+                       {"brick", a->brick},          {"generate_seconds", generate},
+                       {"budget_bytes", budget},     {"t1", t1},
+                       {"edge", a->edge},            {"seed_count", a->seed_count}};
     } catch (...) {
-      if (!a->keep) std::filesystem::remove(file);
+      cleanup();
       throw;
     }
-    if (!a->keep) std::filesystem::remove(file);
+    cleanup();
     if (!a->json.empty()) io::write_json(out, a->json);
     std::cout << out.dump(1) << "\n";
   });

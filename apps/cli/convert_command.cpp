@@ -40,8 +40,9 @@ struct ConvertArgs {
   std::string origin;
   std::string spacing;
   bool keep_order = false;
-  std::string compress = "none";
-  std::string layout = "chunked";
+  std::string compress = "lz4";
+  std::string layout = "bricked";
+  std::int64_t brick = 32;
   std::string group = "/";
   double chunk_mib = std::nan("");  // NaN: the HDF5 writer's default
   io::Hdf5Units units;
@@ -360,7 +361,8 @@ void run_convert(const ConvertArgs& args) {
   } else {
     io::Hdf5WriteOptions options;
     options.group = args.group;
-    options.gzip_level = parse_compression(args.compress);
+    apply_compression(parse_compression(args.compress), options);
+  options.brick_size = args.brick;
     options.storage = parse_layout(args.layout);
     options.units = args.units;
     if (std::isfinite(args.chunk_mib))
@@ -423,9 +425,14 @@ void add_convert_command(CLI::App& app) {
   c->add_option("--origin", args->origin, "Override the grid origin x,y,z (e.g. for .vec)");
   c->add_option("--spacing", args->spacing, "Override the grid spacing dx,dy,dz (e.g. for .vec)");
   c->add_flag("--keep-order", args->keep_order, "Keep the inputs in the given order");
-  c->add_option("--compress", args->compress, "HDF5: none | gzip[:LEVEL] (LEVEL 1-9, default 4)")
+  c->add_option("--compress", args->compress, "HDF5: none | lz4 | zstd | gzip, each with an optional :LEVEL (1-9); lz4 (Blosc, "
+                "byte shuffle) decodes fastest, see docs/hdf5-layout.md")
       ->capture_default_str();
-  c->add_option("--layout", args->layout, "HDF5 time series storage: chunked | per-step")
+  c->add_option("--layout", args->layout, "HDF5 time series storage: bricked (a chunk per brick and step: partial "
+                "reads) | chunked | per-step")
+      ->capture_default_str();
+  c->add_option("--brick", args->brick, "Bricked layout: points per brick along each axis")
+      ->check(CLI::Range(2, 1024))
       ->capture_default_str();
   c->add_option("--group", args->group, "HDF5 group of the field")->capture_default_str();
   c->add_option(

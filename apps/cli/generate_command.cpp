@@ -26,8 +26,9 @@ struct GenerateArgs {
   std::string out;
   std::string resolution;
   std::string box;
-  std::string compress = "none";
-  std::string layout = "chunked";
+  std::string compress = "lz4";
+  std::string layout = "bricked";
+  std::int64_t brick = 32;
   std::string group = "/";
   int steps = 0;
   double t0 = 0;
@@ -70,7 +71,8 @@ void run_generate(const GenerateArgs& args) {
 
   io::Hdf5WriteOptions options;
   options.group = args.group;
-  options.gzip_level = parse_compression(args.compress);
+  apply_compression(parse_compression(args.compress), options);
+  options.brick_size = args.brick;
   options.storage = parse_layout(args.layout);
   options.units = args.units;
   options.max_chunk_bytes = static_cast<std::size_t>(args.chunk_mib * 1024 * 1024);
@@ -167,10 +169,15 @@ void add_generate_command(CLI::App& app) {
       ->required();
   c->add_option("--box", args->box,
                 "Sampled region xmin,ymin,zmin:xmax,ymax,zmax (default: the field's domain)");
-  c->add_option("--compress", args->compress, "none | gzip[:LEVEL] (LEVEL 1-9, default 4)")
+  c->add_option("--compress", args->compress, "none | lz4 | zstd | gzip, each with an optional :LEVEL (1-9); lz4 (Blosc, byte "
+                "shuffle) decodes fastest, see docs/hdf5-layout.md")
       ->capture_default_str();
   c->add_option("--layout", args->layout,
-                "Time series storage: chunked (one 4D/5D dataset, a step per chunk) | per-step")
+                "Time series storage: bricked (one 4D/5D dataset, a chunk per brick and step: "
+                "partial reads) | chunked (chunks of whole z-slices) | per-step")
+      ->capture_default_str();
+  c->add_option("--brick", args->brick, "Bricked layout: points per brick along each axis")
+      ->check(CLI::Range(2, 1024))
       ->capture_default_str();
   c->add_option("--group", args->group, "HDF5 group of the field")->capture_default_str();
   c->add_option("--steps", args->steps, "Time steps (time-dependent fields)");

@@ -67,20 +67,36 @@ Box<3> parse_box(const std::string& text) {
   return box;
 }
 
-int parse_compression(const std::string& text) {
-  if (text == "none") return 0;
-  if (text == "gzip") return 4;
-  int level = 0;
-  if (text.rfind("gzip:", 0) == 0 && parse_number(text.substr(5), level) && level >= 1 &&
-      level <= 9)
-    return level;
-  throw InvalidArgument("--compress '" + text + "' must be none, gzip or gzip:LEVEL (1-9)");
+Compression parse_compression(const std::string& text) {
+  const std::string name = text.substr(0, text.find(':'));
+  Compression c;
+  if (name == "none" && name == text) return c;
+  if (name == "gzip") c = {io::Hdf5Codec::gzip, 4};
+  else if (name == "lz4") c = {io::Hdf5Codec::lz4, 5};
+  else if (name == "zstd") c = {io::Hdf5Codec::zstd, 1};
+  else
+    throw InvalidArgument("--compress '" + text +
+                          "' must be none, lz4, zstd or gzip, optionally with :LEVEL (1-9)");
+  if (name != text) {
+    int level = 0;
+    if (!parse_number(text.substr(name.size() + 1), level) || level < 1 || level > 9)
+      throw InvalidArgument("--compress '" + text + "': the level must be 1 to 9");
+    c.level = level;
+  }
+  return c;
+}
+
+void apply_compression(const Compression& c, io::Hdf5WriteOptions& options) {
+  options.codec = c.codec;
+  options.level = c.level;
+  options.gzip_level = c.codec == io::Hdf5Codec::gzip ? c.level : 0;
 }
 
 io::Hdf5Storage parse_layout(const std::string& text) {
+  if (text == "bricked") return io::Hdf5Storage::bricked;
   if (text == "chunked") return io::Hdf5Storage::chunked;
   if (text == "per-step") return io::Hdf5Storage::per_step;
-  throw InvalidArgument("--layout '" + text + "' must be chunked or per-step");
+  throw InvalidArgument("--layout '" + text + "' must be bricked, chunked or per-step");
 }
 
 }  // namespace orthofront::cli

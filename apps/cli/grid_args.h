@@ -14,9 +14,15 @@ namespace orthofront::cli {
 std::array<std::int64_t, 3> parse_resolution(const std::string& text);
 /// "xmin,ymin,zmin:xmax,ymax,zmax".
 Box<3> parse_box(const std::string& text);
-/// "none" -> 0, "gzip" -> 4, "gzip:LEVEL" -> LEVEL (1-9).
-int parse_compression(const std::string& text);
-/// "chunked" or "per-step".
+/// A chunk codec and its level.
+struct Compression {
+  io::Hdf5Codec codec = io::Hdf5Codec::none;
+  int level = 0;
+};
+/// "none", or "lz4", "zstd", "gzip" with an optional ":LEVEL" (1-9; defaults 5, 1, 4).
+Compression parse_compression(const std::string& text);
+void apply_compression(const Compression& compression, io::Hdf5WriteOptions& options);
+/// "bricked", "chunked" or "per-step".
 io::Hdf5Storage parse_layout(const std::string& text);
 
 }  // namespace orthofront::cli

@@ -27,7 +27,8 @@ struct PathArgs {
   std::string field, seed, out, report, budget = "512MiB";
   int seed_count = 20;
   double t0 = 0, t1 = 1, time_scale = 0, max_band = 0;
-  bool spacetime_out = false, quiet = false, no_prefetch = false;
+  bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
+  std::string cache_unit = "brick";
   StreamSurfaceOptions options;
 };
 
@@ -88,9 +89,18 @@ void add_path_command(CLI::App& app) {
                 "seed speed at t0")
       ->capture_default_str();
   c->add_option("--cache-budget", args->budget,
-                "Memory for resident and in-flight time steps (e.g. 512MiB, 2GiB)")
+                "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded")
       ->capture_default_str();
-  c->add_flag("--no-prefetch", args->no_prefetch, "Load steps on demand only (no read-ahead)");
+  c->add_option("--cache-unit", args->cache_unit,
+                "What the cache holds: brick (the file's bricks, a space-time band around the "
+                "front) or step (whole time steps, the old cache)")
+      ->check(CLI::IsMember({"brick", "step"}))
+      ->capture_default_str();
+  c->add_flag("--no-prefetch", args->no_prefetch, "Load on demand only (no read-ahead)");
+  c->add_flag("--warm", args->warm,
+              "Build the surface twice through one cache that keeps everything it read, and "
+              "report the second build: compute with the data in memory (needs a budget that "
+              "holds every brick the surface touches)");
   c->add_option("--max-band", args->max_band,
                 "Bound the front's time band (time units; 0: none): vertices further behind keep "
                 "pace, so long runs fit a small cache")
@@ -139,7 +149,15 @@ void add_path_command(CLI::App& app) {
       spacetime::CacheOptions co;
       co.budget_bytes = spacetime::parse_bytes(args->budget);
       co.prefetch = !args->no_prefetch;
-      spacetime::TimeStepCache cache(*series, co);
+      co.whole_steps = args->cache_unit == "step";
+      co.retain = args->warm;
+      spacetime::BrickCache cache(*series, co);
+      if (args->warm) {
+        spacetime::PathSurfaceOptions cold = o;
+        cold.progress = {};
+        const auto first = spacetime::build_path_surface(cache, seed, args->seed_count, cold);
+        if (!first.path.complete) throw Error("--warm: the first build stopped: " + first.path.message);
+      }
       result = spacetime::build_path_surface(cache, seed, args->seed_count, o);
     }
     status.finish();
@@ -169,10 +187,13 @@ void add_path_command(CLI::App& app) {
           pr.complete ? "" : " (incomplete)", pr.total_seconds);
       if (pr.streamed)
         std::printf(" (waited %.3f s for data; read %.3f s, decode %.3f s in the pipeline); "
-                    "cache: %zu hits, %zu misses, %zu late prefetches, %s read, peak %s",
-                    pr.wait_seconds, pr.io_seconds, pr.decode_seconds, pr.cache.hits,
+                    "cache: %zu units of %s touched, %zu hits, %zu misses, %zu late prefetches, "
+                    "%s read (%.3fx needed), peak %s",
+                    pr.wait_seconds, pr.io_seconds, pr.decode_seconds, pr.cache.units_touched,
+                    spacetime::format_bytes(pr.cache.unit_bytes).c_str(), pr.cache.hits,
                     pr.cache.misses, pr.cache.late_prefetches,
                     spacetime::format_bytes(pr.cache.bytes_read).c_str(),
+                    pr.cache.read_amplification(),
                     spacetime::format_bytes(pr.cache.peak_bytes).c_str());
       std::printf(".\nWrote %s%s%s\n", args->out.c_str(), args->report.empty() ? "" : " and ",
                   args->report.c_str());

@@ -317,6 +317,7 @@ TEST_CASE("raw chunk reads decoded in parallel equal HDF5's own decoding", "[hdf
         DYNAMIC_SECTION((library_filters ? "HDF5 filters" : "parallel compression")
                         << ", chunk limit " << max_chunk << (shuffle ? ", shuffle" : "")) {
           Hdf5WriteOptions options;
+          options.storage = Hdf5Storage::chunked;  // slices: whole-step raw reads
           options.gzip_level = 4;
           options.shuffle = shuffle;
           options.parallel_compression = !library_filters;

@@ -196,7 +196,7 @@ TEST_CASE("streamed field: sampled and analytic fields agree to interpolation or
                              uniform_times(0, 4, level == 0 ? 20 : 40));
     CacheOptions co;
     co.budget_bytes = 64 << 20;
-    TimeStepCache cache(series, co);
+    BrickCache cache(series, co);
     StreamedField field(cache);
     field.update_band(0, 4);
     std::mt19937 rng(3);
@@ -221,7 +221,7 @@ TEST_CASE("path surface: streamed through a narrow band under a budget", "[space
   SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 101), uniform_times(0, 10, 100));
   CacheOptions co;
   co.budget_bytes = 30 * series.step_bytes();
-  TimeStepCache cache(series, co);
+  BrickCache cache(series, co);
   PathSurfaceOptions o = path_options(0.0, 6.0, 0.05);
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0));
   const PathSurfaceResult r = build_path_surface(cache, seed, 8, o);
@@ -233,8 +233,8 @@ TEST_CASE("path surface: streamed through a narrow band under a budget", "[space
   // Steps 0..60 were needed; each read once.
   std::size_t reads = 0;
   for (std::size_t k = 0; k < 100; ++k) {
-    CHECK(r.path.cache.reads_per_step[k] <= 1);
-    reads += r.path.cache.reads_per_step[k];
+    CHECK(r.path.cache.units_read_per_step[k] <= 1);
+    reads += r.path.cache.units_read_per_step[k];
   }
   CHECK(reads >= 61);
   CHECK(r.path.cache.evictions > 40);
@@ -274,7 +274,7 @@ TEST_CASE("path surface: a corrupt step mid-run keeps the surface built so far",
   Broken series(*flow, uniform_grid(flow->domain(), 2, 51), uniform_times(0, 10, 100));
   CacheOptions co;
   co.budget_bytes = 40 * series.step_bytes();
-  TimeStepCache cache(series, co);
+  BrickCache cache(series, co);
   const PathSurfaceResult r = build_path_surface(
       cache, SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0)), 8, path_options(0, 6, 0.05));
   CHECK_FALSE(r.path.complete);
@@ -288,19 +288,22 @@ TEST_CASE("path surface: a corrupt step mid-run keeps the surface built so far",
   CHECK(measure_quality(spacetime).folds == 0);
 }
 
-TEST_CASE("path surface: a band that cannot fit fails before any work", "[spacetime][path]") {
+TEST_CASE("path surface: a band that cannot fit stops with the budget it needs",
+          "[spacetime][path]") {
   const auto flow = make_unsteady_field("double-gyre");
-  // Time steps 0.01 apart: the first band (ℓ/c ≈ 0.3 time units) spans ~30 steps.
+  // Time steps 0.01 apart: the first front step (ℓ/c ≈ 0.3 time units) spans ~30 steps.
   SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 2, 200));
   CacheOptions co;
   co.budget_bytes = 8 * series.step_bytes();
-  TimeStepCache cache(series, co);
-  CHECK_THROWS_WITH(build_path_surface(cache,
-                                       SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0)), 8,
-                                       path_options(0, 1, 0.05)),
-                    Catch::Contains("is too small for the band of time steps 0..") &&
-                        Catch::Contains("raise --cache-budget"));
-  CHECK(cache.statistics().loads <= 8);
+  co.max_live_tokens = 1;
+  BrickCache cache(series, co);
+  const PathSurfaceResult r = build_path_surface(
+      cache, SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0)), 8, path_options(0, 1, 0.05));
+  CHECK_FALSE(r.path.complete);
+  CHECK_THAT(r.path.message, Catch::Contains("is too small for the front's band") &&
+                                 Catch::Contains("raise --cache-budget"));
+  CHECK(r.report.steps == 0);  // stopped before the first step
+  CHECK(cache.statistics().peak_bytes <= co.budget_bytes);
 }
 
 TEST_CASE("max_band keeps the front's time band bounded", "[spacetime][band]") {

@@ -1,6 +1,9 @@
 #include "orthofront/io/hdf5_detail.h"
 
+#include <blosc.h>
+
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 
 #include "orthofront/io/error.h"
@@ -10,6 +13,110 @@ namespace orthofront::io::detail {
 void silence_hdf5() {
   static std::once_flag once;
   std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+}
+
+namespace {
+
+// HDF5 filter callback (hdf5-blosc's conventions): forward compresses, reverse decompresses;
+// returns the new size, 0 on failure (HDF5 then reports the chunk as unreadable).
+std::size_t blosc_filter(unsigned flags, std::size_t cd_count, const unsigned cd[],
+                         std::size_t bytes, std::size_t* buffer_size, void** buffer) {
+  if ((flags & H5Z_FLAG_REVERSE) != 0) {
+    std::size_t decoded = 0;
+    if (blosc_cbuffer_validate(*buffer, bytes, &decoded) != 0) return 0;
+    void* out = H5allocate_memory(std::max<std::size_t>(decoded, 1), false);
+    if (out == nullptr) return 0;
+    const int n = blosc_decompress_ctx(*buffer, out, decoded, 1);
+    if (n < 0 || static_cast<std::size_t>(n) != decoded) {
+      H5free_memory(out);
+      return 0;
+    }
+    H5free_memory(*buffer);
+    *buffer = out;
+    *buffer_size = decoded;
+    return decoded;
+  }
+  const int level = cd_count > 4 ? static_cast<int>(cd[4]) : 5;
+  const int shuffle = cd_count > 5 ? static_cast<int>(cd[5]) : 1;
+  const std::size_t type_size = cd_count > 2 && cd[2] > 0 ? cd[2] : 4;
+  const char* name = "lz4";
+  if (cd_count > 6) blosc_compcode_to_compname(static_cast<int>(cd[6]), &name);
+  const std::size_t capacity = bytes + BLOSC_MAX_OVERHEAD;
+  void* out = H5allocate_memory(capacity, false);
+  if (out == nullptr) return 0;
+  const int n = blosc_compress_ctx(level, shuffle, type_size, bytes, *buffer, out, capacity, name,
+                                   0, 1);
+  if (n <= 0) {
+    H5free_memory(out);
+    return 0;
+  }
+  H5free_memory(*buffer);
+  *buffer = out;
+  *buffer_size = capacity;
+  return static_cast<std::size_t>(n);
+}
+
+}  // namespace
+
+void register_blosc_filter() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (H5Zfilter_avail(kBloscFilterId) > 0) return;  // a plugin already provides it
+    static const H5Z_class2_t filter = {H5Z_CLASS_T_VERS, kBloscFilterId, 1, 1, "blosc",
+                                        nullptr, nullptr, blosc_filter};
+    H5Zregister(&filter);
+  });
+}
+
+const char* blosc_compressor(Hdf5Codec codec) { return codec == Hdf5Codec::zstd ? "zstd" : "lz4"; }
+
+int default_level(Hdf5Codec codec) {
+  switch (codec) {
+    case Hdf5Codec::gzip:
+      return 1;
+    case Hdf5Codec::lz4:
+      return 5;
+    case Hdf5Codec::zstd:
+      return 1;
+    case Hdf5Codec::none:
+      break;
+  }
+  return 0;
+}
+
+std::vector<unsigned> blosc_parameters(Hdf5Codec codec, int level, std::size_t chunk_bytes) {
+  return {2u,
+          static_cast<unsigned>(BLOSC_VERSION_FORMAT),
+          4u,
+          static_cast<unsigned>(chunk_bytes),
+          static_cast<unsigned>(level),
+          1u,
+          static_cast<unsigned>(codec == Hdf5Codec::zstd ? BLOSC_ZSTD : BLOSC_LZ4)};
+}
+
+std::vector<std::byte> blosc_encode(const std::byte* data, std::size_t bytes, Hdf5Codec codec,
+                                    int level) {
+  std::vector<std::byte> out(bytes + BLOSC_MAX_OVERHEAD);
+  const int n = blosc_compress_ctx(level, BLOSC_SHUFFLE, 4, bytes, data, out.data(), out.size(),
+                                   blosc_compressor(codec), 0, 1);
+  if (n <= 0)
+    throw IoError(std::string("Blosc (") + blosc_compressor(codec) + ") failed to compress " +
+                  std::to_string(bytes) + " bytes");
+  out.resize(static_cast<std::size_t>(n));
+  return out;
+}
+
+void blosc_decode(const std::byte* data, std::size_t size, std::span<std::byte> out,
+                  const std::string& context) {
+  std::size_t decoded = 0;
+  if (blosc_cbuffer_validate(data, size, &decoded) != 0 || decoded != out.size())
+    throw FormatError(context + ": damaged Blosc data (" + std::to_string(size) +
+                      " bytes, header says " + std::to_string(decoded) + " decoded, expected " +
+                      std::to_string(out.size()) + ")");
+  const int n = blosc_decompress_ctx(data, out.data(), out.size(), 1);
+  if (n < 0 || static_cast<std::size_t>(n) != out.size())
+    throw FormatError(context + ": damaged Blosc data (decompression returned " +
+                      std::to_string(n) + ")");
 }
 
 std::string normalize_group(const std::string& group) {
@@ -245,7 +352,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
   const std::string type = "NumberType=\"Float\" Precision=\"4\" Format=\"HDF\"";
   std::string out =
       indent + "<Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">\n";
-  if (d.storage == Hdf5Storage::chunked) {
+  if (has_step_axis(d.storage)) {
     const std::size_t rank = d.geometry.dimension == 3 ? 5 : 4;
     std::string start = std::to_string(step), stride = "1", count = "1";
     for (std::size_t i = 1; i < rank; ++i) {

@@ -72,6 +72,23 @@ std::optional<std::vector<double>> read_doubles_attribute(hid_t object, const ch
                                                           const std::string& where);
 
 // --- chunk encoding ----------------------------------------------------------------------------
+/// Registers the Blosc filter (id 32001) with HDF5 once per process, so datasets compressed with
+/// lz4 or zstd can be created and read through HDF5's own pipeline too.
+void register_blosc_filter();
+/// Blosc compressor name of a codec ("lz4", "zstd") and the default level.
+const char* blosc_compressor(Hdf5Codec codec);
+int default_level(Hdf5Codec codec);
+/// The filter's 7 parameters as hdf5-blosc writes them: filter revision, Blosc format version,
+/// type size, chunk bytes, level, shuffle, compressor code.
+std::vector<unsigned> blosc_parameters(Hdf5Codec codec, int level, std::size_t chunk_bytes);
+/// Compresses `bytes` floats-worth of data with Blosc (byte shuffle, one thread per call).
+std::vector<std::byte> blosc_encode(const std::byte* data, std::size_t bytes, Hdf5Codec codec,
+                                    int level);
+/// Decodes one Blosc frame into `out`, which must be exactly the frame's decoded size; throws
+/// FormatError naming `context` on damaged data.
+void blosc_decode(const std::byte* data, std::size_t size, std::span<std::byte> out,
+                  const std::string& context);
+
 /// HDF5's shuffle filter for 4-byte elements: byte b of element i goes to b * n + i.
 void shuffle4(const std::byte* in, std::size_t bytes, std::byte* out);
 void unshuffle4(const std::byte* in, std::size_t bytes, std::byte* out);

@@ -4,6 +4,7 @@
 /// VectorGrid, and reading as an io::TimeSeries whose raw reads return still-compressed chunks
 /// so that decompression can run in parallel. Every file gets an XDMF sidecar (.xmf) so ParaView
 /// opens it directly.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -21,10 +22,22 @@ namespace orthofront::io {
 /// How the samples are stored.
 enum class Hdf5Storage {
   steady,    ///< one dataset `velocity` [nz][ny][nx][C] (2D: [ny][nx][C])
-  chunked,   ///< series: one dataset `velocity` [T][nz][ny][nx][C], one step per chunk
+  chunked,   ///< series: one dataset `velocity` [T][nz][ny][nx][C], chunks of whole z-slices
   per_step,  ///< series: group `steps` with one dataset per step, `steps/000000`, ...
+  bricked,   ///< series: one dataset `velocity` [T][nz][ny][nx][C], one chunk per brick and step
 };
 const char* to_string(Hdf5Storage storage);
+/// Series storages that keep all steps in one dataset with a leading step axis.
+inline bool has_step_axis(Hdf5Storage storage) {
+  return storage == Hdf5Storage::chunked || storage == Hdf5Storage::bricked;
+}
+
+/// Chunk compression. lz4 and zstd go through Blosc (HDF5 filter 32001, byte shuffle inside),
+/// which h5py/hdf5plugin and other Blosc-aware readers understand.
+enum class Hdf5Codec { none, gzip, lz4, zstd };
+const char* to_string(Hdf5Codec codec);
+/// HDF5's registered id of the Blosc filter.
+constexpr int kBloscFilterId = 32001;
 
 /// Unit names, free text (e.g. "m", "s", "m/s"); empty = not stated.
 struct Hdf5Units {
@@ -33,7 +46,13 @@ struct Hdf5Units {
 
 struct Hdf5WriteOptions {
   std::string group = "/";  ///< group that holds the field (created with its parents)
-  Hdf5Storage storage = Hdf5Storage::chunked;  ///< series only (steady files are `steady`)
+  Hdf5Storage storage = Hdf5Storage::bricked;  ///< series only (steady files are `steady`)
+  /// Bricked storage: points per brick along each axis (one chunk per brick and step; 32 was the
+  /// fastest in `orthofront bench-path --brick-sweep`, see docs/hdf5-layout.md).
+  std::int64_t brick_size = 32;
+  /// Compression; `none` with gzip_level > 0 means gzip at that level.
+  Hdf5Codec codec = Hdf5Codec::none;
+  int level = 0;        ///< lz4/zstd: Blosc level 1..9 (0: 5 for lz4, 1 for zstd)
   int gzip_level = 0;   ///< 0: no compression; 1..9: gzip (deflate) at that level
   bool shuffle = true;  ///< with gzip: byte-shuffle filter before deflate (smaller, faster)
   /// Upper bound on one chunk: a step (or steady field) larger than this is split into chunks of
@@ -70,6 +89,7 @@ struct Hdf5Description {
       filters;                     ///< filter names in pipeline order, e.g. {"shuffle", "deflate"}
   int gzip_level = 0;              ///< deflate level from the filter parameters (0: none)
   std::int64_t chunk_slices = 0;   ///< z-slices (2D: y-rows) per chunk; 0: contiguous
+  std::array<std::int64_t, 3> brick{0, 0, 0};  ///< bricked: points per brick along x, y, z
   std::string stored_type;         ///< e.g. "float32 little-endian"
   std::uint64_t stored_bytes = 0;  ///< bytes the samples occupy in the file (all steps)
 
@@ -139,6 +159,11 @@ class Hdf5TimeSeries final : public TimeSeries {
   std::string describe() const override;
   RawStep read_raw(std::size_t step) const override;
   void decode(const RawStep& raw, std::span<float> values) const override;
+  /// Bricked storage: the chunks; other storages: one brick, the whole step.
+  BrickLayout bricks() const override;
+  RawStep read_raw_brick(std::size_t step, std::size_t brick) const override;
+  void decode_brick(const RawStep& raw, std::span<float> values) const override;
+  bool zero_is_no_data() const override;
 
   const Hdf5Description& description() const;
 

@@ -1,6 +1,7 @@
 // Reading the HDF5 layout: description, steady reads, and time series with raw chunk reads
 // (H5Dread_chunk) decoded in parallel.
 #include <tbb/blocked_range.h>
+#include <blosc.h>
 #include <tbb/parallel_for.h>
 #include <zlib.h>
 
@@ -86,6 +87,7 @@ struct Hdf5TimeSeries::Impl {
   Hdf5ReadOptions options;
   H5Id file, group, dataset, steps;
   detail::SliceLayout layout;
+  BrickLayout bricks;                 // bricked storage; otherwise the whole step
   std::vector<H5Z_filter_t> filters;  // pipeline order
   bool raw = false;                   // raw chunk reads possible and wanted
 
@@ -101,6 +103,7 @@ struct Hdf5TimeSeries::Impl {
        const Hdf5ReadOptions& read_options)
       : options(read_options) {
     detail::silence_hdf5();
+    detail::register_blosc_filter();
     d.file = path;
     std::error_code error;
     if (!std::filesystem::exists(path, error))
@@ -178,8 +181,9 @@ struct Hdf5TimeSeries::Impl {
     if (samples < 0) throw FormatError(where() + ": '" + shape_path + "' is not a dataset");
     shape = dataset_shape(samples);
 
-    // Shape: [T][nz][ny][nx][C] (chunked), [nz][ny][nx][C] (steady, per step); 2D without nz.
-    const bool series_axis = d.storage == Hdf5Storage::chunked;
+    // Shape: [T][nz][ny][nx][C] (chunked, bricked), [nz][ny][nx][C] (steady, per step); 2D
+    // without nz.
+    const bool series_axis = has_step_axis(d.storage);
     const int leading = series_axis ? 1 : 0;
     const int spatial = static_cast<int>(shape.size()) - 1 - leading;
     const std::string expected = std::string(series_axis ? "[steps]" : "") +
@@ -279,8 +283,15 @@ struct Hdf5TimeSeries::Impl {
                           : name[0] != 0             ? name
                                                      : "filter " + std::to_string(id));
       if (id == H5Z_FILTER_DEFLATE && values > 0) d.gzip_level = static_cast<int>(cd[0]);
+      if (id == kBloscFilterId) {
+        const char* compressor = "blosc";
+        if (values > 6) blosc_compcode_to_compname(static_cast<int>(cd[6]), &compressor);
+        d.filters.back() = std::string("blosc ") + compressor +
+                           (values > 4 ? " level " + std::to_string(cd[4]) : std::string());
+      }
     }
     layout = detail::slice_layout(g, d.components, std::numeric_limits<std::size_t>::max());
+    bricks = BrickLayout::whole(g);
     if (H5Pget_layout(create.get()) == H5D_CHUNKED) {
       std::vector<hsize_t> chunk(shape.size());
       H5Pget_chunk(create.get(), static_cast<int>(chunk.size()), chunk.data());
@@ -290,12 +301,26 @@ struct Hdf5TimeSeries::Impl {
       bool whole_slices = !series_axis || chunk[0] == 1;
       for (std::size_t i = static_cast<std::size_t>(leading) + 1; i < shape.size(); ++i)
         whole_slices = whole_slices && chunk[i] == shape[i];
-      bool known_filters = !filters.empty();
+      // Bricked: one chunk per brick and step ([1][bz][by][bx][C]), read brick by brick.
+      const std::string storage_name =
+          detail::read_string_attribute(group.get(), "storage", group_where).value_or("");
+      if (series_axis && chunk[0] == 1 && chunk.back() == shape.back() &&
+          (storage_name == "bricked" || !whole_slices)) {
+        d.storage = Hdf5Storage::bricked;
+        const std::size_t n = chunk.size();
+        d.brick = {static_cast<std::int64_t>(chunk[n - 2]), static_cast<std::int64_t>(chunk[n - 3]),
+                   g.dimension == 3 ? static_cast<std::int64_t>(chunk[n - 4]) : 1};
+        bricks.size = d.brick;
+        for (std::size_t a = 0; a < 3; ++a)
+          bricks.count[a] = (g.size[a] + bricks.size[a] - 1) / bricks.size[a];
+      }
+      const bool bricked = d.storage == Hdf5Storage::bricked;
+      bool known_filters = !filters.empty() || bricked;
       for (std::size_t i = 0; i < filters.size(); ++i)
         known_filters =
-            known_filters && (filters[i] == H5Z_FILTER_DEFLATE ||
+            known_filters && (filters[i] == H5Z_FILTER_DEFLATE || filters[i] == kBloscFilterId ||
                               (filters[i] == H5Z_FILTER_SHUFFLE && i + 1 < filters.size()));
-      raw = options.raw_chunks && whole_slices && known_filters &&
+      raw = options.raw_chunks && (whole_slices || bricked) && known_filters &&
             std::endian::native == std::endian::little && H5Tequal(type.get(), H5T_IEEE_F32LE) > 0;
     }
   }
@@ -400,7 +425,7 @@ struct Hdf5TimeSeries::Impl {
     out.bytes.resize(d.step_bytes());
     H5Id memory(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr), H5Sclose);
     H5Id file_space(H5Dget_space(set), H5Sclose);
-    if (d.storage == Hdf5Storage::chunked) {
+    if (has_step_axis(d.storage)) {
       std::vector<hsize_t> start(shape.size() + 1, 0), count{1};
       start[0] = step;
       count.insert(count.end(), shape.begin(), shape.end());
@@ -419,9 +444,9 @@ struct Hdf5TimeSeries::Impl {
                             "series has " + std::to_string(d.step_count()));
     H5Id holder;
     const hid_t set = step_dataset(step, holder);
-    if (!raw) return read_plain(step, set);
+    if (!raw || d.storage == Hdf5Storage::bricked) return read_plain(step, set);
     const std::int64_t chunks = layout.chunk_count();
-    const bool series_axis = d.storage == Hdf5Storage::chunked;
+    const bool series_axis = has_step_axis(d.storage);
     const std::size_t rank =
         detail::step_shape(d.geometry, d.components).size() + (series_axis ? 1 : 0);
     std::vector<ChunkRecord> records(static_cast<std::size_t>(chunks));
@@ -487,6 +512,8 @@ struct Hdf5TimeSeries::Impl {
               context + ": damaged deflate data (zlib: " +
               (rc == Z_OK ? "wrong length " + std::to_string(produced) : std::string(zError(rc))) +
               ")");
+      } else if (applied[k] == kBloscFilterId) {
+        detail::blosc_decode(data, size, {target, out.size()}, context);
       } else {  // shuffle
         if (size != out.size())
           throw FormatError(context + ": shuffled chunk of " + std::to_string(size) +
@@ -565,6 +592,107 @@ struct Hdf5TimeSeries::Impl {
                         });
     }
   }
+
+  std::string brick_where(std::size_t step, std::size_t brick) const {
+    return step_where(step) + ", brick " + std::to_string(brick);
+  }
+
+  // Offset of a brick's chunk in the dataset: [step][k0][j0][i0][0] (2D: [step][j0][i0][0]).
+  std::vector<hsize_t> brick_offset(std::size_t step, std::size_t brick) const {
+    const auto b = static_cast<std::int64_t>(brick);
+    const std::int64_t bi = b % bricks.count[0], bj = (b / bricks.count[0]) % bricks.count[1],
+                       bk = b / (bricks.count[0] * bricks.count[1]);
+    std::vector<hsize_t> offset(d.geometry.dimension == 3 ? 5 : 4, 0);
+    offset[0] = step;
+    const std::size_t n = offset.size();
+    offset[n - 2] = static_cast<hsize_t>(bi * bricks.size[0]);
+    offset[n - 3] = static_cast<hsize_t>(bj * bricks.size[1]);
+    if (d.geometry.dimension == 3) offset[n - 4] = static_cast<hsize_t>(bk * bricks.size[2]);
+    return offset;
+  }
+
+  std::size_t brick_bytes() const {
+    return bricks.brick_points() * static_cast<std::size_t>(d.components) * sizeof(float);
+  }
+
+  RawStep read_raw_brick(std::size_t step, std::size_t brick) const {
+    if (d.storage != Hdf5Storage::bricked) {
+      RawStep whole = read_raw(step);
+      whole.brick = brick;
+      return whole;
+    }
+    if (step >= d.step_count() || brick >= bricks.bricks())
+      throw InvalidArgument(where() + ": brick " + std::to_string(brick) + " of step " +
+                            std::to_string(step) + " requested; the series has " +
+                            std::to_string(d.step_count()) + " steps of " +
+                            std::to_string(bricks.bricks()) + " bricks");
+    const std::vector<hsize_t> offset = brick_offset(step, brick);
+    RawStep out{step, {}, raw, brick, 0};
+    if (!raw) {  // HDF5 decodes: read the brick's region into a padded brick
+      out.bytes.assign(brick_bytes(), std::byte{0});
+      std::vector<hsize_t> count(offset.size(), 1);
+      std::vector<hsize_t> memory_dims(offset.size(), 1);
+      const std::size_t n = offset.size();
+      const GridGeometry& g = d.geometry;
+      for (std::size_t a = 0; a < static_cast<std::size_t>(g.dimension); ++a) {
+        count[n - 2 - a] = static_cast<hsize_t>(
+            std::min<std::int64_t>(bricks.size[a], g.size[a] - static_cast<std::int64_t>(offset[n - 2 - a])));
+        memory_dims[n - 2 - a] = static_cast<hsize_t>(bricks.size[a]);
+      }
+      count[n - 1] = memory_dims[n - 1] = static_cast<hsize_t>(d.components);
+      H5Id file_space(H5Dget_space(dataset.get()), H5Sclose);
+      H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, offset.data(), nullptr, count.data(),
+                          nullptr);
+      H5Id memory(H5Screate_simple(static_cast<int>(n), memory_dims.data(), nullptr), H5Sclose);
+      const std::vector<hsize_t> zero(n, 0);
+      H5Sselect_hyperslab(memory.get(), H5S_SELECT_SET, zero.data(), nullptr, count.data(),
+                          nullptr);
+      if (H5Dread(dataset.get(), H5T_NATIVE_FLOAT, memory.get(), file_space.get(), H5P_DEFAULT,
+                  out.bytes.data()) < 0)
+        throw FormatError(brick_where(step, brick) + ": cannot read the samples (damaged file?)");
+      return out;
+    }
+    hsize_t bytes = 0;
+    if (H5Dget_chunk_storage_size(dataset.get(), offset.data(), &bytes) < 0 || bytes == 0)
+      throw FormatError(brick_where(step, brick) + ": the brick was never written (truncated or "
+                                                   "damaged file?)");
+    // A stored chunk is at most its decoded size plus a codec's overhead: refuse anything larger
+    // before allocating (a damaged index could claim gigabytes).
+    if (bytes > brick_bytes() + (std::size_t{1} << 16))
+      throw FormatError(brick_where(step, brick) + ": stored chunk of " + std::to_string(bytes) +
+                        " bytes for a brick of " + std::to_string(brick_bytes()) +
+                        " bytes (damaged file?)");
+    out.bytes.resize(bytes);
+    std::uint32_t mask = 0;
+    if (H5Dread_chunk(dataset.get(), H5P_DEFAULT, offset.data(), &mask, out.bytes.data()) < 0)
+      throw FormatError(brick_where(step, brick) + ": cannot read the chunk (damaged file?)");
+    out.filter_mask = mask;
+    return out;
+  }
+
+  void decode_brick(const RawStep& raw_brick, std::span<float> values) const {
+    if (d.storage != Hdf5Storage::bricked) return decode(raw_brick, values);
+    if (values.size() * sizeof(float) != brick_bytes())
+      throw InvalidArgument(where() + ": decode_brick needs a buffer of " +
+                            std::to_string(brick_bytes() / sizeof(float)) + " floats, got " +
+                            std::to_string(values.size()));
+    const std::string context = brick_where(raw_brick.step, raw_brick.brick);
+    std::span<std::byte> out(reinterpret_cast<std::byte*>(values.data()), brick_bytes());
+    if (!raw_brick.encoded) {
+      if (raw_brick.bytes.size() != out.size())
+        throw FormatError(context + ": " + std::to_string(raw_brick.bytes.size()) +
+                          " bytes read, expected " + std::to_string(out.size()));
+      std::memcpy(out.data(), raw_brick.bytes.data(), out.size());
+    } else {
+      decode_chunk(raw_brick.bytes.data(), raw_brick.bytes.size(), raw_brick.filter_mask, out,
+                   context);
+    }
+    if (d.fill_value && !std::isnan(*d.fill_value)) {
+      const float fill = *d.fill_value;
+      for (float& v : values)
+        if (v == fill) v = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
 };
 
 Hdf5TimeSeries::Hdf5TimeSeries(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -601,6 +729,15 @@ std::string Hdf5TimeSeries::describe() const {
 RawStep Hdf5TimeSeries::read_raw(std::size_t step) const {
   return impl_->read_raw(step);
 }
+BrickLayout Hdf5TimeSeries::bricks() const { return impl_->bricks; }
+RawStep Hdf5TimeSeries::read_raw_brick(std::size_t step, std::size_t brick) const {
+  return impl_->read_raw_brick(step, brick);
+}
+void Hdf5TimeSeries::decode_brick(const RawStep& raw, std::span<float> values) const {
+  impl_->decode_brick(raw, values);
+}
+bool Hdf5TimeSeries::zero_is_no_data() const { return impl_->d.zero_is_no_data; }
+
 void Hdf5TimeSeries::decode(const RawStep& raw, std::span<float> values) const {
   impl_->decode(raw, values);
 }

@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -24,6 +25,22 @@ const char* to_string(Hdf5Storage storage) {
       return "chunked";
     case Hdf5Storage::per_step:
       return "per-step";
+    case Hdf5Storage::bricked:
+      return "bricked";
+  }
+  return "?";
+}
+
+const char* to_string(Hdf5Codec codec) {
+  switch (codec) {
+    case Hdf5Codec::none:
+      return "none";
+    case Hdf5Codec::gzip:
+      return "gzip";
+    case Hdf5Codec::lz4:
+      return "lz4";
+    case Hdf5Codec::zstd:
+      return "zstd";
   }
   return "?";
 }
@@ -102,6 +119,9 @@ struct FieldWriter {
   Hdf5Description description;
   Hdf5WriteOptions options;
   detail::SliceLayout layout;
+  BrickLayout bricks;          // bricked storage
+  Hdf5Codec codec = Hdf5Codec::none;
+  int level = 0;
   std::vector<hsize_t> shape;  // one step
   H5Id h5file, group, dataset, steps_group;
   std::size_t written = 0;
@@ -116,6 +136,20 @@ struct FieldWriter {
     if (options.gzip_level < 0 || options.gzip_level > 9)
       throw InvalidArgument("HDF5 layout: gzip level must be 0 (none) to 9, got " +
                             std::to_string(options.gzip_level));
+    codec = options.codec != Hdf5Codec::none ? options.codec
+            : options.gzip_level > 0         ? Hdf5Codec::gzip
+                                             : Hdf5Codec::none;
+    level = codec == Hdf5Codec::gzip ? (options.gzip_level > 0 ? options.gzip_level
+                                                                : std::max(options.level, 1))
+            : options.level > 0      ? options.level
+                                     : detail::default_level(codec);
+    if (level < 0 || level > 9)
+      throw InvalidArgument("HDF5 layout: compression level must be 1 to 9, got " +
+                            std::to_string(level));
+    if (storage == Hdf5Storage::bricked && options.brick_size < 1)
+      throw InvalidArgument("HDF5 layout: brick size must be at least 1 point, got " +
+                            std::to_string(options.brick_size));
+    detail::register_blosc_filter();
     check_writable(file);
     description.file = file;
     description.group = detail::normalize_group(options.group);
@@ -126,11 +160,19 @@ struct FieldWriter {
     description.units = options.units;
     description.fill_value = options.fill_value;
     description.zero_is_no_data = options.zero_is_no_data;
-    description.gzip_level = options.gzip_level;
+    description.gzip_level = codec == Hdf5Codec::gzip ? level : 0;
     description.dataset = detail::child_path(
         description.group, storage == Hdf5Storage::per_step ? "steps" : "velocity");
     layout = detail::slice_layout(geometry, components, options.max_chunk_bytes);
     shape = detail::step_shape(geometry, components);
+    if (storage == Hdf5Storage::bricked) {
+      bricks = BrickLayout::cubes(geometry, options.brick_size);
+      description.brick = bricks.size;
+      if (bricks.brick_points() * static_cast<std::size_t>(components) * sizeof(float) >=
+          (std::size_t{1} << 32))
+        throw InvalidArgument("HDF5 layout: a brick of " + std::to_string(options.brick_size) +
+                              " points per axis exceeds HDF5's 4 GiB chunk limit");
+    }
 
     h5file = H5Id(H5Fcreate(temp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
     if (!h5file.valid()) throw IoError("cannot create HDF5 file " + temp.string());
@@ -200,7 +242,7 @@ struct FieldWriter {
 
     if (description.storage != Hdf5Storage::steady)
       write_doubles_dataset(g, "times", description.times, where());
-    if (description.storage == Hdf5Storage::chunked) {
+    if (has_step_axis(description.storage)) {
       std::vector<hsize_t> dims{description.times.size()};
       dims.insert(dims.end(), shape.begin(), shape.end());
       dataset = create_samples(g, "velocity", dims, true);
@@ -212,7 +254,7 @@ struct FieldWriter {
     }
   }
 
-  bool compressed() const { return options.gzip_level > 0; }
+  bool compressed() const { return codec != Hdf5Codec::none; }
 
   /// A float32 dataset of `dims`; chunked by slices (with a leading 1 for the step axis of a
   /// chunked series) when compressed or when `series` is set, contiguous otherwise.
@@ -225,10 +267,22 @@ struct FieldWriter {
       std::vector<hsize_t> chunk = dims;
       if (series) chunk[0] = 1;
       chunk[series ? 1 : 0] = static_cast<hsize_t>(layout.chunk_slices);
+      if (description.storage == Hdf5Storage::bricked) {
+        // [1][bz][by][bx][C] (2D: [1][by][bx][C]).
+        const std::size_t n = chunk.size();
+        chunk[n - 2] = static_cast<hsize_t>(bricks.size[0]);
+        chunk[n - 3] = static_cast<hsize_t>(bricks.size[1]);
+        if (description.geometry.dimension == 3) chunk[n - 4] = static_cast<hsize_t>(bricks.size[2]);
+      }
       H5Pset_chunk(create.get(), static_cast<int>(chunk.size()), chunk.data());
-      if (compressed()) {
+      if (codec == Hdf5Codec::gzip) {
         if (options.shuffle) H5Pset_shuffle(create.get());
-        H5Pset_deflate(create.get(), static_cast<unsigned>(options.gzip_level));
+        H5Pset_deflate(create.get(), static_cast<unsigned>(level));
+      } else if (codec != Hdf5Codec::none) {
+        std::size_t chunk_bytes = sizeof(float);
+        for (hsize_t c : chunk) chunk_bytes *= c;
+        const std::vector<unsigned> cd = detail::blosc_parameters(codec, level, chunk_bytes);
+        H5Pset_filter(create.get(), kBloscFilterId, H5Z_FLAG_OPTIONAL, cd.size(), cd.data());
       }
     }
     H5Id set(H5Dcreate2(location, name, H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, create.get(),
@@ -265,8 +319,10 @@ struct FieldWriter {
       step_set = create_samples(steps_group.get(), name, shape, false);
       target = step_set.get();
     }
-    const bool series_axis = description.storage == Hdf5Storage::chunked;
-    if (compressed() && options.parallel_compression)
+    const bool series_axis = has_step_axis(description.storage);
+    if (description.storage == Hdf5Storage::bricked)
+      write_bricks(target, values);
+    else if (compressed() && (options.parallel_compression || codec != Hdf5Codec::gzip))
       write_compressed_chunks(target, values, series_axis);
     else
       write_plain(target, values, series_axis);
@@ -293,7 +349,7 @@ struct FieldWriter {
   /// skipped in the filter mask (as HDF5's optional filters do).
   void write_compressed_chunks(hid_t target, std::span<const float> values, bool series_axis) {
     const std::int64_t chunks = layout.chunk_count();
-    std::vector<std::vector<Bytef>> encoded(static_cast<std::size_t>(chunks));
+    std::vector<std::vector<std::byte>> encoded(static_cast<std::size_t>(chunks));
     std::vector<std::uint32_t> masks(static_cast<std::size_t>(chunks), 0);
     const std::size_t slice_bytes = layout.slice_floats * sizeof(float);
     tbb::parallel_for(std::int64_t{0}, chunks, [&](std::int64_t c) {
@@ -309,25 +365,8 @@ struct FieldWriter {
         std::memcpy(padded.data(), source, static_cast<std::size_t>(count) * slice_bytes);
         source = padded.data();
       }
-      const std::byte* unfiltered = source;
-      std::vector<std::byte> shuffled;
-      if (options.shuffle) {
-        shuffled.resize(bytes);
-        detail::shuffle4(source, bytes, shuffled.data());
-        source = shuffled.data();
-      }
-      std::vector<Bytef>& out = encoded[static_cast<std::size_t>(c)];
-      uLongf size = compressBound(static_cast<uLong>(bytes));
-      out.resize(size);
-      const int rc = compress2(out.data(), &size, reinterpret_cast<const Bytef*>(source),
-                               static_cast<uLong>(bytes), options.gzip_level);
-      if (rc == Z_OK && size < bytes) {
-        out.resize(size);
-      } else {  // store the raw floats, every filter skipped
-        const auto* raw = reinterpret_cast<const Bytef*>(unfiltered);
-        out.assign(raw, raw + bytes);
-        masks[static_cast<std::size_t>(c)] = options.shuffle ? 0x3u : 0x1u;
-      }
+      masks[static_cast<std::size_t>(c)] =
+          encode_chunk(source, bytes, encoded[static_cast<std::size_t>(c)]);
     });
     for (std::int64_t c = 0; c < chunks; ++c) {
       std::vector<hsize_t> offset(shape.size() + (series_axis ? 1 : 0), 0);
@@ -337,6 +376,81 @@ struct FieldWriter {
       if (H5Dwrite_chunk(target, H5P_DEFAULT, masks[static_cast<std::size_t>(c)], offset.data(),
                          chunk.size(), chunk.data()) < 0)
         throw IoError("cannot write chunk " + std::to_string(c) + " of step " +
+                      std::to_string(written) + " of " + where());
+    }
+  }
+
+  /// Encodes one chunk with the dataset's filters into `out`; returns HDF5's filter mask (bits of
+  /// the filters skipped: a chunk that gzip cannot shrink is stored raw, as HDF5's optional
+  /// filters do).
+  std::uint32_t encode_chunk(const std::byte* source, std::size_t bytes,
+                             std::vector<std::byte>& out) const {
+    if (codec == Hdf5Codec::none) {
+      out.assign(source, source + bytes);
+      return 0;
+    }
+    if (codec != Hdf5Codec::gzip) {
+      out = detail::blosc_encode(source, bytes, codec, level);
+      return 0;
+    }
+    const std::byte* unfiltered = source;
+    std::vector<std::byte> shuffled;
+    if (options.shuffle) {
+      shuffled.resize(bytes);
+      detail::shuffle4(source, bytes, shuffled.data());
+      source = shuffled.data();
+    }
+    uLongf size = compressBound(static_cast<uLong>(bytes));
+    out.resize(size);
+    const int rc = compress2(reinterpret_cast<Bytef*>(out.data()), &size,
+                             reinterpret_cast<const Bytef*>(source), static_cast<uLong>(bytes),
+                             level);
+    if (rc == Z_OK && size < bytes) {
+      out.resize(size);
+      return 0;
+    }
+    out.assign(unfiltered, unfiltered + bytes);  // every filter skipped
+    return options.shuffle ? 0x3u : 0x1u;
+  }
+
+  /// Bricked storage: gathers every brick of the step (edge bricks padded with zeros, HDF5 chunks
+  /// being whole), encodes them in parallel and stores them with H5Dwrite_chunk.
+  void write_bricks(hid_t target, std::span<const float> values) {
+    const std::size_t count = bricks.bricks();
+    const auto c = static_cast<std::size_t>(description.components);
+    const GridGeometry& g = description.geometry;
+    std::vector<std::vector<std::byte>> encoded(count);
+    std::vector<std::uint32_t> masks(count, 0);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t b) {
+      const auto bi = static_cast<std::int64_t>(b) % bricks.count[0];
+      const auto bj = (static_cast<std::int64_t>(b) / bricks.count[0]) % bricks.count[1];
+      const auto bk = static_cast<std::int64_t>(b) / (bricks.count[0] * bricks.count[1]);
+      const std::int64_t i0 = bi * bricks.size[0], j0 = bj * bricks.size[1],
+                         k0 = bk * bricks.size[2];
+      const std::int64_t nx = std::min(bricks.size[0], g.size[0] - i0);
+      std::vector<float> brick(bricks.brick_points() * c, 0.0f);
+      for (std::int64_t k = 0; k < std::min(bricks.size[2], g.size[2] - k0); ++k)
+        for (std::int64_t j = 0; j < std::min(bricks.size[1], g.size[1] - j0); ++j)
+          std::memcpy(brick.data() + static_cast<std::size_t>((k * bricks.size[1] + j) *
+                                                               bricks.size[0]) * c,
+                      values.data() + g.index(i0, j0 + j, k0 + k) * c,
+                      static_cast<std::size_t>(nx) * c * sizeof(float));
+      masks[b] = encode_chunk(reinterpret_cast<const std::byte*>(brick.data()),
+                              brick.size() * sizeof(float), encoded[b]);
+    });
+    for (std::size_t b = 0; b < count; ++b) {
+      const auto bi = static_cast<std::int64_t>(b) % bricks.count[0];
+      const auto bj = (static_cast<std::int64_t>(b) / bricks.count[0]) % bricks.count[1];
+      const auto bk = static_cast<std::int64_t>(b) / (bricks.count[0] * bricks.count[1]);
+      // [step][k0][j0][i0][0] (2D: [step][j0][i0][0]).
+      std::array<hsize_t, 5> offset{written, 0, 0, 0, 0};
+      const std::size_t n = shape.size() + 1;
+      offset[n - 2] = static_cast<hsize_t>(bi * bricks.size[0]);
+      offset[n - 3] = static_cast<hsize_t>(bj * bricks.size[1]);
+      if (g.dimension == 3) offset[n - 4] = static_cast<hsize_t>(bk * bricks.size[2]);
+      if (H5Dwrite_chunk(target, H5P_DEFAULT, masks[b], offset.data(), encoded[b].size(),
+                         encoded[b].data()) < 0)
+        throw IoError("cannot write brick " + std::to_string(b) + " of step " +
                       std::to_string(written) + " of " + where());
     }
   }
@@ -380,9 +494,9 @@ Hdf5SeriesWriter::Hdf5SeriesWriter(const std::filesystem::path& file, const Grid
                                    int components, std::vector<double> times,
                                    const Hdf5WriteOptions& options)
     : impl_(std::make_unique<Impl>(file, geometry, components, std::move(times), options,
-                                   options.storage == Hdf5Storage::per_step
-                                       ? Hdf5Storage::per_step
-                                       : Hdf5Storage::chunked)) {}
+                                   options.storage == Hdf5Storage::steady
+                                       ? Hdf5Storage::bricked
+                                       : options.storage)) {}
 
 Hdf5SeriesWriter::~Hdf5SeriesWriter() = default;
 

@@ -123,8 +123,8 @@ template <int N>
 class Engine {
  public:
   Engine(const Field<N>& field, const Seed<N>& seed, const StreamSurfaceOptions& options,
-         const ProgressCallback& progress)
-      : field_(field), seed_(seed), opt_(options), progress_(progress) {
+         const ProgressCallback& progress, const FrontHook& before_step)
+      : field_(field), seed_(seed), opt_(options), progress_(progress), before_step_(before_step) {
     validate();
     report_.options = opt_;
     tol_.absolute = opt_.tolerance * opt_.edge;
@@ -155,6 +155,17 @@ class Engine {
       if (elapsed > opt_.time_budget_seconds) {
         reason = StopReason::time_budget;
         break;
+      }
+      if (before_step_) {
+        front_positions_.clear();
+        for (const auto& f : fronts)
+          for (const auto& fv : f.v)
+            for (int i = 0; i < N; ++i) front_positions_.push_back(fv.x[i]);
+        if (!before_step_(FrontSnapshot{step + 1, N, front_positions_})) {
+          reason = StopReason::cancelled;
+          report_.complete = false;
+          break;
+        }
       }
       if (progress_) {
         Progress p{step, opt_.max_steps, mesh_.vertex_count(), fronts.size(), 0, elapsed};
@@ -983,6 +994,8 @@ class Engine {
   const Seed<N>& seed_;
   StreamSurfaceOptions opt_;
   ProgressCallback progress_;
+  FrontHook before_step_;
+  std::vector<double> front_positions_;
   Tolerance tol_;
   double h_star_ = 0;
   Mesh mesh_;
@@ -1006,16 +1019,17 @@ class Engine {
 template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
-                                   const ProgressCallback& progress) {
-  Engine<N> engine(field, seed, options, progress);
+                                   const ProgressCallback& progress,
+                                   const FrontHook& before_step) {
+  Engine<N> engine(field, seed, options, progress, before_step);
   return engine.run();
 }
 
 template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                const StreamSurfaceOptions&,
-                                               const ProgressCallback&);
+                                               const ProgressCallback&, const FrontHook&);
 template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                const StreamSurfaceOptions&,
-                                               const ProgressCallback&);
+                                               const ProgressCallback&, const FrontHook&);
 
 }  // namespace orthofront

@@ -1,6 +1,7 @@
 #pragma once
 /// The advancing-front stream-surface engine: α solve → rip → advance → adapt → stitch.
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "orthofront/engine/options.h"
@@ -19,6 +20,15 @@ struct Progress {
 /// Called once per front step; return false to stop (the mesh built so far is returned).
 using ProgressCallback = std::function<bool(const Progress&)>;
 
+/// The front before a step: every front vertex's position, N coordinates each. A data cache uses
+/// it to hold what the step will sample; return false to stop (the mesh built so far is kept).
+struct FrontSnapshot {
+  int step = 0;  ///< the step about to run (1 for the first)
+  int dimension = 3;
+  std::span<const double> positions;
+};
+using FrontHook = std::function<bool(const FrontSnapshot&)>;
+
 struct SurfaceResult {
   Mesh mesh;
   SurfaceReport report;
@@ -31,13 +41,14 @@ struct SurfaceResult {
 template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
-                                   const ProgressCallback& progress = {});
+                                   const ProgressCallback& progress = {},
+                                   const FrontHook& before_step = {});
 
 extern template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                       const StreamSurfaceOptions&,
-                                                      const ProgressCallback&);
+                                                      const ProgressCallback&, const FrontHook&);
 extern template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                       const StreamSurfaceOptions&,
-                                                      const ProgressCallback&);
+                                                      const ProgressCallback&, const FrontHook&);
 
 }  // namespace orthofront

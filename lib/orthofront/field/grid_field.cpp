@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/multilinear.h"
 
 namespace orthofront {
 namespace {
@@ -121,12 +122,9 @@ void GridField::build_no_data_mask() {
       [&](const tbb::blocked_range<std::size_t>& r, bool found) {
         for (std::size_t p = r.begin(); p != r.end(); ++p) {
           const float* v = values_ + p * c;
-          bool finite = true, zero = true;
-          for (std::size_t k = 0; k < c; ++k) {
-            finite = finite && std::isfinite(v[k]);
-            zero = zero && v[k] == 0.0f;
-          }
-          if (!finite || (zero_is_no_data && zero)) {
+          const bool no_data = c == 3 ? multilinear::point_has_no_data<3>(v, zero_is_no_data)
+                                      : multilinear::point_has_no_data<2>(v, zero_is_no_data);
+          if (no_data) {
             bad[p] = 1;
             found = true;
           }
@@ -166,65 +164,26 @@ template <int Axes, int Components, bool Rectilinear, bool WithJacobian>
 FieldStatus GridField::evaluate(const Vec3& x, Vec3& v, Mat3* J) const {
   if (!domain_.contains(x)) return FieldStatus::outside;  // also rejects NaN coordinates
   std::size_t base = 0, cell = 0;
-  double t[3] = {0, 0, 0}, w[3] = {0, 0, 0};
+  multilinear::AxisCell at[3];
   for (int a = 0; a < Axes; ++a) {
     const auto ua = static_cast<std::size_t>(a);
-    std::int64_t i;
-    if constexpr (Rectilinear) {
-      const std::vector<double>& axis = grid_->geometry.axes[ua];
-      i = std::upper_bound(axis.begin(), axis.end(), x[a]) - axis.begin() - 1;
-      i = std::clamp<std::int64_t>(i, 0, cells_[ua] - 1);
-      w[a] = inverse_width_[ua][static_cast<std::size_t>(i)];
-      t[a] = (x[a] - axis[static_cast<std::size_t>(i)]) * w[a];
-    } else {
-      const double u = (x[a] - origin_[ua]) * inverse_spacing_[ua];
-      // u >= 0 up to rounding, and truncation sends tiny negatives to 0. A point on the last
-      // sample belongs to the last cell (t = 1).
-      i = std::min(static_cast<std::int64_t>(u), cells_[ua] - 1);
-      i = std::max<std::int64_t>(i, 0);
-      t[a] = u - static_cast<double>(i);
-      w[a] = inverse_spacing_[ua];
-    }
-    base += static_cast<std::size_t>(i) * stride_[ua];
-    cell += static_cast<std::size_t>(i) * cell_stride_[ua];
+    if constexpr (Rectilinear)
+      at[a] = multilinear::locate_rectilinear(x[a], grid_->geometry.axes[ua],
+                                              inverse_width_[ua].data(), cells_[ua]);
+    else
+      at[a] = multilinear::locate_uniform(x[a], origin_[ua], inverse_spacing_[ua], cells_[ua]);
+    base += static_cast<std::size_t>(at[a].i) * stride_[ua];
+    cell += static_cast<std::size_t>(at[a].i) * cell_stride_[ua];
   }
   if (!no_data_cells_.empty() && ((no_data_cells_[cell >> 6] >> (cell & 63)) & 1u) != 0)
     return FieldStatus::no_data;
-
   const float* p = values_ + base;
-  const std::size_t sx = Components, sy = stride_[1], sz = stride_[2];
-  const double tx = t[0], ty = t[1], tz = t[2];
-  for (int c = 0; c < Components; ++c) {
-    const double c000 = p[c], c100 = p[sx + c], c010 = p[sy + c], c110 = p[sy + sx + c];
-    const double d00 = c100 - c000, d10 = c110 - c010;
-    const double a00 = c000 + tx * d00, a10 = c010 + tx * d10;
-    if constexpr (Axes == 2) {
-      v[c] = a00 + ty * (a10 - a00);
-      if constexpr (WithJacobian) {
-        (*J)(c, 0) = (d00 + ty * (d10 - d00)) * w[0];
-        (*J)(c, 1) = (a10 - a00) * w[1];
-        (*J)(c, 2) = 0.0;
-      }
-    } else {
-      const double c001 = p[sz + c], c101 = p[sz + sx + c], c011 = p[sz + sy + c],
-                   c111 = p[sz + sy + sx + c];
-      const double d01 = c101 - c001, d11 = c111 - c011;
-      const double a01 = c001 + tx * d01, a11 = c011 + tx * d11;
-      const double b0 = a00 + ty * (a10 - a00), b1 = a01 + ty * (a11 - a01);
-      v[c] = b0 + tz * (b1 - b0);
-      if constexpr (WithJacobian) {
-        const double e0 = d00 + ty * (d10 - d00), e1 = d01 + ty * (d11 - d01);
-        const double f0 = a10 - a00, f1 = a11 - a01;
-        (*J)(c, 0) = (e0 + tz * (e1 - e0)) * w[0];
-        (*J)(c, 1) = (f0 + tz * (f1 - f0)) * w[1];
-        (*J)(c, 2) = (b1 - b0) * w[2];
-      }
-    }
-  }
-  if constexpr (Components == 2) {
-    v[2] = 0.0;
-    if constexpr (WithJacobian) J->row(2).setZero();
-  }
+  const std::size_t sy = stride_[1], sz = stride_[2];
+  const auto corner = [p, sy, sz](int bx, int by, int bz) {
+    return p + static_cast<std::size_t>(bx) * Components + static_cast<std::size_t>(by) * sy +
+           static_cast<std::size_t>(bz) * sz;
+  };
+  multilinear::interpolate<Axes, Components, WithJacobian>(corner, at, v, J);
   return FieldStatus::inside;
 }
 

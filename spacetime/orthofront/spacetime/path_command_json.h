@@ -7,7 +7,9 @@
 namespace orthofront::spacetime {
 
 inline nlohmann::json to_json(const CacheStatistics& s) {
-  return {{"hits", s.hits},
+  return {{"unit_bytes", s.unit_bytes},
+          {"bricks_per_step", s.units_per_step},
+          {"hits", s.hits},
           {"late_prefetches", s.late_prefetches},
           {"misses", s.misses},
           {"prefetches", s.prefetches},
@@ -19,7 +21,13 @@ inline nlohmann::json to_json(const CacheStatistics& s) {
           {"decode_seconds", s.decode_seconds},
           {"wait_seconds", s.wait_seconds},
           {"peak_bytes", s.peak_bytes},
-          {"reads_per_step", s.reads_per_step}};
+          {"peak_resident_units", s.peak_resident_units},
+          {"units_touched", s.units_touched},
+          {"units_used", s.units_used},
+          {"max_reads_of_a_unit", s.max_reads_of_a_unit},
+          {"bytes_needed", s.bytes_needed},
+          {"read_amplification", s.read_amplification()},
+          {"units_read_per_step", s.units_read_per_step}};
 }
 
 inline nlohmann::json to_json(const PathReport& r) {
@@ -33,7 +41,8 @@ inline nlohmann::json to_json(const PathReport& r) {
                     {"vertex_t_min", b.vertex_t_min},
                     {"vertex_t_max", b.vertex_t_max},
                     {"first_time_step", b.first_step},
-                    {"last_time_step", b.last_step}});
+                    {"last_time_step", b.last_step},
+                    {"pinned_units", b.pinned_units}});
   }
   nlohmann::json j = {{"time_scale", r.time_scale},
                       {"time_scale_source", r.time_scale_source},

@@ -104,7 +104,7 @@ std::pair<double, std::string> choose_time_scale(const UnsteadyField& flow, cons
 struct Run {
   const UnsteadyField& flow;
   StreamedField* streamed = nullptr;
-  TimeStepCache* cache = nullptr;
+  BrickCache* cache = nullptr;
 };
 
 template <int N>
@@ -122,7 +122,17 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
   pr.streamed = run.streamed != nullptr;
   TrackedFlow tracked(run.flow);
   const Seed<3> seed3 = make_seed(curve, seed_count);
-  if (run.streamed) run.streamed->update_band(o.t0, o.t0);  // the steps around t0 (checks fit)
+  if (run.streamed) {
+    // The seed's own units, for the time scale and the engine's first evaluations (checks fit).
+    std::vector<FrontSample> seeds;
+    for (double s : seed3.parameters) seeds.push_back({seed3.point(s), o.t0, Vec3::Zero()});
+    BandPrediction around;
+    around.edge = o.engine.edge;
+    around.time_scale = 1e300;  // no reach in time: the steps around t0
+    around.pinned_steps = 1;
+    around.prefetch_steps = 0;
+    run.streamed->update_front(seeds, around);
+  }
   const auto [c, source] = choose_time_scale(run.flow, seed3, o);
   pr.time_scale = c;
   pr.time_scale_source = source;
@@ -136,16 +146,35 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
   const bool backwards = o.engine.negative_alpha == NegativeAlpha::keep;
   std::pair<double, double> observed{o.t0, o.t0};
   double wait_before = 0;
-  auto move_band = [&](double lo, double hi) {
-    if (!run.streamed) return;
-    const double below = (backwards ? 1.0 : 0.25) * step_time;
-    const double t_lo = std::max(o.t0, lo - below);
-    const double t_hi = std::min(o.t1, hi + 1.25 * step_time);
-    run.streamed->update_band(t_lo, t_hi);
-  };
+  BandUpdate band;
+  BandPrediction prediction;
+  prediction.edge = o.engine.edge;
+  prediction.time_scale = c;
+  prediction.back_time = (backwards ? 1.0 : 0.25) * step_time;
+  std::vector<FrontSample> samples;
+  // The cache's own hook: before each front step, pin what the step samples around each vertex
+  // and prefetch what the following steps will reach.
+  FrontHook before_step;
   if (run.streamed) {
-    move_band(o.t0, o.t0);
     wait_before = run.cache->statistics().wait_seconds;
+    before_step = [&](const FrontSnapshot& f) -> bool {
+      samples.resize(f.positions.size() / N);
+      for (std::size_t i = 0; i < samples.size(); ++i) {
+        FrontSample& sample = samples[i];
+        sample.x.setZero();
+        for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i * N + static_cast<std::size_t>(a)];
+        sample.t = f.positions[i * N + N - 1] / c;
+        if (!run.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
+      }
+      try {
+        band = run.streamed->update_front(samples, prediction);
+      } catch (const std::exception& e) {
+        pr.complete = false;
+        pr.message = e.what();
+        return false;
+      }
+      return true;
+    };
   }
   auto callback = [&](const Progress& p) -> bool {
     const auto [lo, hi] = tracked.take();
@@ -155,7 +184,8 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
       b.step = p.step;
       b.t_min = observed.first;
       b.t_max = observed.second;
-      if (run.streamed) b.first_step = run.streamed->band_first(), b.last_step = run.streamed->band_last();
+      if (run.streamed) b.first_step = band.first_step, b.last_step = band.last_step;
+      if (run.streamed) b.pinned_units = band.pinned;
       pr.band.push_back(b);
     }
     pr.time_reached = std::max(pr.time_reached, observed.second);
@@ -163,13 +193,6 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
       if (const std::string e = run.streamed->error(); !e.empty()) {
         pr.complete = false;
         pr.message = e;
-        return false;
-      }
-      try {
-        move_band(observed.first, observed.second);
-      } catch (const std::exception& e) {
-        pr.complete = false;
-        pr.message = e.what();
         return false;
       }
     }
@@ -183,8 +206,8 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
       pp.band_end = observed.second;
       pp.streamed = pr.streamed;
       if (run.streamed) {
-        pp.band_first = run.streamed->band_first();
-        pp.band_last = run.streamed->band_last();
+        pp.band_first = band.first_step;
+        pp.band_last = band.last_step;
         pp.cache = run.cache->statistics();
       }
       if (!o.progress(pp)) {
@@ -200,7 +223,7 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
     engine.max_lag = c * o.max_band;
   }
-  SurfaceResult sr = build_stream_surface<N>(lifted, seed, engine, callback);
+  SurfaceResult sr = build_stream_surface<N>(lifted, seed, engine, callback, before_step);
   // The last step has no callback after it: record its band here.
   if (const auto [lo, hi] = tracked.take(); lo <= hi && sr.report.steps > 0 &&
                                             pr.band.size() < static_cast<std::size_t>(sr.report.steps)) {
@@ -208,7 +231,8 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     b.step = sr.report.steps;
     b.t_min = lo;
     b.t_max = hi;
-    if (run.streamed) b.first_step = run.streamed->band_first(), b.last_step = run.streamed->band_last();
+    if (run.streamed) b.first_step = band.first_step, b.last_step = band.last_step;
+    if (run.streamed) b.pinned_units = band.pinned;
     pr.band.push_back(b);
   }
   if (run.streamed && pr.complete) {
@@ -278,7 +302,7 @@ PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve&
   return dispatch(Run{flow}, seed, seed_count, options);
 }
 
-PathSurfaceResult build_path_surface(TimeStepCache& cache, const SeedCurve& seed, int seed_count,
+PathSurfaceResult build_path_surface(BrickCache& cache, const SeedCurve& seed, int seed_count,
                                      const PathSurfaceOptions& options) {
   StreamedField field(cache);
   PathSurfaceOptions o = options;

@@ -1,7 +1,7 @@
 #pragma once
 /// Path surfaces of unsteady flows: the stream surface of the lifted field (v, c) in R^(d+1),
 /// built by the flow-orthogonal engine, from analytic fields or from time series streamed
-/// through a narrow-band TimeStepCache.
+/// through the space-time BrickCache.
 #include <functional>
 #include <string>
 #include <vector>
@@ -9,7 +9,7 @@
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/seed/seed_curve.h"
-#include "orthofront/spacetime/time_step_cache.h"
+#include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::spacetime {
 
@@ -43,7 +43,8 @@ struct BandRecord {
   int step = 0;
   double t_min = 0, t_max = 0;     ///< over the front's evaluations (vertices and stages)
   double vertex_t_min = 0, vertex_t_max = 0;  ///< over the mesh vertices created by the step
-  std::size_t first_step = 0, last_step = 0;  ///< resident time steps (streamed)
+  std::size_t first_step = 0, last_step = 0;  ///< time steps of the pinned units (streamed)
+  std::size_t pinned_units = 0;    ///< bricks (or whole steps) pinned for the step (streamed)
 };
 
 struct PathReport {
@@ -81,7 +82,7 @@ PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve&
 /// Path surface of a time series read through `cache`. Errors reading a step mid-run stop the
 /// surface (complete = false, message naming step and file); the mesh built so far is returned.
 /// A band that cannot fit the budget at the start throws InvalidArgument naming the budget.
-PathSurfaceResult build_path_surface(TimeStepCache& cache, const SeedCurve& seed, int seed_count,
+PathSurfaceResult build_path_surface(BrickCache& cache, const SeedCurve& seed, int seed_count,
                                      const PathSurfaceOptions& options);
 
 }  // namespace orthofront::spacetime

@@ -1,6 +1,8 @@
 #pragma once
 /// A TimeSeries whose steps are an unsteady field sampled on a grid, computed when read: test
 /// data and benchmark input of any size without a file.
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -35,11 +37,12 @@ class SampledTimeSeries : public io::TimeSeries {
     return raw;
   }
 
-  /// The floats of `step` (step_floats() of them), NaN outside the flow's domain.
+  /// The floats of `step` (step_floats() of them), NaN outside the flow's domain; z-slices in
+  /// parallel.
   void sample(std::size_t step, float* out) const {
     const double t = times_.at(step);
     const auto c = static_cast<std::size_t>(components_);
-    for (std::int64_t k = 0; k < grid_.size[2]; ++k)
+    tbb::parallel_for(std::int64_t{0}, grid_.size[2], [&](std::int64_t k) {
       for (std::int64_t j = 0; j < grid_.size[1]; ++j)
         for (std::int64_t i = 0; i < grid_.size[0]; ++i) {
           const Vec3 x(grid_.coordinate(0, i), grid_.coordinate(1, j), grid_.coordinate(2, k));
@@ -50,6 +53,7 @@ class SampledTimeSeries : public io::TimeSeries {
             p[a] = ok ? static_cast<float>(v[static_cast<int>(a)])
                       : std::numeric_limits<float>::quiet_NaN();
         }
+    });
   }
 
  private:

@@ -1,0 +1,273 @@
+#include <catch2/catch.hpp>
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "orthofront/error.h"
+#include "orthofront/io/error.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/brick_pipeline.h"
+
+using namespace orthofront;
+using namespace orthofront::spacetime;
+
+namespace {
+
+// A 16^3 grid in bricks of 4^3 (64 bricks per step). Float i of brick b of step k holds
+// k * 100000 + b * 1000 + i % 1000. Reads are logged; one brick may be "corrupt".
+class BrickSeries final : public io::TimeSeries {
+ public:
+  explicit BrickSeries(std::size_t steps) : steps_(steps) {
+    grid_.dimension = 3;
+    grid_.size = {16, 16, 16};
+  }
+  std::size_t step_count() const override { return steps_; }
+  double time(std::size_t step) const override { return 0.5 * static_cast<double>(step); }
+  const GridGeometry& geometry() const override { return grid_; }
+  int components() const override { return 3; }
+  std::string describe() const override { return "bricks.h5:/velocity"; }
+  io::BrickLayout bricks() const override { return io::BrickLayout::cubes(grid_, 4); }
+  io::RawStep read_raw(std::size_t step) const override { return read_raw_brick(step, 0); }
+  io::RawStep read_raw_brick(std::size_t step, std::size_t brick) const override {
+    {
+      std::lock_guard lock(mutex_);
+      log_.push_back({static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(brick)});
+      if (concurrent_++ != 0) overlapped_ = true;
+    }
+    if (delay_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    {
+      std::lock_guard lock(mutex_);
+      --concurrent_;
+    }
+    if (step == corrupt_step && brick == corrupt_brick)
+      throw io::FormatError("bricks.h5: step " + std::to_string(step) + " of '/velocity', brick " +
+                            std::to_string(brick) + ": damaged Blosc data");
+    io::RawStep raw;
+    raw.step = step;
+    raw.brick = brick;
+    raw.encoded = true;
+    raw.bytes.resize(100);  // stands for a compressed brick
+    return raw;
+  }
+  void decode_brick(const io::RawStep& raw, std::span<float> values) const override {
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = expected(raw.step, raw.brick, i);
+  }
+  void decode(const io::RawStep& raw, std::span<float> values) const override {
+    decode_brick(raw, values);
+  }
+  static float expected(std::size_t step, std::size_t brick, std::size_t i) {
+    return static_cast<float>(step * 100000 + brick * 1000 + i % 1000);
+  }
+  std::vector<BrickKey> log() const {
+    std::lock_guard lock(mutex_);
+    return log_;
+  }
+  std::size_t corrupt_step = static_cast<std::size_t>(-1), corrupt_brick = 0;
+  int delay_ms = 0;
+  mutable bool overlapped_ = false;
+
+ private:
+  std::size_t steps_;
+  GridGeometry grid_;
+  mutable std::mutex mutex_;
+  mutable std::vector<BrickKey> log_;
+  mutable int concurrent_ = 0;
+};
+
+bool holds(const BrickCache::Handle& h, std::size_t floats) {
+  for (std::size_t i = 0; i < floats; i += 13)
+    if (h.data()[i] != BrickSeries::expected(h.key().step, h.key().brick, i)) return false;
+  return true;
+}
+
+BrickKey key(std::size_t step, std::size_t brick) {
+  return {static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(brick)};
+}
+
+std::size_t thread_count() {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator("/proc/self/task")) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("brick cache: correct data under random access from several threads, never above "
+          "budget",
+          "[spacetime][cache]") {
+  BrickSeries series(20);
+  CacheOptions o;
+  o.budget_bytes = 60 * 768 + 4 * 3 * 768;  // 60 bricks of 768 bytes plus the loads in flight
+  BrickCache cache(series, o);
+  REQUIRE(cache.unit_bytes() == 768);
+  REQUIRE(cache.layout().bricks() == 64);
+  const std::size_t floats = series.brick_floats();
+  tbb::parallel_for(0, 4, [&](int thread) {
+    std::mt19937 rng(static_cast<unsigned>(thread));
+    std::uniform_int_distribution<std::size_t> step(0, 19), brick(0, 63);
+    for (int i = 0; i < 300; ++i) {
+      const BrickKey a = key(step(rng), brick(rng)), b = key(step(rng), brick(rng));
+      if (i % 50 == 0) cache.new_epoch(a.step);
+      auto ha = cache.acquire(a);
+      auto hb = cache.acquire(b);
+      REQUIRE(holds(ha, floats));
+      REQUIRE(holds(hb, floats));
+      REQUIRE(cache.statistics().peak_bytes <= o.budget_bytes);
+    }
+  });
+  const CacheStatistics s = cache.statistics();
+  CHECK(s.peak_bytes <= o.budget_bytes);
+  CHECK(s.hits + s.misses + s.late_prefetches == 2400);
+  CHECK(s.evictions > 0);
+  CHECK(s.resident_bytes <= o.budget_bytes);
+  std::size_t loads = 0;
+  for (unsigned r : s.units_read_per_step) loads += r;
+  CHECK(loads == s.loads);
+  CHECK_FALSE(series.overlapped_);  // the series was never read on two threads at once
+}
+
+TEST_CASE("brick cache: a monotone sweep reads every brick once, prefetched in order, and evicts "
+          "behind the band",
+          "[spacetime][cache]") {
+  BrickSeries series(30);
+  CacheOptions o;
+  o.budget_bytes = 3 * 16 * 768 + 4 * 3 * 768 + 2 * 3 * 768;
+  o.prefetch_share = 1.0;
+  BrickCache cache(series, o);
+  // The "front" needs bricks 0..15 of steps k, k+1 and asks for step k+2 ahead.
+  for (std::size_t k = 0; k + 2 < 30; ++k) {
+    cache.new_epoch(k);
+    std::vector<BrickKey> now, ahead;
+    for (std::size_t b = 0; b < 16; ++b) now.push_back(key(k, b));
+    for (std::size_t b = 0; b < 16; ++b) now.push_back(key(k + 1, b));
+    for (std::size_t b = 0; b < 16; ++b) ahead.push_back(key(k + 2, b));
+    auto pins = cache.acquire_all(now);
+    for (const auto& h : pins) REQUIRE(holds(h, series.brick_floats()));
+    cache.prefetch(ahead);
+    REQUIRE(cache.statistics().peak_bytes <= o.budget_bytes);
+    // Nothing behind the band is resident once the band moved past it.
+    REQUIRE(cache.statistics().resident_units <= 3 * 16);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const CacheStatistics s = cache.statistics();
+  CHECK(s.max_reads_of_a_unit == 1);
+  CHECK(s.units_touched >= 29 * 16);
+  CHECK(s.read_amplification() == 1.0);
+  CHECK(s.prefetches >= 16 * 16);  // most bricks arrived ahead of need
+  CHECK(s.hits > s.misses);
+  CHECK(s.evictions >= 25 * 16);
+  // Prefetches are read in the order asked: steps never go backwards in the read log.
+  const std::vector<BrickKey> log = series.log();
+  for (std::size_t i = 1; i < log.size(); ++i) REQUIRE(log[i].step >= log[i - 1].step);
+}
+
+TEST_CASE("brick cache: eviction takes units behind the band, then the least recently wanted",
+          "[spacetime][cache]") {
+  BrickSeries series(10);
+  CacheOptions o;
+  o.prefetch = false;
+  o.max_live_tokens = 1;
+  o.budget_bytes = 20 * 768 + 3 * 768 - 1;  // 20 bricks and a load in flight need one byte more
+  BrickCache cache(series, o);
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(1, b));  // step 1, epoch 1
+  cache.new_epoch(1);
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(2, b));  // epoch 2
+  cache.new_epoch(2);  // step 1 is behind: dropped at once
+  CHECK(cache.statistics().resident_units == 10);
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(3, b));
+  cache.new_epoch(0);  // nothing behind; step 2 was not wanted in this epoch
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(4, b));
+  // Room for step 4 came from step 2 (least recently wanted), not from step 3.
+  const std::size_t before = series.log().size();
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(3, b));
+  CHECK(series.log().size() == before);  // step 3 still resident
+  cache.acquire(key(2, 0));
+  CHECK(series.log().size() == before + 1);  // step 2 was evicted
+}
+
+TEST_CASE("brick cache: too small a budget is an error naming the budget needed",
+          "[spacetime][cache]") {
+  BrickSeries series(10);
+  CacheOptions o;
+  o.budget_bytes = 8 * 768;
+  CHECK_THROWS_WITH(BrickCache(series, o),
+                    Catch::Contains("is too small for sampling one cell between two time steps") &&
+                        Catch::Contains("16 resident bricks of 768 B") &&
+                        Catch::Contains(std::to_string(16 * 768 + 4 * 3 * 768) + " bytes"));
+  o.budget_bytes = 40 * 768;
+  BrickCache cache(series, o);
+  CHECK_NOTHROW(cache.require_fits(28, "a band"));
+  CHECK_THROWS_WITH(cache.require_fits(29, "the front's band"),
+                    Catch::Contains("too small for the front's band") &&
+                        Catch::Contains("raise --cache-budget"));
+}
+
+TEST_CASE("brick cache: a brick that cannot be read names the step, the brick and the file",
+          "[spacetime][cache]") {
+  BrickSeries series(10);
+  series.corrupt_step = 4;
+  series.corrupt_brick = 17;
+  CacheOptions o;
+  o.budget_bytes = 100 * 768;
+  BrickCache cache(series, o);
+  CHECK(holds(cache.acquire(key(4, 16)), series.brick_floats()));
+  CHECK_THROWS_AS(cache.acquire(key(4, 17)), io::IoError);
+  CHECK_THROWS_WITH(cache.acquire(key(4, 17)),
+                    Catch::Contains("time step 4, brick 17 of bricks.h5:/velocity") &&
+                        Catch::Contains("damaged Blosc data"));
+  CHECK(holds(cache.acquire(key(4, 18)), series.brick_floats()));
+}
+
+TEST_CASE("brick cache: whole steps ignore the bricks (the baseline)", "[spacetime][cache]") {
+  BrickSeries series(6);
+  CacheOptions o;
+  o.whole_steps = true;
+  o.budget_bytes = 20 * series.step_bytes();
+  BrickCache cache(series, o);
+  CHECK(cache.layout().bricks() == 1);
+  CHECK(cache.unit_bytes() == series.step_bytes());
+  auto h = cache.acquire(key(3, 0));
+  CHECK(h.data()[5] == BrickSeries::expected(3, 0, 5));
+}
+
+TEST_CASE("brick pipeline: cancellation joins cleanly and leaves no threads",
+          "[spacetime][pipeline]") {
+  BrickSeries series(64);
+  series.delay_ms = 5;
+  tbb::parallel_for(0, 64, [](int) {});  // start the TBB workers first
+  const std::size_t before = thread_count();
+  std::atomic<std::size_t> published{0};
+  {
+    BrickPipeline pipeline(series, [&](LoadedBrick&& b) {
+      CHECK(b.error.empty());
+      CHECK(b.values.size() == series.brick_floats());
+      published.fetch_add(1);
+    });
+    for (std::size_t k = 0; k < 64; ++k) pipeline.submit(key(k, k % 64));
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));
+    pipeline.cancel();
+  }  // destructor joins
+  const std::size_t done = published.load();
+  CHECK(done > 0);
+  CHECK(done < 64);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  CHECK(published.load() == done);  // nothing published after the join
+  CHECK(thread_count() == before);
+  CHECK(series.log().size() == done);  // every brick read was published
+}
+
+TEST_CASE("memory sizes parse and print", "[spacetime][cache]") {
+  CHECK(parse_bytes("512MiB") == 512u << 20);
+  CHECK(parse_bytes("1.5GiB") == 3u << 29);
+  CHECK(parse_bytes("100MB") == 100000000u);
+  CHECK(parse_bytes("4096") == 4096u);
+  CHECK_THROWS_WITH(parse_bytes("12 parsecs"), Catch::Contains("'12 parsecs'"));
+  CHECK(format_bytes(256u << 20) == "256 MiB");
+}

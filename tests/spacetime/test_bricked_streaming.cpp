@@ -1,0 +1,356 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "io/grid_test_support.h"
+#include "orthofront/field/grid_field.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/spacetime/path_surface.h"
+#include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/streamed_field.h"
+
+using namespace orthofront;
+using namespace orthofront::spacetime;
+using grid_test::TempDir;
+
+namespace {
+
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 9) == 0; }
+
+GridGeometry test_grid(int dimension, bool rectilinear) {
+  GridGeometry g;
+  g.dimension = dimension;
+  g.size = {11, 9, dimension == 3 ? 7 : 1};  // not multiples of the brick: partial edge bricks
+  g.origin = Vec3(-1.0, 0.5, 0.25);
+  g.spacing = Vec3(0.3, 0.2, dimension == 3 ? 0.1 : 1.0);
+  if (rectilinear)
+    for (std::size_t a = 0; a < 3; ++a) {
+      double x = g.origin[static_cast<int>(a)];
+      for (std::int64_t i = 0; i < g.size[a]; ++i) {
+        g.axes[a].push_back(x);
+        x += 0.1 + 0.05 * static_cast<double>((i * 7 + static_cast<std::int64_t>(a)) % 5);
+      }
+    }
+  return g;
+}
+
+// Writes `steps` steps of smooth-ish pseudo-random vectors; returns the file.
+std::filesystem::path write_series(const TempDir& dir, const GridGeometry& g, int components,
+                                   std::size_t steps, std::int64_t brick, bool zero_is_no_data) {
+  const auto file = dir.path() / ("series-" + std::to_string(g.dimension) + "-" +
+                                  std::to_string(g.rectilinear()) + ".h5");
+  io::Hdf5WriteOptions w;
+  w.storage = io::Hdf5Storage::bricked;
+  w.brick_size = brick;
+  w.codec = io::Hdf5Codec::lz4;
+  w.zero_is_no_data = zero_is_no_data;
+  w.xdmf = false;
+  std::vector<double> times;
+  for (std::size_t k = 0; k < steps; ++k) times.push_back(0.5 * static_cast<double>(k));
+  io::Hdf5SeriesWriter writer(file, g, components, times, w);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> values(g.point_count() * static_cast<std::size_t>(components));
+  for (std::size_t k = 0; k < steps; ++k) {
+    for (float& v : values) v = u(rng);
+    writer.write_step(values);
+  }
+  writer.commit();
+  return file;
+}
+
+}  // namespace
+
+TEST_CASE("bricked series: sampling across bricks equals whole-step sampling bit for bit",
+          "[spacetime][bricks]") {
+  TempDir dir("bricks");
+  for (int dimension : {2, 3})
+    for (bool rectilinear : {false, true}) {
+      const GridGeometry g = test_grid(dimension, rectilinear);
+      const auto file = write_series(dir, g, dimension, 5, 4, false);
+      const auto series = io::open_hdf5_series(file);
+      REQUIRE(series->description().storage == io::Hdf5Storage::bricked);
+      const io::BrickLayout layout = series->bricks();
+      REQUIRE(layout.size[0] == 4);
+      REQUIRE(layout.count[0] == 3);  // 11 points: bricks of 4, 4 and 3
+      CacheOptions bricked;
+      bricked.budget_bytes = 64 << 20;
+      CacheOptions whole = bricked;
+      whole.whole_steps = true;
+      BrickCache brick_cache(*series, bricked), step_cache(*series, whole);
+      StreamedField by_brick(brick_cache), by_step(step_cache);
+      // Points on brick borders (index 3 and 4 along each axis), on corners and at random.
+      std::vector<Vec3> points;
+      const Box<3> box = g.bounds();
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<double> u(0.0, 1.0);
+      for (int i = 0; i < 400; ++i) {
+        Vec3 x;
+        for (int a = 0; a < 3; ++a) x[a] = box.lo[a] + u(rng) * (box.hi[a] - box.lo[a]);
+        if (dimension == 2) x.z() = 0;
+        if (i % 4 == 1)  // exactly on a brick border along x (sample 4), between samples elsewhere
+          x.x() = g.coordinate(0, 4);
+        if (i % 4 == 2)  // in a cell that straddles bricks on every axis
+          for (int a = 0; a < dimension; ++a)
+            x[a] = 0.5 * (g.coordinate(a, 3) + g.coordinate(a, 4));
+        if (i % 4 == 3)  // a brick corner point
+          for (int a = 0; a < dimension; ++a) x[a] = g.coordinate(a, 4);
+        points.push_back(x);
+      }
+      for (const Vec3& x : points)
+        for (double t : {0.0, 0.3, 1.0, 1.75, 2.0}) {
+          Vec3 va, vb, da, db;
+          Mat3 ja, jb;
+          REQUIRE(by_brick.velocity_jacobian(x, t, va, ja, da) == FieldStatus::inside);
+          REQUIRE(by_step.velocity_jacobian(x, t, vb, jb, db) == FieldStatus::inside);
+          INFO("dimension " << dimension << " rectilinear " << rectilinear << " x " << x.transpose()
+                            << " t " << t);
+          REQUIRE(same_bits(va, vb));
+          REQUIRE(same_bits(ja, jb));
+          REQUIRE(same_bits(da, db));
+        }
+      // At a step's time the streamed value is the in-memory grid field's, bit for bit.
+      GridFieldOptions go;
+      go.zero_is_no_data = false;
+      const GridField step2(std::make_shared<VectorGrid>(io::read_hdf5_grid(file, "/", 2)), go);
+      for (const Vec3& x : points) {
+        Vec3 a, b;
+        REQUIRE(by_brick.velocity(x, 1.0, a) == FieldStatus::inside);
+        REQUIRE(step2.velocity(x, b) == FieldStatus::inside);
+        REQUIRE(same_bits(a, b));
+      }
+      CHECK(brick_cache.statistics().units_touched > 8);  // only some of the bricks were read
+    }
+}
+
+TEST_CASE("bricked series: zero vectors are no data when the file says so, as in memory",
+          "[spacetime][bricks]") {
+  TempDir dir("zeros");
+  GridGeometry g = test_grid(2, false);
+  for (bool zero_is_no_data : {true, false}) {
+    const auto file = dir.path() / (std::string("wall-") + (zero_is_no_data ? "1" : "0") + ".h5");
+    io::Hdf5WriteOptions w;
+    w.zero_is_no_data = zero_is_no_data;
+    w.brick_size = 4;
+    w.xdmf = false;
+    io::Hdf5SeriesWriter writer(file, g, 2, {0.0, 1.0}, w);
+    std::vector<float> values(g.point_count() * 2, 0.0f);
+    for (std::int64_t j = 0; j < g.size[1]; ++j)
+      for (std::int64_t i = 0; i < g.size[0]; ++i) {
+        const std::size_t p = g.index(i, j, 0) * 2;
+        values[p] = i == 6 ? 0.0f : 1.0f;  // a wall of zero vectors along x = sample 6
+        values[p + 1] = 0.0f;
+      }
+    writer.write_step(values);
+    writer.write_step(values);
+    writer.commit();
+    const auto series = io::open_hdf5_series(file);
+    CHECK(series->zero_is_no_data() == zero_is_no_data);
+    BrickCache cache(*series, CacheOptions{});
+    StreamedField field(cache);
+    GridFieldOptions go;
+    go.zero_is_no_data = zero_is_no_data;
+    const GridField memory(std::make_shared<VectorGrid>(io::read_hdf5_grid(file)), go);
+    const Vec3 by_wall(0.5 * (g.coordinate(0, 5) + g.coordinate(0, 6)), 1.0, 0.0);
+    const Vec3 away(g.coordinate(0, 1) + 0.1, 1.0, 0.0);
+    Vec3 v;
+    const FieldStatus expected = zero_is_no_data ? FieldStatus::no_data : FieldStatus::inside;
+    CHECK(field.velocity(by_wall, 0.5, v) == expected);
+    CHECK(memory.velocity(by_wall, v) == expected);
+    CHECK(field.velocity(away, 0.5, v) == FieldStatus::inside);
+    if (zero_is_no_data) {
+      // A path surface flowing +x stops at the wall instead of flowing through it.
+      const SeedCurve seed = SeedCurve::line(Vec3(g.coordinate(0, 1), 0.7, 0),
+                                             Vec3(g.coordinate(0, 1), 2.0, 0));
+      PathSurfaceOptions o;
+      o.t0 = 0;
+      o.t1 = 1;
+      o.engine.edge = 0.1;
+      o.engine.max_steps = 400;
+      const PathSurfaceResult r = build_path_surface(cache, seed, 6, o);
+      REQUIRE(r.mesh.vertex_count() > 6);
+      double x_max = -1e9;
+      for (const Vec3& p : r.mesh.positions) x_max = std::max(x_max, p.x());
+      CHECK(x_max <= g.coordinate(0, 6));
+    }
+  }
+}
+
+TEST_CASE("path surface through bricks under a tiny budget equals the in-memory surface",
+          "[spacetime][bricks][path]") {
+  TempDir dir("tiny");
+  const auto flow = make_unsteady_field("double-gyre-3d");
+  const GridGeometry g = uniform_grid(flow->domain(), 3, 17);
+  const std::vector<double> times = uniform_times(0, 6, 60);
+  const SampledTimeSeries memory(*flow, g, times);
+  const auto file = dir.path() / "gyre.h5";
+  {
+    io::Hdf5WriteOptions w;
+    w.brick_size = 4;  // 5 x 5 x 5 bricks of 768 bytes
+    w.zero_is_no_data = false;
+    w.xdmf = false;
+    io::Hdf5SeriesWriter writer(file, g, 3, times, w);
+    std::vector<float> values(memory.step_floats());
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      memory.sample(k, values.data());
+      writer.write_step(values);
+    }
+    writer.commit();
+  }
+  const auto series = io::open_hdf5_series(file);
+  PathSurfaceOptions o;
+  o.t0 = 0;
+  o.t1 = 6;
+  o.engine.edge = 0.05;
+  o.engine.max_steps = 100000;
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0.3), Vec3(0.9, 0.7, 0.6));
+  CacheOptions all;
+  all.budget_bytes = 1 << 30;
+  BrickCache in_memory_cache(memory, all);
+  const PathSurfaceResult reference = build_path_surface(in_memory_cache, seed, 8, o);
+  REQUIRE(reference.path.complete);
+  REQUIRE(reference.mesh.vertex_count() > 500);
+  for (bool prefetch : {true, false}) {
+    CacheOptions tiny;
+    tiny.budget_bytes = 400 * 768;  // 400 bricks of the 7,625 (125 per step)
+    tiny.prefetch = prefetch;
+    BrickCache cache(*series, tiny);
+    const PathSurfaceResult r = build_path_surface(cache, seed, 8, o);
+    INFO("prefetch " << prefetch << ": " << r.path.message);
+    REQUIRE(r.path.complete);
+    CHECK(r.path.cache.peak_bytes <= tiny.budget_bytes);
+    CHECK(r.path.cache.units_touched < 125 * times.size() / 2);
+    REQUIRE(r.mesh.vertex_count() == reference.mesh.vertex_count());
+    REQUIRE(r.mesh.faces.size() == reference.mesh.faces.size());
+    for (std::size_t i = 0; i < r.mesh.vertex_count(); ++i)
+      REQUIRE(same_bits(r.mesh.positions[i], reference.mesh.positions[i]));
+    for (std::size_t f = 0; f < r.mesh.faces.size(); ++f)
+      REQUIRE(r.mesh.faces[f].v == reference.mesh.faces[f].v);
+  }
+}
+
+namespace {
+// Forwards to a series and fails one step's bricks, as a damaged file would.
+class FailingSeries final : public io::TimeSeries {
+ public:
+  FailingSeries(const io::TimeSeries& inner, std::size_t bad_step) : inner_(inner), bad_(bad_step) {}
+  std::size_t step_count() const override { return inner_.step_count(); }
+  double time(std::size_t step) const override { return inner_.time(step); }
+  const GridGeometry& geometry() const override { return inner_.geometry(); }
+  int components() const override { return inner_.components(); }
+  std::string describe() const override { return inner_.describe(); }
+  io::RawStep read_raw(std::size_t step) const override { return inner_.read_raw(step); }
+  void decode(const io::RawStep& raw, std::span<float> v) const override { inner_.decode(raw, v); }
+  io::BrickLayout bricks() const override { return inner_.bricks(); }
+  io::RawStep read_raw_brick(std::size_t step, std::size_t brick) const override {
+    if (step == bad_)
+      throw io::FormatError("gyre.h5: step " + std::to_string(step) + " of '/velocity', brick " +
+                            std::to_string(brick) + ": damaged Blosc data");
+    return inner_.read_raw_brick(step, brick);
+  }
+  void decode_brick(const io::RawStep& raw, std::span<float> v) const override {
+    inner_.decode_brick(raw, v);
+  }
+
+ private:
+  const io::TimeSeries& inner_;
+  std::size_t bad_;
+};
+}  // namespace
+
+TEST_CASE("a corrupt brick mid-run stops the surface, names file, step and brick, keeps the "
+          "partial surface",
+          "[spacetime][bricks][path]") {
+  TempDir dir("corrupt");
+  const auto flow = make_unsteady_field("double-gyre");
+  const GridGeometry g = uniform_grid(flow->domain(), 2, 41);
+  const std::vector<double> times = uniform_times(0, 10, 100);
+  const SampledTimeSeries memory(*flow, g, times, 2);
+  const auto file = dir.path() / "gyre.h5";
+  {
+    io::Hdf5WriteOptions w;
+    w.brick_size = 8;
+    w.zero_is_no_data = false;
+    io::Hdf5SeriesWriter writer(file, g, 2, times, w);
+    std::vector<float> values(memory.step_floats());
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      memory.sample(k, values.data());
+      writer.write_step(values);
+    }
+    writer.commit();
+  }
+  const auto series = io::open_hdf5_series(file);
+  FailingSeries failing(*series, 30);
+  CacheOptions co;
+  co.budget_bytes = 4 << 20;
+  BrickCache cache(failing, co);
+  PathSurfaceOptions o;
+  o.t0 = 0;
+  o.t1 = 6;
+  o.engine.edge = 0.05;
+  o.engine.max_steps = 100000;
+  const PathSurfaceResult r =
+      build_path_surface(cache, SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0)), 8, o);
+  CHECK_FALSE(r.path.complete);
+  CHECK_FALSE(r.report.complete);
+  CHECK_THAT(r.path.message, Catch::Contains("time step 30, brick") &&
+                                 Catch::Contains("gyre.h5") && Catch::Contains("damaged"));
+  CHECK(r.mesh.vertex_count() > 50);
+  CHECK(r.path.time_reached < 3.0 + 1e-9);
+}
+
+TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the whole-step cache "
+          "cannot use",
+          "[spacetime][bricks][path]") {
+  // Same shape as the README recipe (double-gyre-3d, 2:1:1 grid, 201 steps to t = 20, seed line
+  // at mid-depth), 8x fewer points per axis, budget scaled with the data.
+  TempDir dir("recipe");
+  const auto flow = make_unsteady_field("double-gyre-3d");
+  GridGeometry g = uniform_grid(flow->domain(), 3, 2);
+  g.size = {32, 16, 16};
+  for (int a = 0; a < 3; ++a)
+    g.spacing[a] = flow->domain().extent()[a] / static_cast<double>(g.size[static_cast<std::size_t>(a)] - 1);
+  const std::vector<double> times = uniform_times(0, 20, 200);
+  const SampledTimeSeries memory(*flow, g, times);
+  const auto file = dir.path() / "gyre.h5";
+  {
+    io::Hdf5WriteOptions w;
+    w.brick_size = 4;
+    w.zero_is_no_data = false;
+    w.xdmf = false;
+    io::Hdf5SeriesWriter writer(file, g, 3, times, w);
+    std::vector<float> values(memory.step_floats());
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      memory.sample(k, values.data());
+      writer.write_step(values);
+    }
+    writer.commit();
+  }
+  const auto series = io::open_hdf5_series(file);
+  PathSurfaceOptions o;
+  o.t0 = 0;
+  o.t1 = 20;
+  o.engine.edge = 0.04;
+  o.engine.max_steps = 100000;
+  const SeedCurve seed = SeedCurve::line(Vec3(0.1, 0.5, 0.5), Vec3(0.6, 0.5, 0.5));
+  CacheOptions co;
+  co.budget_bytes = 10 * series->step_bytes();  // 5 % of the series
+  BrickCache bricks(*series, co);
+  const PathSurfaceResult r = build_path_surface(bricks, seed, 20, o);
+  INFO(r.path.message);
+  REQUIRE(r.path.complete);
+  CHECK(r.path.time_reached >= 19.9);
+  CHECK(r.path.cache.peak_bytes <= co.budget_bytes);
+  CHECK(r.path.cache.read_amplification() < 1.5);
+  co.whole_steps = true;
+  co.max_live_tokens = 1;
+  BrickCache steps(*series, co);
+  const PathSurfaceResult s = build_path_surface(steps, seed, 20, o);
+  CHECK_FALSE(s.path.complete);  // the front's time band holds more steps than fit
+  CHECK_THAT(s.path.message, Catch::Contains("raise --cache-budget"));
+}
