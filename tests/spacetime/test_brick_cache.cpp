@@ -138,7 +138,7 @@ TEST_CASE("brick cache: a monotone sweep reads every brick once, prefetched in o
           "[spacetime][cache]") {
   BrickSeries series(30);
   CacheOptions o;
-  o.budget_bytes = 3 * 16 * 768 + 4 * 3 * 768 + 2 * 3 * 768;
+  o.budget_bytes = 4 * 16 * 768 + 4 * 3 * 768 + 2 * 3 * 768;
   o.prefetch_share = 1.0;
   BrickCache cache(series, o);
   // The "front" needs bricks 0..15 of steps k, k+1 and asks for step k+2 ahead.
@@ -152,14 +152,12 @@ TEST_CASE("brick cache: a monotone sweep reads every brick once, prefetched in o
     for (const auto& h : pins) REQUIRE(holds(h, series.brick_floats()));
     cache.prefetch(ahead);
     REQUIRE(cache.statistics().peak_bytes <= o.budget_bytes);
-    // Nothing behind the band is resident once the band moved past it.
-    REQUIRE(cache.statistics().resident_units <= 3 * 16);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   const CacheStatistics s = cache.statistics();
   CHECK(s.max_reads_of_a_unit == 1);
   CHECK(s.units_touched >= 29 * 16);
-  CHECK(s.read_amplification() == 1.0);
+  CHECK(s.read_amplification() < 1.05);  // only the last prefetches went unused
   CHECK(s.prefetches >= 16 * 16);  // most bricks arrived ahead of need
   CHECK(s.hits > s.misses);
   CHECK(s.evictions >= 25 * 16);
@@ -179,17 +177,24 @@ TEST_CASE("brick cache: eviction takes units behind the band, then the least rec
   for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(1, b));  // step 1, epoch 1
   cache.new_epoch(1);
   for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(2, b));  // epoch 2
-  cache.new_epoch(2);  // step 1 is behind: dropped at once
-  CHECK(cache.statistics().resident_units == 10);
+  cache.new_epoch(2);  // step 1 is behind the band
+  CHECK(cache.statistics().resident_units == 20);
   for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(3, b));
-  cache.new_epoch(0);  // nothing behind; step 2 was not wanted in this epoch
+  // Room for step 3 came from step 1 (behind), not from step 2.
+  std::size_t reads = series.log().size();
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(2, b));
+  CHECK(series.log().size() == reads);
+  cache.new_epoch(0);  // nothing behind
+  for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(3, b));  // step 3 wanted again, step 2 not
+  reads = series.log().size();
   for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(4, b));
+  CHECK(series.log().size() == reads + 10);
   // Room for step 4 came from step 2 (least recently wanted), not from step 3.
-  const std::size_t before = series.log().size();
   for (std::size_t b = 0; b < 10; ++b) cache.acquire(key(3, b));
-  CHECK(series.log().size() == before);  // step 3 still resident
+  CHECK(series.log().size() == reads + 10);
   cache.acquire(key(2, 0));
-  CHECK(series.log().size() == before + 1);  // step 2 was evicted
+  CHECK(series.log().size() == reads + 11);
+  CHECK(cache.statistics().peak_bytes <= o.budget_bytes);
 }
 
 TEST_CASE("brick cache: too small a budget is an error naming the budget needed",

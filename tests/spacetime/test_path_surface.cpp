@@ -221,10 +221,12 @@ TEST_CASE("path surface: streamed through a narrow band under a budget", "[space
   SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 101), uniform_times(0, 10, 100));
   CacheOptions co;
   co.budget_bytes = 30 * series.step_bytes();
+  co.max_live_tokens = 2;  // each whole step in flight reserves 3 steps of room
   BrickCache cache(series, co);
   PathSurfaceOptions o = path_options(0.0, 6.0, 0.05);
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0));
   const PathSurfaceResult r = build_path_surface(cache, seed, 8, o);
+  INFO(r.path.message);
   REQUIRE(r.path.complete);
   CHECK(r.path.streamed);
   CHECK(r.path.time_reached == Approx(6.0).epsilon(1e-3));

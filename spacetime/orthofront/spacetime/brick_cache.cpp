@@ -308,18 +308,7 @@ void BrickCache::new_epoch(std::size_t first_step) {
   std::lock_guard lock(mutex_);
   ++epoch_;
   first_step_ = first_step;
-  if (options_.retain) return;
-  // Units behind the band are dropped at once: a forward front never needs them again.
-  for (auto it = entries_.begin(); it != entries_.end();) {
-    const std::size_t step = it->first / layout_.bricks();
-    if (step < first_step && it->second.state == State::ready && it->second.pins == 0) {
-      resident_ -= it->second.values.size() * sizeof(float);
-      it = entries_.erase(it);
-      ++stats_.evictions;
-    } else {
-      ++it;
-    }
-  }
+  // Units behind the band stay until room is needed; they are then the first to go.
 }
 
 void BrickCache::release(BrickKey key) {
