@@ -5,7 +5,6 @@
 // so its peak RSS is its own, and the meshes they write are compared byte for byte.
 #include <fcntl.h>
 #include <spawn.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -43,6 +42,7 @@ struct BenchArgs {
   double edge = 0.004;
   int seed_count = 40;
   std::string codec = "lz4";
+  std::string whole_step_budget = "12GiB";
   std::int64_t brick = 32;
   bool keep = false;
 };
@@ -64,6 +64,15 @@ std::string read_file(const std::filesystem::path& path) {
   in.seekg(0);
   in.read(text.data(), static_cast<std::streamsize>(text.size()));
   return text;
+}
+
+// Drops the file's pages from the page cache, so every run reads from the disk.
+void drop_page_cache(const std::filesystem::path& file) {
+  const int fd = ::open(file.c_str(), O_RDONLY);
+  if (fd < 0) return;
+  ::fdatasync(fd);
+  ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
+  ::close(fd);
 }
 
 // Runs `orthofront path ARGS` as a child process; returns its exit code and peak RSS.
@@ -92,15 +101,16 @@ Run run_child(const std::string& name, const std::vector<std::string>& args,
     throw Error("bench-path: cannot start a child process for run '" + name + "'");
   posix_spawn_file_actions_destroy(&actions);
   int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
+  waitpid(pid, &status, 0);
   r.wall = since(t0);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.rss_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
   r.note = read_file(log);
   while (!r.note.empty() && (r.note.back() == '\n' || r.note.back() == '\r')) r.note.pop_back();
   if (const auto cut = r.note.rfind('\r'); cut != std::string::npos) r.note = r.note.substr(cut + 1);
   if (std::filesystem::exists(report)) r.report = nlohmann::json::parse(read_file(report));
+  // The child's own high-water mark (getrusage's ru_maxrss would carry the parent's over exec).
+  if (r.report.contains("process"))
+    r.rss_mib = r.report["process"].value("peak_rss_bytes", 0.0) / (1024.0 * 1024.0);
   r.mesh = read_file(mesh);
   return r;
 }
@@ -135,6 +145,9 @@ void add_bench_path_command(CLI::App& app) {
   c->add_option("--codec", a->codec, "Compression of the series: none, gzip, lz4, zstd")
       ->capture_default_str();
   c->add_option("--brick", a->brick, "Brick edge in points")->capture_default_str();
+  c->add_option("--whole-step-budget", a->whole_step_budget,
+                "Budget of a second whole-step run that states what that cache needs")
+      ->capture_default_str();
   c->add_option("--series", a->series, "Use this existing series instead of generating one");
   c->add_option("--json", a->json, "Write the results as JSON here");
   c->add_flag("--keep", a->keep, "Keep the generated series and the runs' outputs");
@@ -225,11 +238,13 @@ void add_bench_path_command(CLI::App& app) {
       std::printf("running: brick cache + prefetch, brick cache on demand, whole-step cache, "
                   "in memory ...\n");
       std::fflush(stdout);
-      runs.push_back(run_child("brick+prefetch", with({"--cache-budget", a->budget}), work));
-      runs.push_back(
-          run_child("brick on-demand", with({"--cache-budget", a->budget, "--no-prefetch"}), work));
-      runs.push_back(
-          run_child("whole-step", with({"--cache-budget", a->budget, "--cache-unit", "step"}), work));
+      const auto cold_run = [&](const std::string& name, const std::vector<std::string>& extra) {
+        drop_page_cache(file);
+        runs.push_back(run_child(name, with(extra), work));
+      };
+      cold_run("brick+prefetch", {"--cache-budget", a->budget});
+      cold_run("brick on-demand", {"--cache-budget", a->budget, "--no-prefetch"});
+      cold_run("whole-step", {"--cache-budget", a->budget, "--cache-unit", "step"});
       // In memory: every brick the surface touches, kept; the second build reads nothing.
       const double touched_bytes =
           runs[0].report.contains("path")
@@ -237,8 +252,9 @@ void add_bench_path_command(CLI::App& app) {
                     runs[0].report["path"]["cache"].value("unit_bytes", 0.0)
               : 0.0;
       const auto memory_budget = static_cast<std::size_t>(touched_bytes * 1.2) + (std::size_t{1} << 30);
-      runs.push_back(run_child(
-          "in-memory", with({"--cache-budget", std::to_string(memory_budget), "--warm"}), work));
+      cold_run("in-memory", {"--cache-budget", std::to_string(memory_budget), "--warm"});
+      cold_run("whole-step " + a->whole_step_budget,
+               {"--cache-budget", a->whole_step_budget, "--cache-unit", "step"});
 
       // The I/O floor: read + decode of exactly the bricks the surface needs, from the streamed
       // run's own measurement of each brick read once.
@@ -259,14 +275,17 @@ void add_bench_path_command(CLI::App& app) {
         const nlohmann::json& cache = p["cache"];
         const double total = p["seconds"]["total"], wait = p["seconds"]["wait"];
         const double io_s = p["seconds"]["io"], decode = p["seconds"]["decode"];
-        const double floor = io_s + decode;  // of the units read, each read once when read/need = 1
+        // Read + decode of the bricks this run read (the bricks it needed, when read/need = 1);
+        // the in-memory run's figures are those of its first, untimed build.
+        const bool warm = r.name == "in-memory";
+        const double floor = warm ? 0.0 : io_s + decode;
         const std::string same =
             runs[0].mesh.empty() ? "-" : (r.mesh == runs[0].mesh ? "identical" : "DIFFERS");
         std::printf("%-16s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %10.3f %8zu %10s %7.0f MiB %9zu  %s\n",
                     r.name.c_str(), total, floor, total - wait, wait, io_s, decode,
                     cache["read_amplification"].get<double>(), cache["units_touched"].get<std::size_t>(),
                     spacetime::format_bytes(cache["peak_bytes"].get<std::size_t>()).c_str(),
-                    r.rss_mib, r.report["vertices"].get<std::size_t>(), same.c_str());
+                    r.rss_mib, r.report["counts"]["vertices"].get<std::size_t>(), same.c_str());
         row["total_seconds"] = total;
         row["io_floor_seconds"] = floor;
         row["compute_seconds"] = total - wait;
@@ -278,7 +297,7 @@ void add_bench_path_command(CLI::App& app) {
         row["read_amplification"] = cache["read_amplification"];
         row["bricks_touched"] = cache["units_touched"];
         row["peak_cache_bytes"] = cache["peak_bytes"];
-        row["vertices"] = r.report["vertices"];
+        row["vertices"] = r.report["counts"]["vertices"];
         row["time_reached"] = p["time_reached"];
         row["complete"] = p["complete"];
         row["mesh_identical_to_first"] = same == "identical";
@@ -286,7 +305,10 @@ void add_bench_path_command(CLI::App& app) {
       }
       if (first.contains("path")) {
         const nlohmann::json& p = first["path"];
-        const double floor = p["seconds"]["io"].get<double>() + p["seconds"]["decode"].get<double>();
+        // I/O floor: the on-demand run reads exactly the bricks needed, each once.
+        const nlohmann::json& demand = runs[1].report.contains("path") ? runs[1].report["path"] : p;
+        const double floor =
+            demand["seconds"]["io"].get<double>() + demand["seconds"]["decode"].get<double>();
         const double compute = runs[3].report.contains("path")
                                    ? runs[3].report["path"]["seconds"]["total"].get<double>()
                                    : 0.0;

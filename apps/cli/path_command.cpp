@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -22,11 +23,22 @@
 namespace orthofront::cli {
 
 namespace {
+// This process's peak resident set (VmHWM), 0 where /proc is not available.
+std::size_t peak_rss_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;
+  return 0;
+}
+}  // namespace
+
+namespace {
 
 struct PathArgs {
   std::string field, seed, out, report, budget = "512MiB";
   int seed_count = 20;
-  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0;
+  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 0.5;
   bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
   StreamSurfaceOptions options;
@@ -105,6 +117,11 @@ void add_path_command(CLI::App& app) {
                 "Bound the front's time band (time units; 0: none): vertices further behind keep "
                 "pace, so long runs fit a small cache")
       ->check(CLI::NonNegativeNumber);
+  c->add_option("--band-ramp", args->band_ramp,
+                "With --max-band: share of the bound over which lagging vertices' alpha ramps up "
+                "smoothly (0: a hard switch at the bound)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   c->add_flag("--spacetime-out", args->spacetime_out,
               "2D flows: write positions (x, y, t) instead of (x, y, 0)");
   add_engine_flags(*c, args->options);
@@ -128,6 +145,7 @@ void add_path_command(CLI::App& app) {
     o.t1 = args->t1;
     o.time_scale = args->time_scale;
     o.max_band = args->max_band;
+    o.engine.lag_ramp = args->band_ramp;
     PathStatus status;
     o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
 
@@ -174,6 +192,7 @@ void add_path_command(CLI::App& app) {
       report["complete"] = result.report.complete;
       report["path"] = spacetime::to_json(result.path);
       report["path"]["spacetime_out"] = args->spacetime_out;
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}};
       io::write_json(report, args->report);
     }
     const spacetime::PathReport& pr = result.path;

@@ -489,8 +489,10 @@ class Engine {
     }
   }
 
-  /// The lag bound: vertices far behind the lead along lag_axis take the front's largest α, so
-  /// they keep pace instead of falling further behind (see StreamSurfaceOptions::max_lag).
+  /// The lag bound: vertices behind the lead along lag_axis have their α raised towards the
+  /// front's largest α, smoothly from lag (1 - lag_ramp)·max_lag to all of it at max_lag, so they
+  /// keep pace instead of falling further behind while neighbours' α differ little (a step in α
+  /// between neighbours tilts the front and folds it; see StreamSurfaceOptions::max_lag).
   void raise_lagging(const Front<N>& f) {
     const std::size_t n = f.v.size();
     double lead = -std::numeric_limits<double>::infinity();
@@ -499,11 +501,18 @@ class Engine {
       lead = std::max(lead, f.v[i].x[opt_.lag_axis]);
       alpha_max = std::max(alpha_max, alpha_[i]);
     }
+    const double ramp = std::clamp(opt_.lag_ramp, 0.0, 1.0) * opt_.max_lag;
+    const double start = opt_.max_lag - ramp;
     for (std::size_t i = 0; i < n; ++i) {
-      if (f.v[i].x[opt_.lag_axis] < lead - opt_.max_lag && alpha_[i] < alpha_max) {
-        alpha_[i] = alpha_max;
-        ++report_.lag_raised_alpha;
+      const double lag = lead - f.v[i].x[opt_.lag_axis];
+      if (lag <= start || alpha_[i] >= alpha_max) continue;
+      double w = 1.0;
+      if (ramp > 0 && lag < opt_.max_lag) {
+        const double u = (lag - start) / ramp;
+        w = u * u * (3 - 2 * u);  // smoothstep: no kink where the ramp begins or ends
       }
+      alpha_[i] += w * (alpha_max - alpha_[i]);
+      ++report_.lag_raised_alpha;
     }
   }
 

@@ -59,6 +59,9 @@ struct StreamSurfaceOptions {
   /// axis (the time band of a lifted field) stays near max_lag. lag_axis < 0: off.
   int lag_axis = -1;
   double max_lag = 0;
+  /// Share of max_lag over which α ramps up smoothly to the front's largest (0: a hard switch at
+  /// max_lag, the first version of the bound).
+  double lag_ramp = 0.5;
 
   bool rip = true;
   double rip_sharpness = 0.5;        ///< 1 - (α_{i-1} + α_{i+1}) / (2 α_i) above this ...

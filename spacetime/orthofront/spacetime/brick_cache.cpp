@@ -298,7 +298,8 @@ void BrickCache::prefetch(std::span<const BrickKey> keys) {
     // Keep room for the loads the front demands besides the prefetched units.
     const auto share = static_cast<std::size_t>(options_.prefetch_share *
                                                  static_cast<double>(options_.budget_bytes));
-    if (accounted() + 2 * load_reserve_ > share && !evict_one(true)) break;
+    while (accounted() + 2 * load_reserve_ > share)
+      if (!evict_one(true)) break;
     if (accounted() + 2 * load_reserve_ > share) break;
     if (!start_load(key, true)) break;
   }

@@ -297,7 +297,9 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
     ++stamp_epoch_;
     for (const FrontSample& f : front) {
       const double lifted_speed = std::hypot(f.v.norm(), p.time_scale);
-      const double reach = 1.5 * p.edge * horizon;
+      // Pinned units must cover the next steps for sure; prefetched ones are a guess, and a
+      // guess too far ahead reads bricks the front never samples.
+      const double reach = (horizon <= p.pinned_steps ? 1.5 : 1.0) * p.edge * horizon;
       const Vec3 ahead = f.x + f.v * (reach / lifted_speed);
       const double t_ahead = f.t + reach / lifted_speed;
       const double margin = 1.5 * p.edge;

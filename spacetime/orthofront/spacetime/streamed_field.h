@@ -33,7 +33,7 @@ struct BandPrediction {
   double edge = 0;          ///< ℓ: a front step moves a vertex at most about ℓ in (x, c t)
   double time_scale = 1;    ///< c of the lifted coordinate
   int pinned_steps = 2;     ///< front steps whose samples are pinned before the step runs
-  int prefetch_steps = 4;   ///< front steps whose samples are prefetched
+  int prefetch_steps = 8;   ///< front steps whose samples are prefetched
   double back_time = 0;     ///< time below a vertex's that it may still sample
 };
 
