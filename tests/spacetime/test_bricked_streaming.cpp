@@ -346,7 +346,16 @@ TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the w
   REQUIRE(r.path.complete);
   CHECK(r.path.time_reached >= 19.9);
   CHECK(r.path.cache.peak_bytes <= co.budget_bytes);
-  CHECK(r.path.cache.read_amplification() < 1.5);
+  CHECK(r.path.cache.read_amplification() < 2.5);  // prefetch guesses, timing-dependent
+  // On demand, only the bricks the front samples are read, and (nearly) each once.
+  co.prefetch = false;
+  BrickCache on_demand(*series, co);
+  const PathSurfaceResult d = build_path_surface(on_demand, seed, 20, o);
+  REQUIRE(d.path.complete);
+  INFO("on-demand read amplification " << d.path.cache.read_amplification());
+  CHECK(d.path.cache.read_amplification() < 1.2);
+  CHECK(d.mesh.positions == r.mesh.positions);
+  co.prefetch = true;
   co.whole_steps = true;
   co.max_live_tokens = 1;
   BrickCache steps(*series, co);
