@@ -8,6 +8,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <tbb/parallel_for.h>
+
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -45,6 +48,7 @@ struct BenchArgs {
   std::string whole_step_budget = "12GiB";
   std::int64_t brick = 32;
   bool keep = false;
+  bool layout_sweep = false;
 };
 
 struct Run {
@@ -123,6 +127,114 @@ io::Hdf5Codec parse_codec(const std::string& text) {
   throw InvalidArgument("--codec '" + text + "' is not none, gzip, lz4 or zstd");
 }
 
+// --layout-sweep: the same (smaller) series written with each codec and brick size; size on disk,
+// write time, cold read and parallel decode rates of every brick, and a path surface through it.
+void layout_sweep(const BenchArgs& a) {
+  const auto flow = make_unsteady_field("double-gyre-3d");
+  GridGeometry grid = spacetime::uniform_grid(flow->domain(), 3, 2);
+  const std::array<std::int64_t, 3> size{256, 128, 128};
+  for (std::size_t i = 0; i < 3; ++i) {
+    grid.size[i] = size[i];
+    grid.spacing[static_cast<int>(i)] =
+        flow->domain().extent()[static_cast<int>(i)] / static_cast<double>(size[i] - 1);
+  }
+  const std::size_t steps = 24;
+  const std::vector<double> times = spacetime::uniform_times(0, 0.5 * (steps - 1), steps - 1);
+  const spacetime::SampledTimeSeries source(*flow, grid, times);
+  const std::filesystem::path work =
+      std::filesystem::path(a.dir) / ("orthofront-layout-sweep-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(work);
+  struct Layout {
+    std::string codec;
+    std::int64_t brick;
+  };
+  const std::vector<Layout> layouts{{"none", 32}, {"gzip", 32}, {"zstd", 32},
+                                    {"lz4", 32},  {"lz4", 16},  {"lz4", 64}};
+  nlohmann::json out = nlohmann::json::array();
+  std::printf("series: %zu steps of 256x128x128 (%s of floats); path surface as bench-path's, "
+              "budget %s\n\n", steps,
+              spacetime::format_bytes(source.step_bytes() * steps).c_str(), a.budget.c_str());
+  std::printf("%-6s %6s %10s %7s %8s %12s %14s %9s %8s %9s\n", "codec", "brick", "on disk", "ratio",
+              "write s", "read MB/s", "decode MB/s", "path s", "wait s", "read/need");
+  try {
+    for (const Layout& l : layouts) {
+      const std::filesystem::path file = work / (l.codec + "-" + std::to_string(l.brick) + ".h5");
+      auto t = Clock::now();
+      {
+        io::Hdf5WriteOptions w;
+        w.codec = parse_codec(l.codec);
+        w.gzip_level = l.codec == "gzip" ? 1 : 0;
+        w.brick_size = l.brick;
+        w.zero_is_no_data = false;
+        w.xdmf = false;
+        io::Hdf5SeriesWriter writer(file, grid, 3, times, w);
+        std::vector<float> values(source.step_floats());
+        for (std::size_t k = 0; k < steps; ++k) {
+          source.sample(k, values.data());
+          writer.write_step(values);
+        }
+        writer.commit();
+      }
+      const double write = since(t);
+      const auto stored = std::filesystem::file_size(file);
+      const auto series = io::open_hdf5_series(file);
+      const io::BrickLayout bricks = series->bricks();
+      // Cold serial reads of every brick of 8 steps, then their decode on all threads.
+      drop_page_cache(file);
+      std::vector<io::RawStep> raw;
+      std::size_t raw_bytes = 0;
+      t = Clock::now();
+      for (std::size_t k = 0; k < 8; ++k)
+        for (std::size_t b = 0; b < bricks.bricks(); ++b) {
+          raw.push_back(series->read_raw_brick(k, b));
+          raw_bytes += raw.back().bytes.size();
+        }
+      const double read = since(t);
+      t = Clock::now();
+      tbb::parallel_for(std::size_t{0}, raw.size(), [&](std::size_t i) {
+        std::vector<float> values(series->brick_floats());
+        series->decode_brick(raw[i], values);
+      });
+      const double decode = since(t);
+      raw.clear();
+      const double decoded_mb = static_cast<double>(series->brick_floats() * sizeof(float) *
+                                                    bricks.bricks() * 8) / 1e6;
+      drop_page_cache(file);
+      const Run r = run_child(
+          l.codec + "-" + std::to_string(l.brick),
+          {"--field", file.string(), "--seed", "line:0.3,0.25,0.3:0.9,0.7,0.6", "--seed-count",
+           std::to_string(a.seed_count), "--t0", "0", "--t1", std::to_string(times.back()),
+           "--edge", std::to_string(a.edge), "--steps", "1000000", "--cache-budget", a.budget},
+          work);
+      double total = 0, wait = 0, amplification = 0;
+      if (r.report.contains("path")) {
+        total = r.report["path"]["seconds"]["total"];
+        wait = r.report["path"]["seconds"]["wait"];
+        amplification = r.report["path"]["cache"]["read_amplification"];
+      }
+      std::printf("%-6s %6lld %10s %7.2f %8.1f %12.0f %14.0f %9.2f %8.2f %9.3f%s\n", l.codec.c_str(),
+                  static_cast<long long>(l.brick), spacetime::format_bytes(stored).c_str(),
+                  static_cast<double>(source.step_bytes() * steps) / static_cast<double>(stored),
+                  write, static_cast<double>(raw_bytes) / 1e6 / read, decoded_mb / decode, total,
+                  wait, amplification, r.exit_code == 0 ? "" : (" failed: " + r.note).c_str());
+      std::fflush(stdout);
+      out.push_back({{"codec", l.codec}, {"brick", l.brick}, {"stored_bytes", stored},
+                     {"write_seconds", write}, {"read_mb_per_s", static_cast<double>(raw_bytes) / 1e6 / read},
+                     {"decode_mb_per_s", decoded_mb / decode}, {"path_seconds", total},
+                     {"path_wait_seconds", wait}, {"read_amplification", amplification},
+                     {"exit_code", r.exit_code}});
+      std::filesystem::remove(file);
+    }
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove_all(work, ignored);
+    throw;
+  }
+  std::error_code ignored;
+  std::filesystem::remove_all(work, ignored);
+  if (!a.json.empty()) io::write_json(nlohmann::json{{"layout_sweep", out}}, a.json);
+}
+
 }  // namespace
 
 void add_bench_path_command(CLI::App& app) {
@@ -151,7 +263,11 @@ void add_bench_path_command(CLI::App& app) {
   c->add_option("--series", a->series, "Use this existing series instead of generating one");
   c->add_option("--json", a->json, "Write the results as JSON here");
   c->add_flag("--keep", a->keep, "Keep the generated series and the runs' outputs");
+  c->add_flag("--layout-sweep", a->layout_sweep,
+              "Instead: compare codecs (none, gzip, zstd, lz4) and brick sizes (16, 32, 64) on a "
+              "1.1 GiB series: size, write, read and decode rates, path surface time");
   c->callback([a]() {
+    if (a->layout_sweep) return layout_sweep(*a);
     const auto flow = make_unsteady_field("double-gyre-3d");
     GridGeometry grid = spacetime::uniform_grid(flow->domain(), 3, 2);
     for (std::size_t i = 0; i < 3; ++i) {

@@ -38,7 +38,7 @@ namespace {
 struct PathArgs {
   std::string field, seed, out, report, budget = "512MiB";
   int seed_count = 20;
-  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 0.5;
+  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
   bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
   StreamSurfaceOptions options;

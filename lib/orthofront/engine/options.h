@@ -61,7 +61,7 @@ struct StreamSurfaceOptions {
   double max_lag = 0;
   /// Share of max_lag over which α ramps up smoothly to the front's largest (0: a hard switch at
   /// max_lag, the first version of the bound).
-  double lag_ramp = 0.5;
+  double lag_ramp = 1.0;
 
   bool rip = true;
   double rip_sharpness = 0.5;        ///< 1 - (α_{i-1} + α_{i+1}) / (2 α_i) above this ...
