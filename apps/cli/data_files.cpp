@@ -44,7 +44,12 @@ DataFile open_hdf5(const DataFileSpec& spec) {
   file.details.emplace_back("samples", d.dataset + " (" + d.stored_type + ")");
   std::string storage = to_string(d.storage);
   const std::int64_t slices = d.geometry.dimension == 3 ? d.geometry.size[2] : d.geometry.size[1];
-  if (d.chunk_slices >= slices)
+  if (d.storage == io::Hdf5Storage::bricked) {
+    const io::BrickLayout b = series->bricks();
+    storage += ", bricks of " + std::to_string(b.size[0]) + " x " + std::to_string(b.size[1]) +
+               (d.geometry.dimension == 3 ? " x " + std::to_string(b.size[2]) : std::string()) +
+               " points (" + std::to_string(b.bricks()) + " per step)";
+  } else if (d.chunk_slices >= slices)
     storage += ", one chunk per step";
   else if (d.chunk_slices > 0)
     storage += ", chunks of " + std::to_string(d.chunk_slices) +

@@ -1,11 +1,10 @@
 #include "orthofront/io/vdb_field.h"
 
-#include <openvdb/tools/Interpolation.h>
-
 #include <array>
 #include <cmath>
 #include <sstream>
 
+#include "orthofront/field/multilinear.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/vdb_detail.h"
 #include "orthofront/io/vdb_grid.h"
@@ -39,45 +38,20 @@ bool cell_along(double q, double lo, double hi, int& i0, double& t) {
   return true;
 }
 
-/// Fetches the 8 voxels of the cell at `ijk` as doubles; false when one is inactive or NaN.
+/// Fetches the 8 voxels of the cell at `ijk` as doubles, corner (bx, by, bz) at bx | by << 1 |
+/// bz << 2; false when one is inactive or NaN.
 template <typename Accessor>
 bool fetch(const Accessor& acc, const openvdb::Coord& ijk, bool planar,
-           openvdb::Vec3d (&data)[2][2][2]) {
+           openvdb::Vec3d (&data)[8]) {
   typename Accessor::ValueType value;
-  for (int a = 0; a < 2; ++a) {
-    for (int b = 0; b < 2; ++b) {
-      for (int c = 0; c < 2; ++c) {
-        const openvdb::Coord at = ijk.offsetBy(a, b, planar ? 0 : c);
-        if (!acc.probeValue(at, value)) return false;
-        const openvdb::Vec3d d(value[0], value[1], value[2]);
-        if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2])) return false;
-        data[a][b][c] = d;
-      }
-    }
+  for (int corner = 0; corner < (planar ? 4 : 8); ++corner) {
+    const openvdb::Coord at = ijk.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+    if (!acc.probeValue(at, value)) return false;
+    const openvdb::Vec3d d(value[0], value[1], value[2]);
+    if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2])) return false;
+    data[corner] = d;
   }
   return true;
-}
-
-/// The exact derivative of BoxSampler's trilinear interpolant along index axis `axis`.
-openvdb::Vec3d trilinear_derivative(const openvdb::Vec3d (&d)[2][2][2], const openvdb::Vec3d& t, int axis) {
-  openvdb::Vec3d sum(0.0);
-  for (int a = 0; a < 2; ++a) {
-    for (int b = 0; b < 2; ++b) {
-      for (int c = 0; c < 2; ++c) {
-        const int idx[3] = {a, b, c};
-        double w = 1.0;
-        for (int k = 0; k < 3; ++k) {
-          if (k == axis) {
-            w *= idx[k] == 1 ? 1.0 : -1.0;
-          } else {
-            w *= idx[k] == 1 ? t[k] : 1.0 - t[k];
-          }
-        }
-        sum += d[a][b][c] * w;
-      }
-    }
-  }
-  return sum;
 }
 
 }  // namespace
@@ -104,21 +78,29 @@ FieldStatus VdbField::Impl::evaluate(const GridT& g, const Vec3& x, Vec3& v, Mat
                       hi[static_cast<std::size_t>(a)] + (staggered && a == comp ? 1.0 : 0.0), ijk[a], t[a]))
         return FieldStatus::no_data;
     }
-    openvdb::Vec3d data[2][2][2];
+    openvdb::Vec3d data[8];
     if (!fetch(acc, openvdb::Coord(ijk[0], ijk[1], ijk[2]), planar, data)) return FieldStatus::no_data;
-    const openvdb::Vec3d value = openvdb::tools::BoxSampler::trilinearInterpolation(data, t);
+    // The project's one multilinear kernel, in index space (cells of width 1).
+    const multilinear::AxisCell cells[3] = {{ijk[0], t[0], 1.0}, {ijk[1], t[1], 1.0},
+                                            {ijk[2], t[2], 1.0}};
+    const auto corner = [&data](int bx, int by, int bz) {
+      return data[bx | by << 1 | bz << 2].asPointer();
+    };
+    Vec3 value;
+    Mat3 derivative;
+    Mat3* d = J != nullptr ? &derivative : nullptr;
+    if (planar) {
+      if (d) multilinear::interpolate<2, 3, true>(corner, cells, value, d);
+      else multilinear::interpolate<2, 3, false>(corner, cells, value, d);
+    } else {
+      if (d) multilinear::interpolate<3, 3, true>(corner, cells, value, d);
+      else multilinear::interpolate<3, 3, false>(corner, cells, value, d);
+    }
     for (int r = 0; r < 3; ++r) {
       if (staggered && r != comp) continue;
       v[r] = value[r];
-    }
-    if (J != nullptr) {
-      for (int a = 0; a < (planar ? 2 : 3); ++a) {
-        const openvdb::Vec3d d = trilinear_derivative(data, t, a);
-        for (int r = 0; r < 3; ++r) {
-          if (staggered && r != comp) continue;
-          J_index(r, a) = d[r];
-        }
-      }
+      if (d)
+        for (int a = 0; a < (planar ? 2 : 3); ++a) J_index(r, a) = derivative(r, a);
     }
   }
   if (grid.components == 2) v[2] = 0.0;

@@ -41,15 +41,15 @@ inline AxisCell locate_rectilinear(double x, const std::vector<double>& axis,
   return {i, (x - axis[static_cast<std::size_t>(i)]) * w, w};
 }
 
-/// Interpolates `Components` floats per corner; `corner(bx, by, bz)` returns a pointer to the
-/// components of corner (i + bx, j + by, k + bz) of the cell. v gets the value; with a Jacobian,
+/// Interpolates `Components` values per corner; `corner(bx, by, bz)` returns a pointer (to float
+/// or double samples) to the components of corner (i + bx, j + by, k + bz) of the cell. v gets the value; with a Jacobian,
 /// J(c, a) = ∂v_c/∂x_a (column 2 is 0 on 2D cells; row 2 is 0 with two components).
 template <int Axes, int Components, bool WithJacobian, class Corner>
 inline void interpolate(const Corner& corner, const AxisCell (&cell)[3], Vec3& v, Mat3* J) {
-  const float* p000 = corner(0, 0, 0);
-  const float* p100 = corner(1, 0, 0);
-  const float* p010 = corner(0, 1, 0);
-  const float* p110 = corner(1, 1, 0);
+  const auto* p000 = corner(0, 0, 0);
+  const auto* p100 = corner(1, 0, 0);
+  const auto* p010 = corner(0, 1, 0);
+  const auto* p110 = corner(1, 1, 0);
   const double tx = cell[0].t, ty = cell[1].t;
   for (int c = 0; c < Components; ++c) {
     const double c000 = p000[c], c100 = p100[c], c010 = p010[c], c110 = p110[c];
@@ -64,10 +64,10 @@ inline void interpolate(const Corner& corner, const AxisCell (&cell)[3], Vec3& v
       }
     } else {
       const double tz = cell[2].t;
-      const float* p001 = corner(0, 0, 1);
-      const float* p101 = corner(1, 0, 1);
-      const float* p011 = corner(0, 1, 1);
-      const float* p111 = corner(1, 1, 1);
+      const auto* p001 = corner(0, 0, 1);
+      const auto* p101 = corner(1, 0, 1);
+      const auto* p011 = corner(0, 1, 1);
+      const auto* p111 = corner(1, 1, 1);
       const double c001 = p001[c], c101 = p101[c], c011 = p011[c], c111 = p111[c];
       const double d01 = c101 - c001, d11 = c111 - c011;
       const double a01 = c001 + tx * d01, a11 = c011 + tx * d11;

@@ -94,6 +94,7 @@ BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
   BrickPipelineOptions po;
   po.max_live_tokens = std::max<std::size_t>(1, options_.max_live_tokens);
   po.whole_steps = options_.whole_steps;
+  po.upload = options_.upload;
   pipeline_ = std::make_unique<BrickPipeline>(
       series_, [this](LoadedBrick&& b) { publish(std::move(b)); }, std::move(po));
 }

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -27,6 +28,8 @@ struct CacheOptions {
   /// Ignore the series' bricks: each time step is one unit (the whole-step cache, kept as a
   /// baseline and for series stored without bricks).
   bool whole_steps = false;
+  /// Optional stage after decode, in parallel in the pipeline (a device upload); may be empty.
+  std::function<void(BrickKey key, std::span<float> values)> upload;
   /// Share of the budget prefetches may fill (the rest stays for the loads the front demands).
   double prefetch_share = 0.75;
   /// Never drop a unit while the budget has room, even behind the band: a second run through the
