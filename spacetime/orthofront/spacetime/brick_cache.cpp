@@ -82,6 +82,16 @@ BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
   layout_ = options_.whole_steps ? io::BrickLayout::whole(series.geometry()) : series.bricks();
   unit_bytes_ = layout_.brick_points() * static_cast<std::size_t>(series.components()) *
                 sizeof(float);
+  // The cache keeps a few bytes of bookkeeping per unit of the whole series; a file chunked into
+  // tiny bricks (or a damaged chunk shape) would make that unbounded.
+  constexpr std::size_t kMaxUnits = std::size_t{1} << 27;
+  if (layout_.bricks() > kMaxUnits || n * layout_.bricks() > kMaxUnits)
+    throw InvalidArgument("time series " + series.describe() + ": " + std::to_string(n) +
+                          " steps of " + std::to_string(layout_.bricks()) + " bricks of " +
+                          std::to_string(layout_.size[0]) + " x " + std::to_string(layout_.size[1]) +
+                          " x " + std::to_string(layout_.size[2]) +
+                          " points are too many to cache; rewrite it with larger bricks "
+                          "(orthofront convert --brick 32)");
   // A load holds its raw bytes (at most about a unit), a decode scratch buffer and the floats.
   load_reserve_ = 3 * unit_bytes_;
   reads_.assign(n * layout_.bricks(), 0);
