@@ -168,7 +168,6 @@ void add_path_command(CLI::App& app) {
       co.budget_bytes = spacetime::parse_bytes(args->budget);
       co.prefetch = !args->no_prefetch;
       co.whole_steps = args->cache_unit == "step";
-      co.retain = args->warm;
       spacetime::BrickCache cache(*series, co);
       if (args->warm) {
         spacetime::PathSurfaceOptions cold = o;

@@ -4,6 +4,8 @@
 #include <cstring>
 #include <random>
 
+#include <hdf5.h>
+
 #include "io/grid_test_support.h"
 #include "orthofront/field/grid_field.h"
 #include "orthofront/field/unsteady.h"
@@ -362,4 +364,80 @@ TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the w
   const PathSurfaceResult s = build_path_surface(steps, seed, 20, o);
   CHECK_FALSE(s.path.complete);  // the front's time band holds more steps than fit
   CHECK_THAT(s.path.message, Catch::Contains("raise --cache-budget"));
+}
+
+TEST_CASE("a new band fits where only the band itself fits: the old band's pins go first",
+          "[spacetime][bricks]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 10, 10), 2);
+  CacheOptions co;
+  co.max_live_tokens = 1;
+  co.budget_bytes = 3 * series.step_bytes() + 3 * series.step_bytes();  // 3 steps + 1 in flight
+  BrickCache cache(series, co);
+  StreamedField field(cache);
+  field.update_band(0.0, 1.5);  // steps 0..2
+  field.update_band(5.0, 6.5);  // steps 5..7: fits only once 0..2 are released
+  CHECK(cache.statistics().peak_bytes <= co.budget_bytes);
+  Vec3 a, b;
+  REQUIRE(field.velocity(Vec3(0.7, 0.3, 0), 5.5, a) == FieldStatus::inside);
+  REQUIRE(flow->velocity(Vec3(0.7, 0.3, 0), 5.5, b) == FieldStatus::inside);
+  CHECK((a - b).norm() < 0.05);
+  CHECK(field.slow_evaluations() == 0);
+}
+
+TEST_CASE("a brick never written reads as the whole-step read does (fill values)",
+          "[spacetime][bricks]") {
+  TempDir dir("unwritten");
+  const auto file = dir.path() / "sparse.h5";
+  // A bricked 2D series written by hand: 8 x 8 points, bricks of 4 x 4, one chunk left out.
+  {
+    const hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t tdims[1] = {2};
+    const double times[2] = {0.0, 1.0};
+    const hid_t tspace = H5Screate_simple(1, tdims, nullptr);
+    const hid_t tset = H5Dcreate2(f, "times", H5T_IEEE_F64LE, tspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    H5Dwrite(tset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, times);
+    const hsize_t dims[4] = {2, 8, 8, 2}, chunk[4] = {1, 4, 4, 2};
+    const hid_t space = H5Screate_simple(4, dims, nullptr);
+    const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(create, 4, chunk);
+    const hid_t set = H5Dcreate2(f, "velocity", H5T_IEEE_F32LE, space, H5P_DEFAULT, create, H5P_DEFAULT);
+    std::vector<float> brick(4 * 4 * 2, 1.5f);
+    for (hsize_t step = 0; step < 2; ++step)
+      for (hsize_t j = 0; j < 8; j += 4)
+        for (hsize_t i = 0; i < 8; i += 4) {
+          if (step == 1 && i == 4 && j == 4) continue;  // never written
+          const hsize_t offset[4] = {step, j, i, 0};
+          H5Dwrite_chunk(set, H5P_DEFAULT, 0, offset, brick.size() * sizeof(float), brick.data());
+        }
+    const double origin[3] = {0, 0, 0}, spacing[3] = {1, 1, 1};
+    const hsize_t three = 3;
+    const hid_t aspace = H5Screate_simple(1, &three, nullptr);
+    for (const auto& [name, values] : {std::pair{"origin", origin}, std::pair{"spacing", spacing}}) {
+      const hid_t attribute = H5Acreate2(f, name, H5T_IEEE_F64LE, aspace, H5P_DEFAULT, H5P_DEFAULT);
+      H5Awrite(attribute, H5T_NATIVE_DOUBLE, values);
+      H5Aclose(attribute);
+    }
+    H5Sclose(aspace);
+    H5Dclose(set);
+    H5Pclose(create);
+    H5Sclose(space);
+    H5Dclose(tset);
+    H5Sclose(tspace);
+    H5Fclose(f);
+  }
+  const auto series = io::open_hdf5_series(file);
+  REQUIRE(series->description().storage == io::Hdf5Storage::bricked);
+  REQUIRE(series->bricks().bricks() == 4);
+  std::vector<float> whole(series->step_floats()), brick(series->brick_floats());
+  series->read(1, whole);
+  series->decode_brick(series->read_raw_brick(1, 3), brick);
+  for (std::int64_t j = 0; j < 4; ++j)
+    for (std::int64_t i = 0; i < 4; ++i)
+      for (std::size_t c = 0; c < 2; ++c)
+        REQUIRE(brick[static_cast<std::size_t>(j * 4 + i) * 2 + c] ==
+                whole[static_cast<std::size_t>((j + 4) * 8 + i + 4) * 2 + c]);
+  CHECK(brick[0] == 0.0f);  // HDF5's default fill value
+  series->decode_brick(series->read_raw_brick(1, 0), brick);
+  CHECK(brick[0] == 1.5f);
 }

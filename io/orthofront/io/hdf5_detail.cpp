@@ -24,6 +24,9 @@ std::size_t blosc_filter(unsigned flags, std::size_t cd_count, const unsigned cd
   if ((flags & H5Z_FLAG_REVERSE) != 0) {
     std::size_t decoded = 0;
     if (blosc_cbuffer_validate(*buffer, bytes, &decoded) != 0) return 0;
+    // A damaged header could claim any size: a chunk decodes to at most its declared size.
+    const std::size_t limit = cd_count > 3 && cd[3] > 0 ? cd[3] : std::size_t{1} << 30;
+    if (decoded > limit) return 0;
     void* out = H5allocate_memory(std::max<std::size_t>(decoded, 1), false);
     if (out == nullptr) return 0;
     const int n = blosc_decompress_ctx(*buffer, out, decoded, 1);

@@ -628,7 +628,12 @@ struct Hdf5TimeSeries::Impl {
                             std::to_string(bricks.bricks()) + " bricks");
     const std::vector<hsize_t> offset = brick_offset(step, brick);
     RawStep out{step, {}, raw, brick, 0};
-    if (!raw) {  // HDF5 decodes: read the brick's region into a padded brick
+    hsize_t bytes = 0;
+    // A chunk never written reads as HDF5's fill values, as the whole-step read does.
+    const bool written = raw && H5Dget_chunk_storage_size(dataset.get(), offset.data(), &bytes) >= 0 &&
+                         bytes > 0;
+    if (!written) {  // HDF5 decodes: read the brick's region into a padded brick
+      out.encoded = false;
       out.bytes.assign(brick_bytes(), std::byte{0});
       std::vector<hsize_t> count(offset.size(), 1);
       std::vector<hsize_t> memory_dims(offset.size(), 1);
@@ -652,10 +657,6 @@ struct Hdf5TimeSeries::Impl {
         throw FormatError(brick_where(step, brick) + ": cannot read the samples (damaged file?)");
       return out;
     }
-    hsize_t bytes = 0;
-    if (H5Dget_chunk_storage_size(dataset.get(), offset.data(), &bytes) < 0 || bytes == 0)
-      throw FormatError(brick_where(step, brick) + ": the brick was never written (truncated or "
-                                                   "damaged file?)");
     // A stored chunk is at most its decoded size plus a codec's overhead: refuse anything larger
     // before allocating (a damaged index could claim gigabytes).
     if (bytes > brick_bytes() + (std::size_t{1} << 16))

@@ -232,11 +232,19 @@ BrickCache::Handle BrickCache::wait_ready(std::unique_lock<std::mutex>& lock, Br
                   ": loading was cancelled");
     auto it = entries_.find(k);
     if (it == entries_.end()) {
-      if (!start_load(key, false) && in_flight_ == 0)
-        throw Error("cache budget " + format_bytes(options_.budget_bytes) +
-                    " is full of pinned units: brick " + std::to_string(key.brick) +
-                    " of time step " + std::to_string(key.step) + " does not fit (each needs " +
-                    format_bytes(unit_bytes_) + "); raise --cache-budget");
+      if (!start_load(key, false) && in_flight_ == 0) {
+        // Other threads may hold pins for one evaluation only: give them time to release them
+        // before calling the budget full.
+        const std::uint64_t before = releases_;
+        if (!changed_.wait_for(lock, std::chrono::seconds(1),
+                               [&] { return releases_ != before || in_flight_ > 0 || cancelled_; }))
+          throw Error("cache budget " + format_bytes(options_.budget_bytes) +
+                      " is full of pinned units: brick " + std::to_string(key.brick) +
+                      " of time step " + std::to_string(key.step) + " does not fit (each needs " +
+                      format_bytes(unit_bytes_) + "); raise --cache-budget");
+        waited = true;
+        continue;
+      }
     } else {
       Entry& e = it->second;
       if (e.state == State::ready) {
@@ -275,23 +283,33 @@ std::vector<BrickCache::Handle> BrickCache::acquire_all(std::span<const BrickKey
   std::vector<Handle> handles;
   handles.reserve(keys.size());
   std::unique_lock lock(mutex_);
-  // Mark every key wanted first, so starting one load never evicts another of the same set.
+  // Pin the resident members first, so starting the loads of the others never evicts them.
+  std::vector<BrickKey> pending;
   for (const BrickKey& key : keys) {
-    auto it = entries_.find(id(key));
-    if (it != entries_.end()) it->second.wanted = epoch_;
+    const std::uint64_t k = id(key);
+    auto it = entries_.find(k);
+    if (it != entries_.end() && it->second.state == State::ready) {
+      Entry& e = it->second;
+      ++stats_.hits;
+      ++e.pins;
+      e.wanted = epoch_;
+      note_use(k, e);
+      handles.push_back(Handle(this, key, e.values.data()));
+    } else {
+      if (it != entries_.end()) it->second.wanted = epoch_;
+      pending.push_back(key);
+    }
   }
-  for (const BrickKey& key : keys) {
+  for (const BrickKey& key : pending) {
     auto it = entries_.find(id(key));
     if (it == entries_.end()) {
       ++stats_.misses;
       start_load(key, false);  // when there is no room now, wait_ready starts it later
-    } else if (it->second.state == State::ready) {
-      ++stats_.hits;
     } else if (it->second.state == State::loading) {
       ++stats_.late_prefetches;
     }
   }
-  for (const BrickKey& key : keys) handles.push_back(wait_ready(lock, key));
+  for (const BrickKey& key : pending) handles.push_back(wait_ready(lock, key));
   return handles;
 }
 
@@ -324,9 +342,16 @@ void BrickCache::new_epoch(std::size_t first_step) {
 }
 
 void BrickCache::release(BrickKey key) {
-  std::lock_guard lock(mutex_);
-  auto it = entries_.find(id(key));
-  if (it != entries_.end()) --it->second.pins;
+  bool freed = false;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(id(key));
+    if (it != entries_.end() && --it->second.pins == 0) {
+      ++releases_;
+      freed = true;
+    }
+  }
+  if (freed) changed_.notify_all();  // a unit became evictable: a waiting load may now fit
 }
 
 void BrickCache::cancel() {

@@ -32,9 +32,6 @@ struct CacheOptions {
   std::function<void(BrickKey key, std::span<float> values)> upload;
   /// Share of the budget prefetches may fill (the rest stays for the loads the front demands).
   double prefetch_share = 0.75;
-  /// Never drop a unit while the budget has room, even behind the band: a second run through the
-  /// same cache then reads nothing (the in-memory baseline).
-  bool retain = false;
 };
 
 struct CacheStatistics {
@@ -168,6 +165,7 @@ class BrickCache {
   std::vector<std::uint8_t> reads_;  // per unit, saturating
   std::vector<bool> used_;           // per unit: pinned at least once
   std::uint64_t epoch_ = 1;
+  std::uint64_t releases_ = 0;  // units whose last pin went: progress for waiting loads
   std::size_t first_step_ = 0;
   std::size_t resident_ = 0;   // bytes of ready entries
   std::size_t in_flight_ = 0;  // loads started, not yet published

@@ -155,8 +155,10 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
   // The cache's own hook: before each front step, pin what the step samples around each vertex
   // and prefetch what the following steps will reach.
   FrontHook before_step;
+  CacheStatistics before;
   if (run.streamed) {
-    wait_before = run.cache->statistics().wait_seconds;
+    before = run.cache->statistics();
+    wait_before = before.wait_seconds;
     before_step = [&](const FrontSnapshot& f) -> bool {
       samples.resize(f.positions.size() / N);
       for (std::size_t i = 0; i < samples.size(); ++i) {
@@ -281,8 +283,9 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     pr.cache = run.cache->statistics();
     pr.slow_evaluations = run.streamed->slow_evaluations();
     pr.wait_seconds = pr.cache.wait_seconds - wait_before;
-    pr.io_seconds = pr.cache.read_seconds;
-    pr.decode_seconds = pr.cache.decode_seconds;
+    // This surface's share (a cache may have served an earlier surface first).
+    pr.io_seconds = pr.cache.read_seconds - before.read_seconds;
+    pr.decode_seconds = pr.cache.decode_seconds - before.decode_seconds;
   }
   pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
   return result;

@@ -225,6 +225,27 @@ void StreamedField::publish(std::vector<BrickCache::Handle>&& pins) {
   extra_pins_.clear();
 }
 
+void StreamedField::release_except(std::span<const BrickKey> keep) {
+  const std::size_t units = layout_.bricks();
+  const auto less = [](const BrickKey& a, const BrickKey& b) {
+    return a.step != b.step ? a.step < b.step : a.brick < b.brick;
+  };
+  std::vector<BrickCache::Handle> kept;
+  for (BrickCache::Handle& h : pins_) {
+    if (std::binary_search(keep.begin(), keep.end(), h.key(), less)) {
+      kept.push_back(std::move(h));
+    } else {
+      table_[static_cast<std::size_t>(h.key().step) * units + h.key().brick].store(
+          nullptr, std::memory_order_relaxed);
+    }
+  }
+  pins_ = std::move(kept);  // the others are released here, before the new band loads
+  for (const auto& h : extra_pins_)
+    table_[static_cast<std::size_t>(h.key().step) * units + h.key().brick].store(
+        nullptr, std::memory_order_relaxed);
+  extra_pins_.clear();
+}
+
 void StreamedField::update_band(double t_lo, double t_hi) {
   const std::vector<double>& times = cache_.times();
   t_lo = std::clamp(t_lo, times.front(), times.back());
@@ -243,6 +264,7 @@ void StreamedField::update_band(double t_lo, double t_hi) {
                                        std::to_string(times[first]) + " to " +
                                        std::to_string(times[last]) + ")");
   cache_.new_epoch(first);
+  release_except(keys);
   publish(cache_.acquire_all(keys));
 }
 
@@ -296,6 +318,7 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
   const auto gather = [&](int horizon, std::vector<BrickKey>& out) {
     ++stamp_epoch_;
     for (const FrontSample& f : front) {
+      if (!f.x.allFinite() || !std::isfinite(f.t)) continue;
       const double lifted_speed = std::hypot(f.v.norm(), p.time_scale);
       // Pinned units must cover the next steps for sure; prefetched ones are a guess, and a
       // guess too far ahead reads bricks the front never samples.
@@ -334,6 +357,7 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
   std::sort(pinned.begin(), pinned.end(), [](const BrickKey& a, const BrickKey& b) {
     return a.step != b.step ? a.step < b.step : a.brick < b.brick;
   });
+  release_except(pinned);
   publish(cache_.acquire_all(pinned));
   if (p.prefetch_steps > p.pinned_steps) {
     std::vector<BrickKey> ahead;

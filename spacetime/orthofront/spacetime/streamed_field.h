@@ -86,6 +86,9 @@ class StreamedField final : public UnsteadyField {
   const float* unit(std::size_t step, std::size_t brick, bool resident_only,
                     BrickCache::Handle& local) const;
   void publish(std::vector<BrickCache::Handle>&& pins);
+  // Releases the pins of units not in `keep` (sorted by step, then brick) and the slow path's,
+  // so the budget can take the next band.
+  void release_except(std::span<const BrickKey> keep);
   // Appends the units a box of point indices [lo, hi] touches at steps [k0, k1].
   void collect(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi,
                std::size_t k0, std::size_t k1, std::vector<BrickKey>& out);
