@@ -457,7 +457,10 @@ struct Hdf5TimeSeries::Impl {
       if (series_axis) offset[0] = step;
       offset[series_axis ? 1 : 0] = static_cast<hsize_t>(c * layout.chunk_slices);
       hsize_t bytes = 0;
-      if (H5Dget_chunk_storage_size(set, offset.data(), &bytes) < 0 || bytes == 0)
+      unsigned chunk_mask = 0;
+      haddr_t address = HADDR_UNDEF;
+      if (H5Dget_chunk_info_by_coord(set, offset.data(), &chunk_mask, &address, &bytes) < 0 ||
+          address == HADDR_UNDEF || bytes == 0)
         return read_plain(step, set);  // a chunk never written: let HDF5 supply fill values
       ChunkRecord& r = records[static_cast<std::size_t>(c)];
       r.first_slice = static_cast<std::uint64_t>(c * layout.chunk_slices);
@@ -629,9 +632,14 @@ struct Hdf5TimeSeries::Impl {
     const std::vector<hsize_t> offset = brick_offset(step, brick);
     RawStep out{step, {}, raw, brick, 0};
     hsize_t bytes = 0;
-    // A chunk never written reads as HDF5's fill values, as the whole-step read does.
-    const bool written = raw && H5Dget_chunk_storage_size(dataset.get(), offset.data(), &bytes) >= 0 &&
-                         bytes > 0;
+    // A chunk never written reads as HDF5's fill values, as the whole-step read does. Its address
+    // tells (H5Dget_chunk_storage_size reports a size for a chunk HDF5 has filled in its cache).
+    unsigned chunk_mask = 0;
+    haddr_t address = HADDR_UNDEF;
+    const bool written = raw &&
+                         H5Dget_chunk_info_by_coord(dataset.get(), offset.data(), &chunk_mask,
+                                                    &address, &bytes) >= 0 &&
+                         address != HADDR_UNDEF && bytes > 0;
     if (!written) {  // HDF5 decodes: read the brick's region into a padded brick
       out.encoded = false;
       out.bytes.assign(brick_bytes(), std::byte{0});
