@@ -17,6 +17,7 @@
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/report_json.h"
+#include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/spacetime/path_surface.h"
 
@@ -159,11 +160,16 @@ void add_path_command(CLI::App& app) {
         throw InvalidArgument("--field '" + args->field +
                               "' is neither an unsteady field name (see `orthofront fields`) "
                               "nor an existing file");
-      if (!io::is_hdf5_file(file))
+      std::unique_ptr<io::TimeSeries> series;
+      if (file.extension() == ".vdb")
+        series = io::open_vdb_file_series(file);  // grids with "time" metadata, read leaf-wise
+      else if (io::is_hdf5_file(file))
+        series = io::open_hdf5_series(file);
+      else
         throw InvalidArgument("--field '" + args->field +
                               "': path surfaces read time series in the project's HDF5 layout "
-                              "(docs/hdf5-layout.md); this file is not HDF5");
-      const auto series = io::open_hdf5_series(file);
+                              "(docs/hdf5-layout.md) or OpenVDB files of timed vector grids; "
+                              "this file is neither");
       spacetime::CacheOptions co;
       co.budget_bytes = spacetime::parse_bytes(args->budget);
       co.prefetch = !args->no_prefetch;

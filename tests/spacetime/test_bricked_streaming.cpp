@@ -11,6 +11,7 @@
 #include "orthofront/field/unsteady.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -440,4 +441,70 @@ TEST_CASE("a brick never written reads as the whole-step read does (fill values)
   CHECK(brick[0] == 0.0f);  // HDF5's default fill value
   series->decode_brick(series->read_raw_brick(1, 0), brick);
   CHECK(brick[0] == 1.5f);
+}
+
+TEST_CASE("an OpenVDB series is read brick by brick, with the values of whole-step reads",
+          "[spacetime][bricks][vdb]") {
+  TempDir dir("vdb");
+  const auto flow = make_unsteady_field("double-gyre-3d");
+  GridGeometry g = uniform_grid(flow->domain(), 3, 2);
+  g.size = {70, 36, 36};  // 3 x 2 x 2 bricks of 32³, partial at the far edges
+  for (int a = 0; a < 3; ++a)
+    g.spacing[a] = flow->domain().extent()[a] / static_cast<double>(g.size[static_cast<std::size_t>(a)] - 1);
+  const std::vector<double> times = uniform_times(0, 3, 15);
+  const SampledTimeSeries memory(*flow, g, times);
+  const auto file = dir.path() / "gyre.vdb";
+  {
+    io::VdbFileWriter writer(file);
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      VectorGrid grid;
+      grid.geometry = g;
+      grid.values.resize(memory.step_floats());
+      memory.sample(k, grid.values.data());
+      writer.add("v" + std::to_string(k), grid, times[k]);
+    }
+    writer.commit();
+  }
+  const auto series = io::open_vdb_file_series(file);
+  REQUIRE(series->step_count() == times.size());
+  const io::BrickLayout layout = series->bricks();
+  REQUIRE(layout.bricks() == 12);
+  // A brick holds exactly the whole step's values over its region.
+  std::vector<float> whole(series->step_floats()), brick(series->brick_floats());
+  series->read(4, whole);
+  const GridGeometry& sg = series->geometry();
+  for (std::size_t b : {std::size_t{0}, std::size_t{5}, std::size_t{11}}) {
+    series->decode_brick(series->read_raw_brick(4, b), brick);
+    const auto bi = static_cast<std::int64_t>(b) % 3, bj = static_cast<std::int64_t>(b) / 3 % 2,
+               bk = static_cast<std::int64_t>(b) / 6;
+    for (std::int64_t k = 0; k < 32 && bk * 32 + k < sg.size[2]; ++k)
+      for (std::int64_t j = 0; j < 32 && bj * 32 + j < sg.size[1]; ++j)
+        for (std::int64_t i = 0; i < 32 && bi * 32 + i < sg.size[0]; ++i)
+          for (std::size_t c = 0; c < 3; ++c)
+            REQUIRE(brick[static_cast<std::size_t>((k * 32 + j) * 32 + i) * 3 + c] ==
+                    whole[sg.index(bi * 32 + i, bj * 32 + j, bk * 32 + k) * 3 + c]);
+  }
+  // The same path surface through bricks on a small budget and through whole steps.
+  PathSurfaceOptions o;
+  o.t0 = 0;
+  o.t1 = 3;
+  o.engine.edge = 0.05;
+  o.engine.max_steps = 100000;
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0.3), Vec3(0.6, 0.4, 0.5));
+  CacheOptions small;
+  small.budget_bytes = 64 * series->brick_floats() * sizeof(float);
+  BrickCache bricks(*series, small);
+  const PathSurfaceResult r = build_path_surface(bricks, seed, 8, o);
+  CacheOptions all;
+  all.whole_steps = true;
+  all.budget_bytes = std::size_t{1} << 30;
+  BrickCache steps(*series, all);
+  const PathSurfaceResult w = build_path_surface(steps, seed, 8, o);
+  INFO(r.path.message);
+  REQUIRE(r.path.complete);
+  REQUIRE(w.path.complete);
+  CHECK(r.path.cache.units_touched < layout.bricks() * times.size() / 2);
+  CHECK(r.path.cache.peak_bytes <= small.budget_bytes);
+  REQUIRE(r.mesh.vertex_count() == w.mesh.vertex_count());
+  CHECK(r.mesh.positions == w.mesh.positions);
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <list>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -570,6 +571,49 @@ class VdbSeries final : public TimeSeries {
     return out.str();
   }
 
+  /// Bricks of 32³ voxels from the dense box's corner. OpenVDB reads a grid's topology first and
+  /// a leaf's voxels (8³) only when they are accessed, so a brick reads just its leaves.
+  BrickLayout bricks() const override { return BrickLayout::cubes(geometry_, kBrick); }
+
+  RawStep read_raw_brick(std::size_t step, std::size_t brick) const override {
+    if (step >= steps_.size()) throw InvalidArgument("step " + std::to_string(step) + " out of range");
+    const BrickLayout layout = bricks();
+    if (brick >= layout.bricks())
+      throw InvalidArgument("brick " + std::to_string(brick) + " out of range");
+    const auto b = static_cast<std::int64_t>(brick);
+    const openvdb::Coord first = box_.min() + openvdb::Coord(
+        static_cast<int>(b % layout.count[0] * kBrick),
+        static_cast<int>(b / layout.count[0] % layout.count[1] * kBrick),
+        geometry_.dimension == 3 ? static_cast<int>(b / (layout.count[0] * layout.count[1]) * kBrick) : 0);
+    openvdb::CoordBBox region(first, first + openvdb::Coord(static_cast<int>(layout.size[0]) - 1,
+                                                            static_cast<int>(layout.size[1]) - 1,
+                                                            static_cast<int>(layout.size[2]) - 1));
+    region.intersect(box_);
+    const VectorGrid part = detail::densify(cached(step), region, where(step) + ", brick " +
+                                                                     std::to_string(brick));
+    // Into the brick's layout: layout.size points per axis, padded past the dense box.
+    const auto c = static_cast<std::size_t>(components_);
+    std::vector<float> values(layout.brick_points() * c, std::numeric_limits<float>::quiet_NaN());
+    const openvdb::Coord dim = region.dim();
+    for (int k = 0; k < dim.z(); ++k)
+      for (int j = 0; j < dim.y(); ++j)
+        std::memcpy(values.data() + static_cast<std::size_t>((k * layout.size[1] + j) * layout.size[0]) * c,
+                    part.values.data() + part.geometry.index(0, j, k) * c,
+                    static_cast<std::size_t>(dim.x()) * c * sizeof(float));
+    RawStep raw;
+    raw.step = step;
+    raw.brick = brick;
+    raw.bytes.resize(values.size() * sizeof(float));
+    std::memcpy(raw.bytes.data(), values.data(), raw.bytes.size());
+    return raw;
+  }
+  void decode_brick(const RawStep& raw, std::span<float> values) const override {
+    if (raw.bytes.size() != values.size_bytes())
+      throw FormatError(where(raw.step) + ": brick of " + std::to_string(raw.bytes.size()) +
+                        " bytes, expected " + std::to_string(values.size_bytes()));
+    std::memcpy(values.data(), raw.bytes.data(), raw.bytes.size());
+  }
+
   RawStep read_raw(std::size_t step) const override {
     if (step >= steps_.size()) throw InvalidArgument("step " + std::to_string(step) + " out of range");
     const VectorGrid dense = detail::densify(load(step), box_, where(step));
@@ -590,6 +634,28 @@ class VdbSeries final : public TimeSeries {
     return detail::load_vdb_grid(steps_[s].file, steps_[s].selector, where(s));
   }
 
+  // The grids of the steps read last (topology, leaves loaded as touched), most recent first:
+  // brick reads of a band revisit a few steps many times. Used by the one reader thread.
+  const detail::LoadedVdbGrid& cached(std::size_t s) const {
+    const auto hit =
+        std::find_if(open_.begin(), open_.end(), [s](const OpenStep& o) { return o.step == s; });
+    if (hit != open_.end()) {
+      open_.splice(open_.begin(), open_, hit);
+    } else {
+      detail::LoadedVdbGrid grid = load(s);
+      if (open_.size() == kOpenSteps) open_.pop_back();
+      open_.push_front(OpenStep{s, std::move(grid)});
+    }
+    return open_.front().grid;
+  }
+
+  static constexpr std::int64_t kBrick = 32;
+  static constexpr std::size_t kOpenSteps = 16;
+  struct OpenStep {
+    std::size_t step = 0;
+    detail::LoadedVdbGrid grid;
+  };
+  mutable std::list<OpenStep> open_;
   std::vector<VdbStep> steps_;
   std::vector<double> times_;
   openvdb::math::Transform::Ptr transform_;
