@@ -67,6 +67,26 @@ std::filesystem::path write_series(const TempDir& dir, const GridGeometry& g, in
   return file;
 }
 
+// Writes a sampled series as a bricked HDF5 file (default codec) and opens it.
+std::unique_ptr<io::Hdf5TimeSeries> write_bricked(const std::filesystem::path& file,
+                                                  const SampledTimeSeries& memory,
+                                                  std::int64_t brick) {
+  io::Hdf5WriteOptions w;
+  w.brick_size = brick;
+  w.zero_is_no_data = false;
+  w.xdmf = false;
+  std::vector<double> times;
+  for (std::size_t k = 0; k < memory.step_count(); ++k) times.push_back(memory.time(k));
+  io::Hdf5SeriesWriter writer(file, memory.geometry(), memory.components(), times, w);
+  std::vector<float> values(memory.step_floats());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    memory.sample(k, values.data());
+    writer.write_step(values);
+  }
+  writer.commit();
+  return io::open_hdf5_series(file);
+}
+
 }  // namespace
 
 TEST_CASE("bricked series: sampling across bricks equals whole-step sampling bit for bit",
@@ -191,21 +211,7 @@ TEST_CASE("path surface through bricks under a tiny budget equals the in-memory 
   const GridGeometry g = uniform_grid(flow->domain(), 3, 17);
   const std::vector<double> times = uniform_times(0, 6, 60);
   const SampledTimeSeries memory(*flow, g, times);
-  const auto file = dir.path() / "gyre.h5";
-  {
-    io::Hdf5WriteOptions w;
-    w.brick_size = 4;  // 5 x 5 x 5 bricks of 768 bytes
-    w.zero_is_no_data = false;
-    w.xdmf = false;
-    io::Hdf5SeriesWriter writer(file, g, 3, times, w);
-    std::vector<float> values(memory.step_floats());
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      memory.sample(k, values.data());
-      writer.write_step(values);
-    }
-    writer.commit();
-  }
-  const auto series = io::open_hdf5_series(file);
+  const auto series = write_bricked(dir.path() / "gyre.h5", memory, 4);
   PathSurfaceOptions o;
   o.t0 = 0;
   o.t1 = 6;
@@ -274,20 +280,7 @@ TEST_CASE("a corrupt brick mid-run stops the surface, names file, step and brick
   const GridGeometry g = uniform_grid(flow->domain(), 2, 41);
   const std::vector<double> times = uniform_times(0, 10, 100);
   const SampledTimeSeries memory(*flow, g, times, 2);
-  const auto file = dir.path() / "gyre.h5";
-  {
-    io::Hdf5WriteOptions w;
-    w.brick_size = 8;
-    w.zero_is_no_data = false;
-    io::Hdf5SeriesWriter writer(file, g, 2, times, w);
-    std::vector<float> values(memory.step_floats());
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      memory.sample(k, values.data());
-      writer.write_step(values);
-    }
-    writer.commit();
-  }
-  const auto series = io::open_hdf5_series(file);
+  const auto series = write_bricked(dir.path() / "gyre.h5", memory, 8);
   FailingSeries failing(*series, 30);
   CacheOptions co;
   co.budget_bytes = 4 << 20;
@@ -320,21 +313,7 @@ TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the w
     g.spacing[a] = flow->domain().extent()[a] / static_cast<double>(g.size[static_cast<std::size_t>(a)] - 1);
   const std::vector<double> times = uniform_times(0, 20, 200);
   const SampledTimeSeries memory(*flow, g, times);
-  const auto file = dir.path() / "gyre.h5";
-  {
-    io::Hdf5WriteOptions w;
-    w.brick_size = 4;
-    w.zero_is_no_data = false;
-    w.xdmf = false;
-    io::Hdf5SeriesWriter writer(file, g, 3, times, w);
-    std::vector<float> values(memory.step_floats());
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      memory.sample(k, values.data());
-      writer.write_step(values);
-    }
-    writer.commit();
-  }
-  const auto series = io::open_hdf5_series(file);
+  const auto series = write_bricked(dir.path() / "gyre.h5", memory, 4);
   PathSurfaceOptions o;
   o.t0 = 0;
   o.t1 = 20;
