@@ -362,8 +362,11 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
   if (p.prefetch_steps > p.pinned_steps) {
     std::vector<BrickKey> ahead;
     gather(p.prefetch_steps, ahead);
-    std::stable_sort(ahead.begin(), ahead.end(),
-                     [](const BrickKey& a, const BrickKey& b) { return a.step < b.step; });
+    // Most urgent first (earlier steps); within a step in file order (bricks are stored in
+    // index order), so the reads sweep the file instead of seeking back and forth.
+    std::sort(ahead.begin(), ahead.end(), [](const BrickKey& a, const BrickKey& b) {
+      return a.step != b.step ? a.step < b.step : a.brick < b.brick;
+    });
     u.prefetched = ahead.size();
     cache_.prefetch(ahead);
   }
