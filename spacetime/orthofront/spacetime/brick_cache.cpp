@@ -354,6 +354,11 @@ void BrickCache::release(BrickKey key) {
   if (freed) changed_.notify_all();  // a unit became evictable: a waiting load may now fit
 }
 
+void BrickCache::wait_idle() {
+  std::unique_lock lock(mutex_);
+  changed_.wait(lock, [this] { return in_flight_ == 0; });
+}
+
 void BrickCache::cancel() {
   {
     std::lock_guard lock(mutex_);

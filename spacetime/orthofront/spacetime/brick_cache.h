@@ -123,6 +123,8 @@ class BrickCache {
   const io::TimeSeries& series() const { return series_; }
   const std::vector<double>& times() const { return times_; }
   std::size_t budget() const { return options_.budget_bytes; }
+  /// Blocks until no load is in flight (every requested unit is published).
+  void wait_idle();
   /// Stops loading (pending requests are dropped; waiting callers get an error).
   void cancel();
 
