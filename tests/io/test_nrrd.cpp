@@ -155,6 +155,23 @@ TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]"
     CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "rot.nrrd"); }),
                Contains("rot.nrrd") && Contains("(0.5,0.5,0)") && Contains("axis-aligned"));
   }
+  SECTION("huge sizes with little data: refused before allocating the grid") {
+    // 3 x 40000 x 40000 floats would be 19 GB; the file holds 96 bytes.
+    for (const char* encoding : {"raw", "ascii", "gzip"}) {
+      write_file(dir / "huge.nrrd", std::string("NRRD0004\ntype: float\ndimension: 3\n") +
+                                        "sizes: 3 40000 40000\nkinds: vector space space\n" +
+                                        "endian: little\nencoding: " + encoding + "\n\n" +
+                                        data.substr(0, 96));
+      CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "huge.nrrd"); }),
+                 Contains("huge.nrrd") && Contains("truncated") && Contains("40000"));
+    }
+  }
+  SECTION("a detached data file that is a device") {
+    write_file(dir / "zero.nrrd", kHeader3D + "endian: little\nencoding: raw\n"
+                                              "data file: /dev/zero\n\n");
+    CHECK_THAT(thrown<orthofront::io::IoError>([&] { read_nrrd(dir / "zero.nrrd"); }),
+               Contains("/dev/zero") && Contains("not a regular file"));
+  }
   SECTION("not NRRD") {
     write_file(dir / "no.nrrd", "P6\n");
     CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "no.nrrd"); }),

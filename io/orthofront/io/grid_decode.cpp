@@ -16,6 +16,9 @@ std::string read_file_bytes(const std::filesystem::path& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw IoError("cannot read " + path.string() + ": it is a directory");
+  // A device or pipe (/dev/zero, a FIFO) has no end: reading it would allocate without bound.
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw IoError("cannot read " + path.string() + ": not a regular file");
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) {

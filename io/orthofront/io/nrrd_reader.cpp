@@ -182,9 +182,10 @@ class NrrdParser {
     const std::size_t points =
         detail::checked_point_count(g.size, grid.components, file_, "sizes " + field("sizes"));
     const std::size_t count = points * static_cast<std::size_t>(components);
+    // Nothing the size of the grid is allocated before the data proved to hold it.
+    std::vector<float> stored;
+    read_data(count, stored);
     grid.values.resize(count);
-    std::vector<float> stored(count);
-    read_data(stored);
     // Reorder: the stored layout has the component axis at c_axis; ours has it first.
     std::array<std::size_t, 4> stride{};
     std::size_t s = 1;
@@ -330,7 +331,7 @@ class NrrdParser {
     return values;
   }
 
-  void read_data(std::vector<float>& out) const {
+  void read_data(std::size_t count, std::vector<float>& out) const {
     const std::string type_name = field("type");
     if (type_name.empty()) throw error("no 'type' field in the header");
     const auto type = nrrd_type(type_name);
@@ -385,7 +386,6 @@ class NrrdParser {
         data.remove_prefix(nl + 1);
       }
     }
-    const std::size_t count = out.size();
     const std::size_t bytes = count * scalar;
     std::int64_t byte_skip = 0;
     if (has("byte skip")) {
@@ -393,6 +393,11 @@ class NrrdParser {
         throw error("bad byte skip '" + field("byte skip") + "'");
     }
     if (encoding == "ascii") {
+      if (data.size() < count)  // every value takes at least one character
+        throw error("truncated: " + data_name + " holds " + std::to_string(data.size()) +
+                    " characters, too few for the " + std::to_string(count) +
+                    " values of sizes " + field("sizes"));
+      out.resize(count);
       std::size_t pos = 0;
       for (std::size_t i = 0; i < count; ++i) {
         while (pos < data.size() &&
@@ -416,6 +421,11 @@ class NrrdParser {
     std::string inflated;
     if (encoding == "gzip") {
       if (byte_skip > 0) data.remove_prefix(std::min<std::size_t>(data.size(), static_cast<std::size_t>(byte_skip)));
+      // Deflate expands at most 1032:1: fewer compressed bytes cannot hold the grid.
+      if (static_cast<double>(data.size()) * 1032.0 < static_cast<double>(bytes))
+        throw error("truncated: " + data_name + " holds " + std::to_string(data.size()) +
+                    " gzip bytes, too few for the " + std::to_string(bytes) + " bytes of sizes " +
+                    field("sizes") + " of " + field("type"));
       inflated = detail::gzip_inflate(data, data_name + ": gzip data", bytes);
       data = inflated;
       if (data.size() < bytes) {
@@ -440,6 +450,7 @@ class NrrdParser {
                     std::to_string(bytes));
       }
     }
+    out.resize(count);
     detail::scalars_to_floats(*type, reinterpret_cast<const unsigned char*>(data.data()), count,
                               little, out.data());
   }
