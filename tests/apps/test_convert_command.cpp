@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -119,6 +120,29 @@ TEST_CASE("convert: bad arguments are refused with a message", "[apps][convert]"
   CHECK(r.status == 2);
   CHECK_THAT(r.output, Contains("matches no file"));
   CHECK_FALSE(fs::exists(dir / "x.h5"));
+}
+
+TEST_CASE("convert to .vdb on a full disk fails and leaves no file", "[apps][convert][diskfull]") {
+  TempDir dir("fulldisk");
+  const fs::path small = dir / "small";
+  fs::create_directories(small);
+  // A 300 KiB tmpfs: needs root (CAP_SYS_ADMIN); said and skipped otherwise.
+  if (std::system(("mount -t tmpfs -o size=300k tmpfs " + q(small) + " 2>/dev/null").c_str()) != 0) {
+    WARN("skipped: cannot mount a small tmpfs here (needs root)");
+    return;
+  }
+  const Run g = run("generate --field lorenz --resolution 40,40,40 --out " + q(dir / "lz.h5"));
+  REQUIRE(g.status == 0);
+  const Run r = run("convert " + q(dir / "lz.h5") + " --out " + q(small / "x.vdb"));
+  const bool left = fs::exists(small / "x.vdb");
+  std::size_t litter = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(small)) ++litter;
+  std::system(("umount " + q(small)).c_str());
+  INFO(r.output);
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Contains("x.vdb") && Contains("disk full"));
+  CHECK_FALSE(left);
+  CHECK(litter == 0);
 }
 
 TEST_CASE("convert and info on the real data", "[apps][convert][realdata]") {

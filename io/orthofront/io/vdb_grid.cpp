@@ -488,6 +488,27 @@ void VdbFileWriter::commit() {
     openvdb::io::File file(temp.string());
     file.write(impl_->grids);
     file.close();
+    // OpenVDB does not check its stream after writing: a full disk leaves a truncated file
+    // without an error. Reading every voxel back (no delayed loading) is the check.
+    bool complete = false;
+    try {
+      openvdb::io::File check(temp.string());
+      check.open(false);
+      const openvdb::GridPtrVecPtr back = check.getGrids();
+      check.close();
+      complete = back && back->size() == impl_->grids.size();
+    } catch (const std::exception&) {
+      complete = false;
+    }
+    if (!complete) {
+      std::error_code error;
+      const auto written = std::filesystem::file_size(temp, error);
+      const auto space = std::filesystem::space(temp.parent_path().empty() ? "." : temp.parent_path(), error);
+      throw std::runtime_error("the file did not read back after writing (" +
+                               std::to_string(written) + " bytes written, " +
+                               std::to_string(error ? 0 : space.available) +
+                               " bytes free: is the disk full?)");
+    }
     std::filesystem::rename(temp, path);
   } catch (const std::exception& e) {
     std::error_code ignored;
