@@ -1,6 +1,7 @@
 // orthofront: flow-orthogonal stream surfaces from the command line.
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <new>
 
 #include "cli/commands.h"
 #include "cli/progress_bar.h"
@@ -28,6 +29,11 @@ int main(int argc, char** argv) {
   } catch (const orthofront::Error& e) {
     std::cerr << "orthofront: error: " << e.what() << "\n";
     return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "orthofront: error: out of memory in '" << (argc > 1 ? argv[1] : "") << "': "
+              << "the job needs more memory than is available; lower --max-vertices or "
+                 "--cache-budget, or raise --edge\n";
+    return 3;
   } catch (const std::exception& e) {
     std::cerr << "orthofront: unexpected error: " << e.what() << "\n";
     return 3;

@@ -139,6 +139,10 @@ void add_path_command(CLI::App& app) {
     if (args->seed_count < 2)
       throw InvalidArgument("--seed-count must be at least 2, got " +
                             std::to_string(args->seed_count));
+    if (static_cast<std::size_t>(args->seed_count) > args->options.max_vertices)
+      throw InvalidArgument("--seed-count " + std::to_string(args->seed_count) +
+                            " exceeds the vertex budget of " +
+                            std::to_string(args->options.max_vertices) + " (--max-vertices)");
     const SeedCurve seed = parse_seed(args->seed);
     spacetime::PathSurfaceOptions o;
     o.engine = args->options;

@@ -14,6 +14,10 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
   const SeedCurve curve = parse_seed(job.seed);
   if (job.seed_count < 2)
     throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
+  if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
+    throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
+                          " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
+                          " (--max-vertices)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
   std::size_t inside = 0;
   Vec3 first_outside = Vec3::Zero();

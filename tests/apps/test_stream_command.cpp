@@ -92,6 +92,11 @@ TEST_CASE("stream rejects bad input naming the value, with no output file", "[cl
                                 (dir / "x.stl").string(), "x.stl"},
       {"missing seed file", "stream --field saddle3d --seed file:/nonexistent/seed.csv" + out,
        "/nonexistent/seed.csv"},
+      {"more seeds than the vertex budget",
+       "stream --field saddle3d --seed-count 100000000" + good_seed + out,
+       "--seed-count 100000000 exceeds the vertex budget"},
+      {"an edge that would refine the seed past the vertex budget",
+       "stream --field saddle3d --edge 1e-9" + good_seed + out, "raise --edge"},
   };
   for (const Case& c : cases) {
     const Outcome o = run(c.args);

@@ -42,6 +42,7 @@ class BrickSeries final : public io::TimeSeries {
       if (concurrent_++ != 0) overlapped_ = true;
     }
     if (delay_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    while (hold.load()) std::this_thread::yield();  // a test lets reads start when it is ready
     {
       std::lock_guard lock(mutex_);
       --concurrent_;
@@ -71,6 +72,7 @@ class BrickSeries final : public io::TimeSeries {
   }
   std::size_t corrupt_step = static_cast<std::size_t>(-1), corrupt_brick = 0;
   int delay_ms = 0;
+  std::atomic<bool> hold{false};
   mutable bool overlapped_ = false;
 
  private:
@@ -256,7 +258,9 @@ TEST_CASE("brick pipeline: cancellation joins cleanly and leaves no threads",
       if (published.fetch_add(1) + 1 == 5) self->cancel();  // cancel from the pipeline itself
     });
     self = &pipeline;
+    series.hold = true;  // every brick is queued before the first read
     for (std::size_t k = 0; k < 64; ++k) pipeline.submit(key(k, k % 64));
+    series.hold = false;
     while (pipeline.pending() > 0) std::this_thread::yield();  // until the cancel took effect
   }  // destructor joins
   const std::size_t done = published.load();

@@ -234,6 +234,21 @@ class Engine {
     if (seed_.parameters.size() < 2)
       throw InvalidArgument("a seed needs at least 2 vertices, got " +
                             std::to_string(seed_.parameters.size()));
+    if (seed_.parameters.size() > opt_.max_vertices)
+      throw InvalidArgument("a seed of " + std::to_string(seed_.parameters.size()) +
+                            " vertices exceeds the vertex budget of " +
+                            std::to_string(opt_.max_vertices) + " (--max-vertices)");
+    // The first front step refines the seed to edges of about ℓ: a seed far longer than the
+    // vertex budget allows would exhaust memory inside that one step.
+    double length = 0;
+    for (std::size_t i = 1; i < seed_.parameters.size(); ++i)
+      length += (seed_.point(seed_.parameters[i]) - seed_.point(seed_.parameters[i - 1])).norm();
+    if (length / opt_.edge > static_cast<double>(opt_.max_vertices))
+      throw InvalidArgument("edge length " + std::to_string(opt_.edge) + " would put about " +
+                            std::to_string(length / opt_.edge) + " vertices on the seed curve (length " +
+                            std::to_string(length) + "), more than the vertex budget of " +
+                            std::to_string(opt_.max_vertices) +
+                            " (--max-vertices); raise --edge");
   }
 
   std::int32_t emit(const FrontVertex<N>& fv, double alpha, std::int32_t front, int step) {
