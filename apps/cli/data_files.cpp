@@ -57,6 +57,12 @@ DataFile open_hdf5(const DataFileSpec& spec) {
   else
     storage += ", contiguous";
   file.details.emplace_back("storage", storage);
+  if (!d.missing_steps.empty()) {
+    std::string missing;
+    for (std::size_t s : d.missing_steps) missing += (missing.empty() ? "" : ", ") + std::to_string(s);
+    file.details.emplace_back("missing steps",
+                              missing + " (no dataset: reading them fails; surfaces stop there)");
+  }
   file.details.emplace_back("compression", compression_text(d));
   const auto unit = [](const std::string& u) { return u.empty() ? std::string("-") : u; };
   file.details.emplace_back("units", "length " + unit(d.units.length) + ", time " +

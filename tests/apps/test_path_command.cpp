@@ -8,6 +8,8 @@
 #include <sstream>
 #include <string>
 
+#include <hdf5.h>
+
 #include "orthofront/field/unsteady.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
@@ -118,5 +120,37 @@ TEST_CASE("path command: HDF5 series through the cache; errors leave no file", "
             dir / "log3") == 2);
   CHECK_THAT(read_text(dir / "log3"), Catch::Contains("'nothing-here'"));
   CHECK_FALSE(fs::exists(none));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("path command: a step deleted from a per-step series keeps the surface up to it",
+          "[apps][path]") {
+  const fs::path dir = fresh_dir();
+  const fs::path h5 = dir / "gyre.h5", out = dir / "gyre.vtp", report = dir / "gyre.json",
+                 log = dir / "log.txt";
+  REQUIRE(run("generate --field double-gyre --resolution 41,21 --steps 80 --t1 8 --layout per-step "
+              "--out " + h5.string(),
+              log) == 0);
+  {
+    const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    REQUIRE(H5Ldelete(f, "/steps/000020", H5P_DEFAULT) >= 0);
+    H5Fclose(f);
+  }
+  const int status = run("path --field " + h5.string() +
+                             " --seed line:0.3,0.25,0:0.9,0.7,0 --t0 0 --t1 6 --edge 0.05"
+                             " --out " + out.string() + " --report " + report.string(),
+                         log);
+  const std::string text = read_text(log);
+  INFO(text);
+  CHECK(status == 2);
+  CHECK(text.find("no dataset '/steps/000020' (step 20 of 80)") != std::string::npos);
+  CHECK(text.find("gyre.h5") != std::string::npos);
+  REQUIRE(fs::exists(out));  // the partial surface
+  const auto r = nlohmann::json::parse(read_text(report));
+  CHECK_FALSE(r["complete"].get<bool>());
+  CHECK(r["path"]["time_reached"].get<double>() <= 2.0 + 1e-9);
+  CHECK(r["path"]["time_reached"].get<double>() > 1.0);
+  CHECK(io::read_mesh(out).vertex_count() > 20);
   fs::remove_all(dir);
 }

@@ -90,6 +90,7 @@ struct Hdf5Description {
   int gzip_level = 0;              ///< deflate level from the filter parameters (0: none)
   std::int64_t chunk_slices = 0;   ///< z-slices (2D: y-rows) per chunk; 0: contiguous
   std::array<std::int64_t, 3> brick{0, 0, 0};  ///< bricked: points per brick along x, y, z
+  std::vector<std::size_t> missing_steps;  ///< per-step storage: steps without a dataset
   std::string stored_type;         ///< e.g. "float32 little-endian"
   std::uint64_t stored_bytes = 0;  ///< bytes the samples occupy in the file (all steps)
 

@@ -225,14 +225,16 @@ struct Hdf5TimeSeries::Impl {
                           std::to_string(d.components));
     read_geometry(group_where, shape_path);
 
-    // Per-step datasets must all exist and agree.
+    // Per-step datasets must agree. A missing one is recorded, not fatal here: reading that step
+    // fails, naming it, so a surface stops there and keeps what it built before.
     if (d.storage == Hdf5Storage::per_step) {
       for (std::size_t s = 1; s < d.times.size(); ++s) {
         const std::string name = step_name(s);
         const std::string path_s = detail::child_path(d.dataset, name);
-        if (!link_exists(steps.get(), name))
-          throw FormatError(where() + ": no dataset '" + path_s + "' (step " + std::to_string(s) +
-                            " of " + std::to_string(d.times.size()) + ")");
+        if (!link_exists(steps.get(), name)) {
+          d.missing_steps.push_back(s);
+          continue;
+        }
         H5Id set(H5Dopen2(steps.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
         if (!set.valid()) throw FormatError(where() + ": '" + path_s + "' is not a dataset");
         const auto other = dataset_shape(set.get());
@@ -413,6 +415,10 @@ struct Hdf5TimeSeries::Impl {
 
   hid_t step_dataset(std::size_t step, H5Id& holder) const {
     if (d.storage != Hdf5Storage::per_step) return dataset.get();
+    if (!link_exists(steps.get(), step_name(step)))
+      throw FormatError(where() + ": no dataset '" + detail::child_path(d.dataset, step_name(step)) +
+                        "' (step " + std::to_string(step) + " of " + std::to_string(d.times.size()) +
+                        ")");
     holder = H5Id(H5Dopen2(steps.get(), step_name(step).c_str(), H5P_DEFAULT), H5Dclose);
     if (!holder.valid()) throw FormatError(step_where(step) + ": cannot open the dataset");
     return holder.get();
