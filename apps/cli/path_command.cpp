@@ -226,6 +226,10 @@ void add_path_command(CLI::App& app) {
       std::printf(".\nWrote %s%s%s\n", args->out.c_str(), args->report.empty() ? "" : " and ",
                   args->report.c_str());
     }
+    if (mesh.face_count() == 0)
+      std::fprintf(stderr, "orthofront: warning: the surface has no faces (stopped: %s after %d "
+                           "steps); check --t1, --steps, --edge and the flow along the seed\n",
+                   to_string(result.report.stop_reason), result.report.steps);
     if (!pr.complete) {
       if (interrupted()) throw Error("interrupted: the surface built so far was written");
       throw Error(pr.message + " (the surface built so far was written to " + args->out +

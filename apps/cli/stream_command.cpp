@@ -78,6 +78,10 @@ void add_stream_command(CLI::App& app) {
       if (!args->exr.empty()) std::cout << " and " << args->exr;
       std::cout << "\n";
     }
+    if (result.mesh.face_count() == 0)
+      std::cerr << "orthofront: warning: the surface has no faces (stopped: "
+                << to_string(result.report.stop_reason) << " after " << result.report.steps
+                << " steps); check --steps, --edge and the field's speed along the seed\n";
     if (!result.report.complete) throw Error("interrupted: the surface built so far was written");
   });
 }

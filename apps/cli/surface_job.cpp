@@ -19,23 +19,33 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
                           " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
                           " (--max-vertices)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
-  std::size_t inside = 0;
-  Vec3 first_outside = Vec3::Zero();
+  std::size_t inside = 0, no_data = 0;
+  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero();
   for (double s : seed.parameters) {
     Vec3 v;
     const Vec3 x = seed.point(s);
-    if (field->velocity(x, v) == FieldStatus::inside)
+    const FieldStatus status = field->velocity(x, v);
+    if (status == FieldStatus::inside)
       ++inside;
-    else if (inside == 0)
+    else if (status == FieldStatus::no_data && no_data++ == 0)
+      first_no_data = x;
+    else if (status == FieldStatus::outside && inside == 0)
       first_outside = x;
   }
   if (inside < 2) {
-    char where[128];
-    std::snprintf(where, sizeof where, "(%g, %g, %g)", first_outside.x(), first_outside.y(),
-                  first_outside.z());
+    const auto point = [](const Vec3& x) {
+      char text[128];
+      std::snprintf(text, sizeof text, "(%g, %g, %g)", x.x(), x.y(), x.z());
+      return std::string(text);
+    };
+    // Inside the domain but without data (NaN, fill values, zero vectors) is not "outside".
+    if (no_data > 0 && no_data + inside == seed.parameters.size())
+      throw InvalidArgument("seed '" + job.seed + "' lies where field '" + job.field +
+                            "' has no data (NaN, fill values or zero vectors; e.g. at the point " +
+                            point(first_no_data) + "; " + field->describe() + ")");
     throw InvalidArgument("seed '" + job.seed + "' lies outside the domain of field '" +
-                          job.field + "' (e.g. the point " + where + "; " + field->describe() +
-                          ")");
+                          job.field + "' (e.g. the point " + point(first_outside) + "; " +
+                          field->describe() + ")");
   }
   if (!show_progress) return build_stream_surface(*field, seed, job.options);
   ProgressBar bar(job.field);

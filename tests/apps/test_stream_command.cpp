@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
 
 namespace fs = std::filesystem;
@@ -114,4 +115,32 @@ TEST_CASE("fields lists every analytic field with its domain", "[cli][fields]") 
                            "repelling-node-saddle", "abc", "double-gyre"})
     CHECK(o.output.find(std::string(name) + "\n") != std::string::npos);
   CHECK(o.output.find("domain") != std::string::npos);
+}
+
+TEST_CASE("a seed in a field without data says so, not 'outside'", "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-nodata");
+  orthofront::VectorGrid zeros;
+  zeros.geometry.dimension = 3;
+  zeros.geometry.size = {6, 6, 6};
+  zeros.values.assign(zeros.geometry.point_count() * 3, 0.0f);  // zero vectors: no data (land)
+  orthofront::io::write_hdf5_grid(zeros, dir / "zeros.h5");
+  const Outcome o = run("stream --field " + (dir / "zeros.h5").string() +
+                        " --seed line:1,1,1:4,4,4 --out " + (dir / "x.vtp").string());
+  INFO(o.output);
+  CHECK(o.status == 2);
+  CHECK(o.output.find("has no data") != std::string::npos);
+  CHECK(o.output.find("(1, 1, 1)") != std::string::npos);
+  CHECK(o.output.find("outside") == std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "x.vtp"));
+}
+
+TEST_CASE("an empty surface is written with a warning", "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-empty");
+  const Outcome o = run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --steps 0 --out " +
+                        (dir / "x.vtp").string());
+  INFO(o.output);
+  CHECK(o.status == 0);
+  CHECK(o.output.find("warning: the surface has no faces (stopped: steps after 0 steps)") !=
+        std::string::npos);
+  CHECK(fs::exists(dir / "x.vtp"));
 }
