@@ -1,3 +1,4 @@
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -694,4 +695,23 @@ TEST_CASE("VTK's own reader reads our .vtp and we read VTK's", "[io][mesh][vtp][
     require_same_attributes(back, mesh, bitwise);
     CHECK(back.faces == mesh.faces);
   }
+}
+
+TEST_CASE("a write removes temporary files that killed writers left behind", "[io][atomic]") {
+  TempDir dir;
+  const fs::path out = dir.path() / "surface.vtp";
+  // A process that has exited (reaped): its PID names no running process.
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(dead, &status, 0);
+  const fs::path stale = out.string() + ".tmp-" + std::to_string(dead);
+  const fs::path live = out.string() + ".tmp-1";  // init runs: a writer still at work
+  const fs::path other = dir.path() / "other.vtp.tmp-123456789";
+  for (const fs::path& p : {stale, live, other}) std::ofstream(p) << "partial";
+  orthofront::io::write_atomically(out, [](std::ofstream& o) { o << "complete"; });
+  CHECK(fs::exists(out));
+  CHECK_FALSE(fs::exists(stale));
+  CHECK(fs::exists(live));
+  CHECK(fs::exists(other));  // another file's temporaries are not ours to judge
 }

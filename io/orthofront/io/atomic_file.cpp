@@ -1,6 +1,7 @@
 #include "orthofront/io/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -21,12 +22,6 @@ std::string errno_text(int err) {
   throw IoError("cannot write " + path.string() + ": " + what);
 }
 
-std::filesystem::path temporary_path(const std::filesystem::path& path) {
-  std::filesystem::path temp = path;
-  temp += ".tmp-" + std::to_string(::getpid());
-  return temp;
-}
-
 /// Forces the file's data to disk, so that after a power loss the renamed file is never empty.
 int sync_file(const std::filesystem::path& path, int flags) {
   const int fd = ::open(path.c_str(), flags | O_RDONLY | O_CLOEXEC);
@@ -44,6 +39,27 @@ void discard(std::ofstream& out, const std::filesystem::path& temp) {
 }
 
 }  // namespace
+
+std::filesystem::path temporary_path(const std::filesystem::path& path) {
+  const std::string prefix = path.filename().string() + ".tmp-";
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const auto pid = static_cast<pid_t>(std::stol(digits));
+    if (pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH) {
+      std::error_code ignored;
+      std::filesystem::remove(it->path(), ignored);
+    }
+  }
+  std::filesystem::path temp = path;
+  temp += ".tmp-" + std::to_string(::getpid());
+  return temp;
+}
 
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(std::ofstream&)>& write) {

@@ -13,6 +13,11 @@ namespace orthofront::io {
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(std::ofstream&)>& write);
 
+/// "<path>.tmp-<pid>": where a file is written before it is renamed onto `path`. Temporary files
+/// of `path` left by processes that no longer run (killed mid-write) are removed first, so a
+/// rerun cleans what a SIGKILL left.
+std::filesystem::path temporary_path(const std::filesystem::path& path);
+
 /// Throws IoError naming `path` when its directory does not exist or is not writable.
 void check_writable(const std::filesystem::path& path);
 

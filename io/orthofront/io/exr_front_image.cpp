@@ -122,8 +122,7 @@ FrontImageSummary write_front_image(const Mesh& mesh, const std::filesystem::pat
   for (const float c : coverage) summary.covered += c > 0 ? 1 : 0;
 
   check_writable(path);
-  std::filesystem::path temp = path;
-  temp += ".tmp-" + std::to_string(::getpid());
+  const std::filesystem::path temp = temporary_path(path);
   try {
     Imf::Header header(width, height);
     header.compression() = Imf::ZIP_COMPRESSION;

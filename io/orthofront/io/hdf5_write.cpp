@@ -95,12 +95,6 @@ void check_times(const std::vector<double>& times) {
   }
 }
 
-std::filesystem::path temporary_path(const std::filesystem::path& file) {
-  std::filesystem::path temp = file;
-  temp += ".tmp-" + std::to_string(::getpid());
-  return temp;
-}
-
 void write_doubles_dataset(hid_t group, const char* name, std::span<const double> values,
                            const std::string& where) {
   const hsize_t n = values.size();

@@ -482,8 +482,7 @@ std::size_t VdbFileWriter::grids() const { return impl_->grids.size(); }
 
 void VdbFileWriter::commit() {
   const std::filesystem::path& path = impl_->path;
-  std::filesystem::path temp = path;
-  temp += ".tmp-" + std::to_string(::getpid());
+  const std::filesystem::path temp = temporary_path(path);
   try {
     openvdb::io::File file(temp.string());
     file.write(impl_->grids);
