@@ -191,6 +191,9 @@ void add_path_command(CLI::App& app) {
     Mesh& mesh = result.mesh;
     if (args->spacetime_out && !result.spacetime_positions.empty())
       mesh.positions = result.spacetime_positions;
+    // The mesh and its report are replaced together: a concurrent run of the same outputs
+    // cannot interleave its files with these.
+    const io::OutputLock lock(out);
     io::write_mesh(mesh, out);
     if (!args->report.empty()) {
       nlohmann::json report = io::to_json(result.report);

@@ -58,6 +58,9 @@ void add_stream_command(CLI::App& app) {
       io::check_writable(args->exr);
     }
     const SurfaceResult result = run_surface(args->job, true);
+    // The mesh and its report are replaced together: a concurrent run of the same outputs
+    // cannot interleave its files with these.
+    const io::OutputLock lock(out);
     io::write_mesh(result.mesh, out);
     if (!args->exr.empty()) {
       io::FrontImageOptions image;

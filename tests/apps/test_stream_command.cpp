@@ -144,3 +144,24 @@ TEST_CASE("an empty surface is written with a warning", "[cli][stream]") {
         std::string::npos);
   CHECK(fs::exists(dir / "x.vtp"));
 }
+
+TEST_CASE("two runs writing the same mesh and report leave a matching pair", "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-race");
+  const std::string mesh = (dir / "s.vtp").string(), report = (dir / "s.json").string();
+  for (int trial = 0; trial < 6; ++trial) {
+    // Two surfaces of different sizes, started together.
+    const std::string common = "' stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --quiet"
+                               " --out '" + mesh + "' --report '" + report + "'";
+    const std::string both = "('" + std::string(ORTHOFRONT_BINARY) + common + " --seed-count 10 & '" +
+                             ORTHOFRONT_BINARY + common + " --seed-count 30 & wait) >/dev/null 2>&1";
+    REQUIRE(std::system(both.c_str()) == 0);
+    std::ifstream in(report);
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string json = text.str();
+    const std::size_t at = json.find("\"vertices\":");
+    REQUIRE(at != std::string::npos);
+    const std::size_t vertices = std::stoul(json.substr(at + 11));
+    CHECK(orthofront::io::read_mesh(mesh).vertex_count() == vertices);
+  }
+}

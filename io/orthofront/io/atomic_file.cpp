@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -98,6 +99,21 @@ void write_atomically(const std::filesystem::path& path,
   std::filesystem::path dir = path.parent_path();
   if (dir.empty()) dir = ".";
   sync_file(dir, O_DIRECTORY);
+}
+
+OutputLock::OutputLock(const std::filesystem::path& path) {
+  std::filesystem::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  // Without a lock (a file system that refuses it) the files are still each written atomically.
+  if (fd_ >= 0 && ::flock(fd_, LOCK_EX) != 0) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing releases the lock
 }
 
 void check_writable(const std::filesystem::path& path) {

@@ -18,6 +18,20 @@ void write_atomically(const std::filesystem::path& path,
 /// rerun cleans what a SIGKILL left.
 std::filesystem::path temporary_path(const std::filesystem::path& path);
 
+/// An exclusive lock on the folder of `path` (flock on the folder itself: nothing is left on
+/// disk). A command holds it while it replaces the files that belong together (a mesh and its
+/// report), so two runs writing the same outputs leave a matching set: the last one's.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::filesystem::path& path);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 /// Throws IoError naming `path` when its directory does not exist or is not writable.
 void check_writable(const std::filesystem::path& path);
 
