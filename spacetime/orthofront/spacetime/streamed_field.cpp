@@ -350,7 +350,8 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
   }
   if (pinned.empty()) u.first_step = 0;
   cache_.require_fits(pinned.size(), "the front's band (" + std::to_string(pinned.size()) +
-                                         " bricks over time steps " +
+                                         (layout_.bricks() == 1 ? " time steps, " : " bricks over ") +
+                                         "time steps " +
                                          std::to_string(u.first_step) + ".." +
                                          std::to_string(u.last_step) + ")");
   cache_.new_epoch(u.first_step);
