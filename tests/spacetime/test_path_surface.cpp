@@ -330,3 +330,18 @@ TEST_CASE("max_band keeps the front's time band bounded", "[spacetime][band]") {
   CHECK(bounded.path.complete);
   CHECK(bounded.report.quality.non_manifold_edges == 0);
 }
+
+TEST_CASE("a path surface cut short by a budget says so", "[spacetime][path]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.25, 0), Vec3(0.9, 0.7, 0));
+  PathSurfaceOptions o = path_options(0.0, 10.0, 0.05);
+  o.engine.max_vertices = 300;
+  const PathSurfaceResult capped = build_path_surface(*flow, seed, 8, o);
+  CHECK_FALSE(capped.path.complete);
+  CHECK_FALSE(capped.report.complete);
+  CHECK(capped.path.time_reached < 10.0);
+  CHECK_THAT(capped.path.message, Catch::Contains("of t1 = 10") &&
+                                      Catch::Contains("raise --max-vertices"));
+  o.engine.max_vertices = 10'000'000;
+  CHECK(build_path_surface(*flow, seed, 8, o).path.complete);  // reaching t1 is complete
+}

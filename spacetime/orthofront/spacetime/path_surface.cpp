@@ -272,6 +272,19 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
   }
   for (BandRecord& b : pr.band)
     if (b.vertex_t_min > b.vertex_t_max) b.vertex_t_min = b.vertex_t_max = b.t_max;
+  // A surface cut short by a budget before its path lines reached t1 did not do what was asked.
+  const StopReason reason = sr.report.stop_reason;
+  if (pr.complete && pr.time_reached < o.t1 - 1e-6 * (o.t1 - o.t0) &&
+      (reason == StopReason::steps || reason == StopReason::vertex_budget ||
+       reason == StopReason::time_budget)) {
+    pr.complete = false;
+    const char* raise = reason == StopReason::steps           ? "--steps"
+                        : reason == StopReason::vertex_budget ? "--max-vertices"
+                                                              : "--time-budget";
+    pr.message = "stopped at t = " + std::to_string(pr.time_reached) + " of t1 = " +
+                 std::to_string(o.t1) + ": " + to_string(reason) + " reached (raise " + raise +
+                 ")";
+  }
   result.report = std::move(sr.report);
   if (!pr.complete) {
     result.report.complete = false;
