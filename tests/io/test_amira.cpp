@@ -131,6 +131,14 @@ TEST_CASE("amira: bad files are rejected naming the file and the value", "[amira
     CHECK_THAT(thrown<FormatError>([&] { read_amira(dir / "short.am"); }),
                Contains("short.am") && Contains("truncated") && Contains("@2"));
   }
+  SECTION("a component count that does not match the data") {
+    std::string bad = good;
+    bad.replace(bad.find("float[3] Velocity"), 17, "float[2] Velocity");
+    write_file(dir / "two.am", bad);
+    CHECK_THAT(thrown<FormatError>([&] { read_amira(dir / "two.am"); }),
+               Contains("two.am") && Contains("float[2] Velocity") &&
+                   Contains("belong to no section"));
+  }
   SECTION("truncated header") {
     write_file(dir / "head.am", good.substr(0, 80));
     CHECK_THAT(thrown<FormatError>([&] { read_amira(dir / "head.am"); }),

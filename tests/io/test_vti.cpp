@@ -9,6 +9,7 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/vec_reader.h"
 #include "orthofront/io/vti_reader.h"
+#include "orthofront/io/vtk_xml.h"
 #include "orthofront/io/zlib_codec.h"
 
 using Catch::Matchers::Contains;
@@ -273,4 +274,21 @@ TEST_CASE("vti: tornado step 1 as .vti and as .vec gives identical values", "[vt
   CHECK(vti.geometry.spacing == vec.geometry.spacing);
   CHECK(vti.components == 3);
   CHECK(vti.values == vec.values);  // bit for bit
+}
+
+TEST_CASE("vti: a compression header claiming 4 GiB is refused before allocating", "[vti]") {
+  const std::string payload = orthofront::io::detail::zlib_deflate(std::string(16, 'x'));
+  std::string block;
+  const auto put = [&](std::uint32_t v) { block.append(reinterpret_cast<const char*>(&v), 4); };
+  put(1);            // one block
+  put(0xffffffffu);  // block size
+  put(0);            // the last block is full: 4 GiB claimed
+  put(static_cast<std::uint32_t>(payload.size()));
+  block += payload;
+  orthofront::io::detail::VtkLayout layout;
+  layout.compressor = "vtkZLibDataCompressor";
+  CHECK_THAT(thrown<FormatError>([&] {
+               orthofront::io::detail::decode_vtk_block(block, layout, "big.vti: velocity");
+             }),
+             Contains("big.vti") && Contains("4294967295") && Contains("more than deflate"));
 }

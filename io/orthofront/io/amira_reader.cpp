@@ -1,5 +1,6 @@
 #include "orthofront/io/amira_reader.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -317,6 +318,27 @@ class AmiraParser {
       pos = read_section(*d, pos, wanted ? target : nullptr);
       if (d == &vector) have_vector = true;
       if (d == coordinates) have_coordinates = true;
+    }
+    // What follows must be another section (or nothing): bytes left over mean the header's type
+    // or sizes do not describe the data (e.g. float[2] declared over float[3] data).
+    while (pos < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos]))) ++pos;
+    if (pos < content_.size()) {
+      const std::size_t line_end = content_.find('\n', pos);
+      std::string_view marker = content_.substr(pos + 1, line_end == std::string_view::npos
+                                                             ? std::string_view::npos
+                                                             : line_end - pos - 1);
+      if (!marker.empty() && marker.back() == '\r') marker.remove_suffix(1);
+      int section = 0;
+      const bool declared =
+          content_[pos] == '@' && line_end != std::string_view::npos &&
+          detail::parse_number(marker, section) &&
+          std::any_of(declarations_.begin(), declarations_.end(),
+                      [&](const Declaration& d) { return d.section == section; });
+      if (!declared)
+        throw error("data section @" + std::to_string(vector.section) + " (" + vector.text() +
+                    ") is followed by " + std::to_string(content_.size() - pos) +
+                    " bytes that belong to no section: do the type and sizes in the header match "
+                    "the data?");
     }
   }
 

@@ -94,11 +94,21 @@ std::string decode_vtk_block(std::string_view bytes, const VtkLayout& layout,
   }
   const std::uint64_t total =
       blocks == 0 ? 0 : (blocks - 1) * block_size + (last_size == 0 ? block_size : last_size);
+  // Deflate expands at most 1032:1: a header claiming more would have us allocate for nothing.
+  constexpr double kMaxRatio = 1032.0;
+  if (static_cast<double>(total) > static_cast<double>(total_compressed) * kMaxRatio + 64.0)
+    throw FormatError(context + " declares " + std::to_string(total) + " bytes from " +
+                      std::to_string(total_compressed) +
+                      " compressed bytes, more than deflate can expand (damaged header?)");
   std::string out;
   out.reserve(static_cast<std::size_t>(total));
   for (std::uint64_t b = 0; b < blocks; ++b) {
     const auto size = static_cast<std::size_t>(load_header_value(data + (3 + b) * h, layout));
     const std::uint64_t expected = b + 1 == blocks && last_size != 0 ? last_size : block_size;
+    if (static_cast<double>(expected) > static_cast<double>(size) * kMaxRatio + 64.0)
+      throw FormatError(context + " block " + std::to_string(b) + " declares " +
+                        std::to_string(expected) + " bytes from " + std::to_string(size) +
+                        " compressed bytes, more than deflate can expand (damaged header?)");
     out += zlib_inflate(bytes.substr(offset, size), static_cast<std::size_t>(expected),
                         context + " block " + std::to_string(b));
     offset += size;
