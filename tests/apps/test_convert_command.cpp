@@ -122,7 +122,7 @@ TEST_CASE("convert: bad arguments are refused with a message", "[apps][convert]"
   CHECK_FALSE(fs::exists(dir / "x.h5"));
 }
 
-TEST_CASE("convert to .vdb on a full disk fails and leaves no file", "[apps][convert][diskfull]") {
+TEST_CASE("writing .vdb or .h5 on a full disk fails naming the cause, leaving no file", "[apps][convert][diskfull]") {
   TempDir dir("fulldisk");
   const fs::path small = dir / "small";
   fs::create_directories(small);
@@ -135,13 +135,16 @@ TEST_CASE("convert to .vdb on a full disk fails and leaves no file", "[apps][con
   REQUIRE(g.status == 0);
   const Run r = run("convert " + q(dir / "lz.h5") + " --out " + q(small / "x.vdb"));
   const bool left = fs::exists(small / "x.vdb");
+  const Run h = run("generate --field lorenz --resolution 40,40,40 --out " + q(small / "y.h5"));
   std::size_t litter = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(small)) ++litter;
   std::system(("umount " + q(small)).c_str());
-  INFO(r.output);
+  INFO(r.output << h.output);
   CHECK(r.status == 2);
   CHECK_THAT(r.output, Contains("x.vdb") && Contains("disk full"));
   CHECK_FALSE(left);
+  CHECK(h.status == 2);  // the HDF5 writer says why too
+  CHECK_THAT(h.output, Contains("y.h5") && Contains("disk full"));
   CHECK(litter == 0);
 }
 

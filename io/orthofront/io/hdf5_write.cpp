@@ -4,9 +4,11 @@
 #include <zlib.h>
 
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <system_error>
 
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
@@ -93,6 +95,18 @@ void check_times(const std::vector<double>& times) {
       throw InvalidArgument("HDF5 layout: times must be finite and strictly increasing; time " +
                             std::to_string(i) + " is " + std::to_string(times[i]));
   }
+}
+
+// Why a write failed, as far as the file system tells: HDF5 reports only that it failed.
+std::string failure_cause(const std::filesystem::path& file) {
+  std::error_code error;
+  std::filesystem::path dir = file.parent_path();
+  if (dir.empty()) dir = ".";
+  const auto space = std::filesystem::space(dir, error);
+  if (!error && space.available < (std::size_t{1} << 20))
+    return " (disk full: " + std::to_string(space.available) + " bytes free in " + dir.string() +
+           ")";
+  return errno != 0 ? " (" + std::generic_category().message(errno) + ")" : std::string();
 }
 
 void write_doubles_dataset(hid_t group, const char* name, std::span<const double> values,
@@ -335,7 +349,8 @@ struct FieldWriter {
     }
     if (H5Dwrite(target, H5T_NATIVE_FLOAT, memory.get(), file_space.get(), H5P_DEFAULT,
                  values.data()) < 0)
-      throw IoError("cannot write step " + std::to_string(written) + " of " + where());
+      throw IoError("cannot write step " + std::to_string(written) + " of " + where() +
+                    failure_cause(temp));
   }
 
   /// Shuffle + deflate every chunk of the step in parallel, then store them in order with
@@ -370,7 +385,7 @@ struct FieldWriter {
       if (H5Dwrite_chunk(target, H5P_DEFAULT, masks[static_cast<std::size_t>(c)], offset.data(),
                          chunk.size(), chunk.data()) < 0)
         throw IoError("cannot write chunk " + std::to_string(c) + " of step " +
-                      std::to_string(written) + " of " + where());
+                      std::to_string(written) + " of " + where() + failure_cause(temp));
     }
   }
 
@@ -445,7 +460,7 @@ struct FieldWriter {
       if (H5Dwrite_chunk(target, H5P_DEFAULT, masks[b], offset.data(), encoded[b].size(),
                          encoded[b].data()) < 0)
         throw IoError("cannot write brick " + std::to_string(b) + " of step " +
-                      std::to_string(written) + " of " + where());
+                      std::to_string(written) + " of " + where() + failure_cause(temp));
     }
   }
 
@@ -459,7 +474,7 @@ struct FieldWriter {
     steps_group.reset();
     group.reset();
     if (H5Fflush(h5file.get(), H5F_SCOPE_GLOBAL) < 0 || !h5file.reset())
-      throw IoError("cannot write HDF5 file " + temp.string());
+      throw IoError("cannot write HDF5 file " + temp.string() + failure_cause(temp));
     std::error_code error;
     std::filesystem::rename(temp, file, error);
     if (error)
