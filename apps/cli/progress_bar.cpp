@@ -9,12 +9,24 @@ namespace orthofront::cli {
 
 namespace {
 volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_interrupt(int) { g_interrupted = 1; }
+// The first SIGINT or SIGTERM asks the run to stop and write what it built; a second one
+// (a user who does not want to wait for that write) ends the process at once.
+extern "C" void on_interrupt(int signal) {
+  if (g_interrupted != 0) {
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+    return;
+  }
+  g_interrupted = 1;
+}
 }  // namespace
 
 bool interrupted() { return g_interrupted != 0; }
 
-void install_interrupt_handler() { std::signal(SIGINT, on_interrupt); }
+void install_interrupt_handler() {
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+}
 
 ProgressBar::ProgressBar(std::string label)
     : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}

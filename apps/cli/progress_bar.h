@@ -23,7 +23,8 @@ class ProgressBar {
   double last_draw_ = -1;
 };
 
-/// True once SIGINT arrived (the handler is installed by install_interrupt_handler).
+/// True once SIGINT or SIGTERM arrived (the handler is installed by install_interrupt_handler;
+/// a second signal ends the process at once).
 bool interrupted();
 void install_interrupt_handler();
 

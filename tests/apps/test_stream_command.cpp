@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <csignal>
 #include <string>
+#include <vector>
 
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
@@ -163,5 +165,52 @@ TEST_CASE("two runs writing the same mesh and report leave a matching pair", "[c
     REQUIRE(at != std::string::npos);
     const std::size_t vertices = std::stoul(json.substr(at + 11));
     CHECK(orthofront::io::read_mesh(mesh).vertex_count() == vertices);
+  }
+}
+
+namespace {
+// Starts `orthofront ARGS...` with its output in `log`; returns the child's pid.
+pid_t start(const std::vector<std::string>& args, const fs::path& log) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(log.c_str(), "w", stdout);
+    std::freopen(log.c_str(), "a", stderr);
+    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(ORTHOFRONT_BINARY, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+}  // namespace
+
+TEST_CASE("SIGTERM and SIGINT write the surface built so far, marked incomplete",
+          "[cli][stream][signals]") {
+  const fs::path dir = fresh_dir("stream-signal");
+  // A long run: the Lorenz band to 10^6 steps.
+  const std::vector<std::string> args{"stream", "--field", "lorenz:reverse=1", "--seed",
+                                      "circle:0,0,0:1.283,1,0:1", "--seed-count", "10", "--edge",
+                                      "0.5", "--steps", "1000000", "--max-vertices", "100000000",
+                                      "--out", (dir / "s.vtp").string(), "--report",
+                                      (dir / "s.json").string()};
+  for (int signal : {SIGTERM, SIGINT}) {
+    const pid_t pid = start(args, dir / "log.txt");
+    ::usleep(1'500'000);
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    std::ifstream log(dir / "log.txt");
+    std::stringstream text;
+    text << log.rdbuf();
+    INFO("signal " << signal << ": " << text.str());
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 2);
+    CHECK(text.str().find("interrupted") != std::string::npos);
+    CHECK(orthofront::io::read_mesh(dir / "s.vtp").vertex_count() > 100);
+    std::ifstream report(dir / "s.json");
+    std::stringstream json;
+    json << report.rdbuf();
+    CHECK(json.str().find("\"complete\": false") != std::string::npos);
   }
 }
