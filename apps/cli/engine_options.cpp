@@ -1,5 +1,7 @@
 #include "cli/engine_options.h"
 
+#include "cli/process_memory.h"
+
 #include <map>
 #include <string>
 
@@ -15,7 +17,10 @@ CLI::CheckedTransformer choices(const std::map<std::string, Enum>& map) {
 void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_option("--edge", o.edge, "Target edge length ℓ (world units)")->capture_default_str();
   c.add_option("--steps", o.max_steps, "Number of front steps")->capture_default_str();
-  c.add_option("--max-vertices", o.max_vertices, "Stop once the mesh has this many vertices")
+  o.max_vertices = default_vertex_budget();
+  c.add_option("--max-vertices", o.max_vertices,
+               "Stop once the mesh has this many vertices (default: what half the available "
+               "memory holds, at most 50 M)")
       ->capture_default_str();
   c.add_option("--time-budget", o.time_budget_seconds, "Stop after this many seconds");
   c.add_option("--method", o.method, "orthogonal (flow-orthogonal fronts) or timeline (baseline)")

@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "orthofront/error.h"
@@ -23,16 +24,6 @@
 
 namespace orthofront::cli {
 
-namespace {
-// This process's peak resident set (VmHWM), 0 where /proc is not available.
-std::size_t peak_rss_bytes() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;
-  return 0;
-}
-}  // namespace
 
 namespace {
 

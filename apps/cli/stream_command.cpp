@@ -3,6 +3,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/process_memory.h"
 #include "cli/surface_job.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
@@ -73,6 +74,7 @@ void add_stream_command(CLI::App& app) {
       report["seed"] = args->job.seed;
       report["seed_count"] = args->job.seed_count;
       report["output"] = args->out;
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}};
       io::write_json(report, args->report);
     }
     if (!args->quiet) {
@@ -81,6 +83,11 @@ void add_stream_command(CLI::App& app) {
       if (!args->exr.empty()) std::cout << " and " << args->exr;
       std::cout << "\n";
     }
+    if (result.report.stop_reason == StopReason::vertex_budget)
+      std::cerr << "orthofront: warning: stopped at the vertex budget of "
+                << args->job.options.max_vertices << " after " << result.report.steps
+                << " steps (peak memory " << peak_rss_bytes() / (1 << 20)
+                << " MiB); raise --max-vertices or --edge to go further\n";
     if (result.mesh.face_count() == 0)
       std::cerr << "orthofront: warning: the surface has no faces (stopped: "
                 << to_string(result.report.stop_reason) << " after " << result.report.steps

@@ -214,3 +214,19 @@ TEST_CASE("SIGTERM and SIGINT write the surface built so far, marked incomplete"
     CHECK(json.str().find("\"complete\": false") != std::string::npos);
   }
 }
+
+TEST_CASE("a surface stopped by the vertex budget says so, with the memory it used",
+          "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-budget");
+  const Outcome o = run("stream --field lorenz:reverse=1 --seed circle:0,0,0:1.283,1,0:1 "
+                        "--seed-count 10 --edge 0.5 --steps 500 --max-vertices 5000 --out " +
+                        (dir / "s.vtp").string() + " --report " + (dir / "s.json").string());
+  INFO(o.output);
+  CHECK(o.status == 0);
+  CHECK(o.output.find("warning: stopped at the vertex budget of 5000") != std::string::npos);
+  CHECK(o.output.find("raise --max-vertices") != std::string::npos);
+  std::ifstream report(dir / "s.json");
+  std::stringstream json;
+  json << report.rdbuf();
+  CHECK(json.str().find("\"peak_rss_bytes\"") != std::string::npos);
+}
