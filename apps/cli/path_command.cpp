@@ -202,11 +202,17 @@ void add_path_command(CLI::App& app) {
     if (!args->quiet) {
       std::printf(
           "Path surface of %s from %s: %zu vertices, %zu faces, t from %g to %g (reached %g), "
-          "c = %g (%s), %d steps, stopped: %s%s. Time %.3f s",
+          "c = %g (%s), %d steps, stopped: %s%s. Quality (2D flows in (x, y, c t), 3D in "
+          "space): %.1f%% quads, %.1f%% of quad angles within 90±10°, edge spread %.3f, "
+          "%zu folds, %zu non-manifold edges, %zu degenerate faces. Time %.3f s",
           args->field.c_str(), args->seed.c_str(), mesh.vertex_count(), mesh.face_count(), pr.t0,
           pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(),
           result.report.steps, to_string(result.report.stop_reason),
-          pr.complete ? "" : " (incomplete)", pr.total_seconds);
+          pr.complete ? "" : " (incomplete)", 100.0 * result.report.quality.quad_share,
+          100.0 * result.report.quality.quad_angles_within_10,
+          result.report.quality.edge_spread_median, result.report.quality.folds,
+          result.report.quality.non_manifold_edges, result.report.quality.degenerate_faces,
+          pr.total_seconds);
       if (pr.streamed)
         std::printf(" (waited %.3f s for data; read %.3f s, decode %.3f s in the pipeline); "
                     "cache: %zu units of %s touched, %zu hits, %zu misses, %zu late prefetches, "

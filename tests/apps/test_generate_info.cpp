@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "temp_dir.h"
 #include "apps/cli_run.h"
 
 namespace fs = std::filesystem;
@@ -18,26 +19,9 @@ using cli_test::run;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("orthofront-test-generate-" + std::to_string(::getpid()) +
-                                         "-" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  bool empty() const { return fs::is_empty(path_); }
+using test_support::TempDir;
 
- private:
-  fs::path path_;
-};
+std::string at(const TempDir& dir, const std::string& name) { return (dir / name).string(); }
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);
@@ -49,13 +33,13 @@ nlohmann::json read_json(const std::string& path) {
 TEST_CASE("generate writes a steady field that info describes", "[apps][generate]") {
   TempDir dir;
   const Run g =
-      run("generate --field saddle3d --resolution 17,9,5 --units-length m --out " + dir / "s.h5");
+      run("generate --field saddle3d --resolution 17,9,5 --units-length m --out " + at(dir, "s.h5"));
   INFO(g.output);
   REQUIRE(g.status == 0);
-  CHECK(fs::exists(dir / "s.h5"));
-  CHECK(fs::exists(dir / "s.xmf"));
+  CHECK(fs::exists(at(dir, "s.h5")));
+  CHECK(fs::exists(at(dir, "s.xmf")));
 
-  const Run info = run("info " + dir / "s.h5");
+  const Run info = run("info " + at(dir, "s.h5"));
   INFO(info.output);
   REQUIRE(info.status == 0);
   CHECK_THAT(info.output, Catch::Contains("uniform 3D, 17 x 9 x 5 points") &&
@@ -66,9 +50,9 @@ TEST_CASE("generate writes a steady field that info describes", "[apps][generate
                               Catch::Contains("v_x [-4, 4] v_y [-4, 4] v_z [-4, 4]") &&
                               Catch::Contains("bytes/step:   9180 "));
 
-  const Run json = run("info --json " + dir / "s.h5" + " > " + dir / "info.json");
+  const Run json = run("info --json " + at(dir, "s.h5") + " > " + at(dir, "info.json"));
   REQUIRE(json.status == 0);
-  const nlohmann::json j = read_json(dir / "info.json");
+  const nlohmann::json j = read_json(at(dir, "info.json"));
   CHECK(j["grid"]["size"] == nlohmann::json{17, 9, 5});
   CHECK(j["components"] == 3);
   CHECK(j["missing_points"] == 0);
@@ -77,7 +61,7 @@ TEST_CASE("generate writes a steady field that info describes", "[apps][generate
 TEST_CASE("generate streams time series of unsteady fields in both layouts", "[apps][generate]") {
   TempDir dir;
   for (const char* layout : {"chunked", "per-step"}) {
-    const std::string file = dir / (std::string(layout) + ".h5");
+    const std::string file = at(dir, (std::string(layout) + ".h5"));
     const Run g = run(std::string("generate --field double-gyre --resolution 41,21,1 --steps 5 "
                                   "--t0 0 --t1 2 --compress gzip:3 --layout ") +
                       layout + " --group /dg --out " + file);
@@ -93,27 +77,27 @@ TEST_CASE("generate streams time series of unsteady fields in both layouts", "[a
                                 Catch::Contains("shuffle + gzip level 3"));
   }
   const Run g3 = run("generate --field unsteady-abc --resolution 16,16,16 --steps 3 --t1 1 --out " +
-                     dir / "abc.h5");
+                     at(dir, "abc.h5"));
   INFO(g3.output);
   REQUIRE(g3.status == 0);
-  const Run info = run("info " + dir / "abc.h5");
+  const Run info = run("info " + at(dir, "abc.h5"));
   CHECK_THAT(info.output, Catch::Contains("16 x 16 x 16") && Catch::Contains("steps:        3"));
 }
 
 TEST_CASE("stream on a sampled field matches the analytic field", "[apps][generate][stream]") {
   TempDir dir;
-  REQUIRE(run("generate --field saddle3d --resolution 81,81,81 --out " + dir / "s.h5").status == 0);
+  REQUIRE(run("generate --field saddle3d --resolution 81,81,81 --out " + at(dir, "s.h5")).status == 0);
   const std::string common =
       " --seed line:-1,2,0.1:1,2,0.1 --seed-count 21 --edge 0.1 --steps 60 --quiet ";
-  const Run grid = run("stream --field " + dir / "s.h5" + common + "--out " + dir / "g.ply" +
-                       " --report " + dir / "g.json");
+  const Run grid = run("stream --field " + at(dir, "s.h5") + common + "--out " + at(dir, "g.ply") +
+                       " --report " + at(dir, "g.json"));
   INFO(grid.output);
   REQUIRE(grid.status == 0);
-  const Run exact = run("stream --field saddle3d" + common + "--out " + dir / "e.ply" +
-                        " --report " + dir / "e.json");
+  const Run exact = run("stream --field saddle3d" + common + "--out " + at(dir, "e.ply") +
+                        " --report " + at(dir, "e.json"));
   REQUIRE(exact.status == 0);
-  const double v_grid = read_json(dir / "g.json")["counts"]["vertices"].get<double>();
-  const double v_exact = read_json(dir / "e.json")["counts"]["vertices"].get<double>();
+  const double v_grid = read_json(at(dir, "g.json"))["counts"]["vertices"].get<double>();
+  const double v_exact = read_json(at(dir, "e.json"))["counts"]["vertices"].get<double>();
   CHECK(v_grid > 1000);
   CHECK(v_grid == Approx(v_exact).epsilon(0.02));
 }
@@ -121,34 +105,34 @@ TEST_CASE("stream on a sampled field matches the analytic field", "[apps][genera
 TEST_CASE("bad paths and values fail with a message naming them", "[apps][generate][errors]") {
   TempDir dir;
   SECTION("info on a missing file") {
-    const Run r = run("info " + dir / "missing.h5");
+    const Run r = run("info " + at(dir, "missing.h5"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("missing.h5") && Catch::Contains("no such file"));
   }
   SECTION("info on a file that is not HDF5") {
-    std::ofstream(dir / "text.h5") << "not hdf5";
-    const Run r = run("info " + dir / "text.h5");
+    std::ofstream(at(dir, "text.h5")) << "not hdf5";
+    const Run r = run("info " + at(dir, "text.h5"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("text.h5 is not an HDF5 file"));
   }
   SECTION("info on an unknown format") {
-    const Run r = run("info " + dir / "field.xyz");
+    const Run r = run("info " + at(dir, "field.xyz"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("field.xyz") && Catch::Contains(".h5"));
   }
   SECTION("stream on a missing file and on a missing group") {
-    Run r = run("stream --field " + dir / "missing.h5" + " --seed line:0,0,0:1,1,1 --out " +
-                dir / "x.ply");
+    Run r = run("stream --field " + at(dir, "missing.h5") + " --seed line:0,0,0:1,1,1 --out " +
+                at(dir, "x.ply"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("missing.h5"));
-    REQUIRE(run("generate --field saddle3d --resolution 5,5,5 --out " + dir / "s.h5").status == 0);
-    r = run("stream --field " + dir / "s.h5:/nope" + " --seed line:0,0,0:1,1,1 --out " +
-            dir / "x.ply");
+    REQUIRE(run("generate --field saddle3d --resolution 5,5,5 --out " + at(dir, "s.h5")).status == 0);
+    r = run("stream --field " + at(dir, "s.h5:/nope") + " --seed line:0,0,0:1,1,1 --out " +
+            at(dir, "x.ply"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("s.h5: no group or dataset '/nope'"));
   }
   SECTION("generate into a missing folder leaves nothing") {
-    const Run r = run("generate --field saddle3d --resolution 5,5,5 --out " + dir / "no/s.h5");
+    const Run r = run("generate --field saddle3d --resolution 5,5,5 --out " + at(dir, "no/s.h5"));
     CHECK(r.status != 0);
     CHECK_THAT(r.output, Catch::Contains("no/s.h5"));
     CHECK(dir.empty());
@@ -162,7 +146,7 @@ TEST_CASE("bad paths and values fail with a message naming them", "[apps][genera
           std::string("--field double-gyre --resolution 5,5,1"),
           std::string("--field double-gyre --resolution 5,5,1 --steps 3 --t0 1 --t1 0"),
           std::string("--field unsteady-abc --resolution 5,5,5 --steps 2 --t0 -1 --t1 1")}) {
-      const Run r = run("generate " + args + " --out " + dir / "s.h5");
+      const Run r = run("generate " + args + " --out " + at(dir, "s.h5"));
       INFO(args << "\n" << r.output);
       CHECK(r.status != 0);
       CHECK_THAT(r.output, Catch::Contains("error"));

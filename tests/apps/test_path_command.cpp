@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +73,13 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
   CHECK(j["complete"] == true);
+  // The summary gives the quality figures of the report.
+  char quads[64];
+  std::snprintf(quads, sizeof quads, "%.1f%% quads", 100.0 * j["quality"]["quad_share"].get<double>());
+  const std::string summary = read_text(dir / "log");
+  CHECK(summary.find(quads) != std::string::npos);
+  CHECK(summary.find(std::to_string(j["quality"]["folds"].get<std::size_t>()) + " folds") !=
+        std::string::npos);
   CHECK(j["path"]["time_scale_source"] == "median seed speed");
   CHECK(j["path"]["time_scale"].get<double>() > 0.1);
   CHECK(j["path"]["time_reached"].get<double>() == Approx(4.0).epsilon(1e-3));

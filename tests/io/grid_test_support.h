@@ -16,34 +16,13 @@
 #include <vector>
 
 #include "orthofront/field/grid.h"
+#include "temp_dir.h"
 
 namespace grid_test {
 
 namespace fs = std::filesystem;
 
-/// A fresh directory under the system temp directory, removed with its content.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag = "grid") {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() /
-            ("orthofront-test-" + tag + "-" + std::to_string(::getpid()) + "-" +
-             std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using test_support::TempDir;
 
 inline void write_file(const fs::path& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary);
