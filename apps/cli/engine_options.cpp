@@ -5,6 +5,8 @@
 #include <map>
 #include <string>
 
+#include "orthofront/spacetime/brick_cache.h"
+
 namespace orthofront::cli {
 
 namespace {
@@ -19,8 +21,9 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_option("--steps", o.max_steps, "Number of front steps")->capture_default_str();
   o.max_vertices = default_vertex_budget();
   c.add_option("--max-vertices", o.max_vertices,
-               "Stop once the mesh has this many vertices (default: what half the available "
-               "memory holds, at most 50 M)")
+               "Stop once the mesh has this many vertices (default: what half of --memory holds "
+               "at ~300 B a vertex, at most 50 M; the figure shown is for the memory available "
+               "now)")
       ->capture_default_str();
   c.add_option("--time-budget", o.time_budget_seconds, "Stop after this many seconds");
   c.add_option("--method", o.method, "orthogonal (flow-orthogonal fronts) or timeline (baseline)")
@@ -56,6 +59,55 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
       ->capture_default_str();
   c.add_option("--timeline-step", o.timeline_step,
                "Time step of the timeline baseline (0: edge / median seed speed)");
+}
+
+void add_memory_flag(CLI::App& c, MemoryLimits& limits) {
+  c.add_option("--memory", limits.memory,
+               "Memory the run may use, e.g. 4GiB, 512MiB (default: what the machine has "
+               "available when the run starts, now " +
+                   format_memory(available_memory_bytes()) +
+                   "). The vertex cap is half of it at ~300 B a vertex (unless --max-vertices is "
+                   "given); path's --cache-budget a quarter");
+}
+
+void apply_memory_flag(const CLI::App& c, MemoryLimits& limits, StreamSurfaceOptions& o) {
+  limits.memory_given = c.count("--memory") > 0;
+  limits.max_vertices_given = c.count("--max-vertices") > 0;
+  limits.memory_bytes =
+      limits.memory_given ? spacetime::parse_bytes(limits.memory) : available_memory_bytes();
+  if (!limits.max_vertices_given)
+    o.max_vertices =
+        limits.memory_given ? vertex_budget_for(limits.memory_bytes) : default_vertex_budget();
+  limits.max_vertices = o.max_vertices;
+}
+
+std::string MemoryLimits::cap_source() const {
+  if (max_vertices_given) return "--max-vertices";
+  if (memory_bytes == 0) return "the default cap (the machine's memory is unknown)";
+  return std::string("half of ") + (memory_given ? "--memory " : "the available memory ") +
+         format_memory(memory_bytes) + " at ~300 B a vertex";
+}
+
+std::string MemoryLimits::raise_advice() const {
+  // An explicit --max-vertices wins over --memory, so raising --memory alone would change nothing.
+  if (max_vertices_given) return "raise --max-vertices (or leave it out and give --memory)";
+  if (memory_given) return "raise --memory or --max-vertices";
+  return "raise --max-vertices or --memory (on a machine with more memory)";
+}
+
+nlohmann::json MemoryLimits::to_json() const {
+  return {{"memory_bytes", memory_bytes},
+          {"memory_source", memory_given ? "--memory" : "available memory"},
+          {"max_vertices", max_vertices},
+          {"max_vertices_source", max_vertices_given ? "--max-vertices"
+                                  : memory_given     ? "--memory"
+                                                     : "available memory"}};
+}
+
+std::string vertex_cap_reached(const MemoryLimits& limits, std::size_t vertices) {
+  return "the vertex budget of " + std::to_string(limits.max_vertices) + " (" +
+         limits.cap_source() + "): " + std::to_string(vertices) + " vertices, resident memory " +
+         format_memory(current_rss_bytes()) + " (peak " + format_memory(peak_rss_bytes()) + ")";
 }
 
 }  // namespace orthofront::cli

@@ -28,18 +28,21 @@ namespace orthofront::cli {
 namespace {
 
 struct PathArgs {
-  std::string field, seed, out, report, budget = "512MiB";
+  std::string field, seed, out, report, budget;  // budget: empty = a quarter of --memory
   int seed_count = 20;
   double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
   bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
   StreamSurfaceOptions options;
+  MemoryLimits limits;
 };
 
-// One status line on stderr (terminals only): simulated time, band, cache.
+// One status line on stderr (terminals only): simulated time, vertices against the cap,
+// resident memory, band, cache.
 class PathStatus {
  public:
-  PathStatus() : enabled_(isatty(STDERR_FILENO) != 0) {}
+  explicit PathStatus(std::size_t vertex_cap)
+      : enabled_(isatty(STDERR_FILENO) != 0), vertex_cap_(vertex_cap) {}
   ~PathStatus() { finish(); }
   PathStatus(const PathStatus&) = delete;
   PathStatus& operator=(const PathStatus&) = delete;
@@ -47,9 +50,11 @@ class PathStatus {
     if (interrupted()) return false;
     if (!enabled_ || p.engine.elapsed_seconds - last_ < 0.1) return true;
     last_ = p.engine.elapsed_seconds;
-    std::fprintf(stderr, "\rpath: t = %.4g of [%g, %g]  step %d  %zu vertices  band [%.4g, %.4g]",
-                 p.time_reached, p.t0, p.t1, p.engine.step, p.engine.vertices, p.band_begin,
-                 p.band_end);
+    std::fprintf(stderr,
+                 "\rpath: t = %.4g of [%g, %g]  step %d  %zu of %zu vertices  RSS %s  band "
+                 "[%.4g, %.4g]",
+                 p.time_reached, p.t0, p.t1, p.engine.step, p.engine.vertices, vertex_cap_,
+                 format_memory(current_rss_bytes()).c_str(), p.band_begin, p.band_end);
     if (p.streamed)
       std::fprintf(stderr, "  steps %zu-%zu  cache %s resident, %zu hits %zu misses, wait %.2fs",
                    p.band_first, p.band_last,
@@ -66,6 +71,7 @@ class PathStatus {
 
  private:
   bool enabled_;
+  std::size_t vertex_cap_;
   bool drawn_ = false;
   double last_ = -1;
 };
@@ -93,8 +99,9 @@ void add_path_command(CLI::App& app) {
                 "seed speed at t0")
       ->capture_default_str();
   c->add_option("--cache-budget", args->budget,
-                "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded")
-      ->capture_default_str();
+                "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
+                "(default: a quarter of --memory, now " +
+                    format_memory(cache_budget_for(available_memory_bytes())) + ")");
   c->add_option("--cache-unit", args->cache_unit,
                 "What the cache holds: brick (the file's bricks, a space-time band around the "
                 "front) or step (whole time steps, the old cache)")
@@ -117,10 +124,12 @@ void add_path_command(CLI::App& app) {
   c->add_flag("--spacetime-out", args->spacetime_out,
               "2D flows: write positions (x, y, t) instead of (x, y, 0)");
   add_engine_flags(*c, args->options);
+  add_memory_flag(*c, args->limits);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args]() {
+  c->callback([args, c]() {
+    apply_memory_flag(*c, args->limits, args->options);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))
       throw InvalidArgument("output '" + args->out +
@@ -133,7 +142,8 @@ void add_path_command(CLI::App& app) {
     if (static_cast<std::size_t>(args->seed_count) > args->options.max_vertices)
       throw InvalidArgument("--seed-count " + std::to_string(args->seed_count) +
                             " exceeds the vertex budget of " +
-                            std::to_string(args->options.max_vertices) + " (--max-vertices)");
+                            std::to_string(args->options.max_vertices) +
+                            " (--max-vertices, or half of --memory at ~300 B a vertex)");
     const SeedCurve seed = parse_seed(args->seed);
     spacetime::PathSurfaceOptions o;
     o.engine = args->options;
@@ -142,10 +152,11 @@ void add_path_command(CLI::App& app) {
     o.time_scale = args->time_scale;
     o.max_band = args->max_band;
     o.engine.lag_ramp = args->band_ramp;
-    PathStatus status;
+    PathStatus status(args->options.max_vertices);
     o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
 
     spacetime::PathSurfaceResult result;
+    std::size_t cache_budget = 0;  // streamed runs only
     if (is_unsteady_field_name(args->field)) {
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
@@ -166,7 +177,10 @@ void add_path_command(CLI::App& app) {
                               "(docs/hdf5-layout.md) or OpenVDB files of timed vector grids; "
                               "this file is neither");
       spacetime::CacheOptions co;
-      co.budget_bytes = spacetime::parse_bytes(args->budget);
+      // An explicit --cache-budget wins over the share of --memory.
+      co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
+                                             : spacetime::parse_bytes(args->budget);
+      cache_budget = co.budget_bytes;
       co.prefetch = !args->no_prefetch;
       co.whole_steps = args->cache_unit == "step";
       spacetime::BrickCache cache(*series, co);
@@ -179,6 +193,23 @@ void add_path_command(CLI::App& app) {
       result = spacetime::build_path_surface(cache, seed, args->seed_count, o);
     }
     status.finish();
+    // Cut off by the vertex cap before t1: say what was reached and which flag raises the cap
+    // (the library's message names --max-vertices only; --memory is this command's).
+    const bool capped =
+        !result.path.complete && result.report.stop_reason == StopReason::vertex_budget;
+    if (capped) {
+      char reached[128];
+      std::snprintf(reached, sizeof reached, "stopped at t = %.6g of t1 = %g (step %d): reached ",
+                    result.path.time_reached, args->t1, result.report.steps);
+      const std::string text =
+          reached + vertex_cap_reached(args->limits, result.mesh.vertex_count());
+      std::string& note = result.report.message;
+      if (const auto at = note.rfind(result.path.message); at != std::string::npos)
+        note.replace(at, result.path.message.size(), text);
+      else
+        note += (note.empty() ? "" : "; ") + text;
+      result.path.message = text;
+    }
     Mesh& mesh = result.mesh;
     if (args->spacetime_out && !result.spacetime_positions.empty())
       mesh.positions = result.spacetime_positions;
@@ -195,7 +226,10 @@ void add_path_command(CLI::App& app) {
       report["complete"] = result.report.complete;
       report["path"] = spacetime::to_json(result.path);
       report["path"]["spacetime_out"] = args->spacetime_out;
-      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}};
+      report["limits"] = args->limits.to_json();
+      if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
+                           {"rss_bytes", current_rss_bytes()}};
       io::write_json(report, args->report);
     }
     const spacetime::PathReport& pr = result.path;
@@ -232,6 +266,10 @@ void add_path_command(CLI::App& app) {
                    to_string(result.report.stop_reason), result.report.steps);
     if (!pr.complete) {
       if (interrupted()) throw Error("interrupted: the surface built so far was written");
+      if (capped)
+        throw Error(pr.message + "; the surface built so far was written to " + args->out +
+                    ", marked incomplete. To go further, " + args->limits.raise_advice() +
+                    ", or raise --edge");
       throw Error(pr.message + " (the surface built so far was written to " + args->out +
                   ", marked incomplete)");
     }

@@ -5,6 +5,8 @@
 #include <csignal>
 #include <cstdio>
 
+#include "cli/process_memory.h"
+
 namespace orthofront::cli {
 
 namespace {
@@ -28,8 +30,8 @@ void install_interrupt_handler() {
   std::signal(SIGTERM, on_interrupt);
 }
 
-ProgressBar::ProgressBar(std::string label)
-    : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) != 0) {}
+ProgressBar::ProgressBar(std::string label, std::size_t vertex_cap)
+    : label_(std::move(label)), vertex_cap_(vertex_cap), enabled_(isatty(STDERR_FILENO) != 0) {}
 
 ProgressBar::~ProgressBar() { finish(); }
 
@@ -41,9 +43,16 @@ bool ProgressBar::update(const Progress& p) {
     const int filled = static_cast<int>(share * width);
     std::string bar(static_cast<std::size_t>(filled), '#');
     bar.resize(width, '.');
-    std::fprintf(stderr, "\r%s [%s] step %d/%d  %zu vertices  %zu fronts (%zu front vertices)  %.1fs ",
-                 label_.c_str(), bar.c_str(), p.step, p.max_steps, p.vertices, p.fronts,
-                 p.front_vertices, p.elapsed_seconds);
+    char vertices[64];
+    if (vertex_cap_ > 0)
+      std::snprintf(vertices, sizeof vertices, "%zu of %zu vertices", p.vertices, vertex_cap_);
+    else
+      std::snprintf(vertices, sizeof vertices, "%zu vertices", p.vertices);
+    // Resident memory is read only when a line is drawn (at most ~10 times a second).
+    std::fprintf(stderr, "\r%s [%s] step %d/%d  %s  RSS %s  %zu fronts (%zu front vertices)  %.1fs ",
+                 label_.c_str(), bar.c_str(), p.step, p.max_steps, vertices,
+                 format_memory(current_rss_bytes()).c_str(), p.fronts, p.front_vertices,
+                 p.elapsed_seconds);
     std::fflush(stderr);
     drawn_ = true;
   }

@@ -1,5 +1,6 @@
 #pragma once
-/// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+/// A one-line progress bar on stderr, drawn only when stderr is a terminal: steps, vertices
+/// (against the vertex cap when one is given), fronts and the resident memory.
 #include <string>
 
 #include "orthofront/engine/stream_surface.h"
@@ -8,7 +9,8 @@ namespace orthofront::cli {
 
 class ProgressBar {
  public:
-  explicit ProgressBar(std::string label);
+  /// `vertex_cap` > 0: show the vertices as "N of CAP" (how close the run is to stopping).
+  explicit ProgressBar(std::string label, std::size_t vertex_cap = 0);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
@@ -18,6 +20,7 @@ class ProgressBar {
 
  private:
   std::string label_;
+  std::size_t vertex_cap_ = 0;
   bool enabled_ = false;
   bool drawn_ = false;
   double last_draw_ = -1;

@@ -21,6 +21,7 @@ struct StreamArgs {
   std::string exr;
   int exr_bins = 0;
   bool quiet = false;
+  MemoryLimits limits;
 };
 }  // namespace
 
@@ -36,6 +37,7 @@ void add_stream_command(CLI::App& app) {
   c->add_option("--seed-count", args->job.seed_count, "Vertices on the seed curve")
       ->capture_default_str();
   add_engine_flags(*c, args->job.options);
+  add_memory_flag(*c, args->limits);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
   c->add_option("--exr", args->exr,
@@ -46,7 +48,8 @@ void add_stream_command(CLI::App& app) {
       ->check(CLI::Range(0, 1 << 16))
       ->capture_default_str();
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args]() {
+  c->callback([args, c]() {
+    apply_memory_flag(*c, args->limits, args->job.options);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))
       throw InvalidArgument("output '" + args->out +
@@ -58,7 +61,19 @@ void add_stream_command(CLI::App& app) {
         throw InvalidArgument("--exr '" + args->exr + "' must end in .exr");
       io::check_writable(args->exr);
     }
-    const SurfaceResult result = run_surface(args->job, true);
+    SurfaceResult result = run_surface(args->job, true);
+    // A surface cut off by the vertex cap did not take the steps asked for: the report says so
+    // (the exit status stays 0 with a warning, as before: what was built is a valid surface).
+    const bool capped = result.report.stop_reason == StopReason::vertex_budget;
+    std::string cap_text;
+    if (capped) {
+      cap_text = "stopped at " + vertex_cap_reached(args->limits, result.mesh.vertex_count()) +
+                 ", after " + std::to_string(result.report.steps) + " of " +
+                 std::to_string(args->job.options.max_steps) + " steps";
+      result.report.complete = false;
+      if (!result.report.message.empty()) result.report.message += "; ";
+      result.report.message += cap_text;
+    }
     // The mesh and its report are replaced together: a concurrent run of the same outputs
     // cannot interleave its files with these.
     const io::OutputLock lock(out);
@@ -74,7 +89,9 @@ void add_stream_command(CLI::App& app) {
       report["seed"] = args->job.seed;
       report["seed_count"] = args->job.seed_count;
       report["output"] = args->out;
-      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}};
+      report["limits"] = args->limits.to_json();
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
+                           {"rss_bytes", current_rss_bytes()}};
       io::write_json(report, args->report);
     }
     if (!args->quiet) {
@@ -83,16 +100,16 @@ void add_stream_command(CLI::App& app) {
       if (!args->exr.empty()) std::cout << " and " << args->exr;
       std::cout << "\n";
     }
-    if (result.report.stop_reason == StopReason::vertex_budget)
-      std::cerr << "orthofront: warning: stopped at the vertex budget of "
-                << args->job.options.max_vertices << " after " << result.report.steps
-                << " steps (peak memory " << peak_rss_bytes() / (1 << 20)
-                << " MiB); raise --max-vertices or --edge to go further\n";
+    if (capped)
+      std::cerr << "orthofront: warning: " << cap_text << "; the surface built so far was written to "
+                << args->out << ", marked incomplete. To go further, "
+                << args->limits.raise_advice() << ", or raise --edge\n";
     if (result.mesh.face_count() == 0)
       std::cerr << "orthofront: warning: the surface has no faces (stopped: "
                 << to_string(result.report.stop_reason) << " after " << result.report.steps
                 << " steps); check --steps, --edge and the field's speed along the seed\n";
-    if (!result.report.complete) throw Error("interrupted: the surface built so far was written");
+    if (result.report.stop_reason == StopReason::cancelled)
+      throw Error("interrupted: the surface built so far was written");
   });
 }
 

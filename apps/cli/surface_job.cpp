@@ -17,7 +17,7 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
   if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
     throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
                           " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
-                          " (--max-vertices)");
+                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
   std::size_t inside = 0, no_data = 0;
   Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero();
@@ -48,7 +48,7 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
                           field->describe() + ")");
   }
   if (!show_progress) return build_stream_surface(*field, seed, job.options);
-  ProgressBar bar(job.field);
+  ProgressBar bar(job.field, job.options.max_vertices);
   return build_stream_surface(*field, seed, job.options,
                               [&](const Progress& p) { return bar.update(p); });
 }
