@@ -19,34 +19,45 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
                           " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
                           " (--max-vertices, or half of --memory at ~300 B a vertex)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
-  std::size_t inside = 0, no_data = 0;
-  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero();
+  std::size_t inside = 0, no_data = 0, outside = 0, still = 0;
+  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero(), first_still = Vec3::Zero();
   for (double s : seed.parameters) {
     Vec3 v;
     const Vec3 x = seed.point(s);
     const FieldStatus status = field->velocity(x, v);
-    if (status == FieldStatus::inside)
+    if (status == FieldStatus::inside) {
       ++inside;
-    else if (status == FieldStatus::no_data && no_data++ == 0)
-      first_no_data = x;
-    else if (status == FieldStatus::outside && inside == 0)
+      if (v.squaredNorm() == 0 && still++ == 0) first_still = x;
+    } else if (status == FieldStatus::no_data) {
+      if (no_data++ == 0) first_no_data = x;
+    } else if (outside++ == 0) {
       first_outside = x;
+    }
   }
+  const auto point = [](const Vec3& x) {
+    char text[128];
+    std::snprintf(text, sizeof text, "(%g, %g, %g)", x.x(), x.y(), x.z());
+    return std::string(text);
+  };
+  const std::string vertices_inside = std::to_string(inside) + " of " +
+                                      std::to_string(seed.parameters.size()) + " seed vertices";
   if (inside < 2) {
-    const auto point = [](const Vec3& x) {
-      char text[128];
-      std::snprintf(text, sizeof text, "(%g, %g, %g)", x.x(), x.y(), x.z());
-      return std::string(text);
-    };
     // Inside the domain but without data (NaN, fill values, zero vectors) is not "outside".
     if (no_data > 0 && no_data + inside == seed.parameters.size())
       throw InvalidArgument("seed '" + job.seed + "' lies where field '" + job.field +
                             "' has no data (NaN, fill values or zero vectors; e.g. at the point " +
                             point(first_no_data) + "; " + field->describe() + ")");
     throw InvalidArgument("seed '" + job.seed + "' lies outside the domain of field '" +
-                          job.field + "' (e.g. the point " + point(first_outside) + "; " +
+                          job.field + "' (" + vertices_inside + " inside, at least 2 needed; " +
+                          "e.g. the point " + point(first_outside) + " is outside; " +
                           field->describe() + ")");
   }
+  // A flow that stands still along the whole seed moves no front: nothing to build.
+  if (still == inside)
+    throw InvalidArgument("field '" + job.field + "' has zero velocity at every vertex of seed '" +
+                          job.seed + "' inside its domain (" + vertices_inside +
+                          " inside; e.g. at the point " + point(first_still) +
+                          "): no flow to build a surface from");
   if (!show_progress) return build_stream_surface(*field, seed, job.options);
   ProgressBar bar(job.field, job.options.max_vertices);
   return build_stream_surface(*field, seed, job.options,

@@ -106,34 +106,34 @@ TEST_CASE("bad paths and values fail with a message naming them", "[apps][genera
   TempDir dir;
   SECTION("info on a missing file") {
     const Run r = run("info " + at(dir, "missing.h5"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("missing.h5") && Catch::Contains("no such file"));
   }
   SECTION("info on a file that is not HDF5") {
     std::ofstream(at(dir, "text.h5")) << "not hdf5";
     const Run r = run("info " + at(dir, "text.h5"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("text.h5 is not an HDF5 file"));
   }
   SECTION("info on an unknown format") {
     const Run r = run("info " + at(dir, "field.xyz"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("field.xyz") && Catch::Contains(".h5"));
   }
   SECTION("stream on a missing file and on a missing group") {
     Run r = run("stream --field " + at(dir, "missing.h5") + " --seed line:0,0,0:1,1,1 --out " +
                 at(dir, "x.ply"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("missing.h5"));
     REQUIRE(run("generate --field saddle3d --resolution 5,5,5 --out " + at(dir, "s.h5")).status == 0);
     r = run("stream --field " + at(dir, "s.h5:/nope") + " --seed line:0,0,0:1,1,1 --out " +
             at(dir, "x.ply"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("s.h5: no group or dataset '/nope'"));
   }
   SECTION("generate into a missing folder leaves nothing") {
     const Run r = run("generate --field saddle3d --resolution 5,5,5 --out " + at(dir, "no/s.h5"));
-    CHECK(r.status != 0);
+    CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("no/s.h5"));
     CHECK(dir.empty());
   }
@@ -148,7 +148,7 @@ TEST_CASE("bad paths and values fail with a message naming them", "[apps][genera
           std::string("--field unsteady-abc --resolution 5,5,5 --steps 2 --t0 -1 --t1 1")}) {
       const Run r = run("generate " + args + " --out " + at(dir, "s.h5"));
       INFO(args << "\n" << r.output);
-      CHECK(r.status != 0);
+      CHECK(r.status == 2);
       CHECK_THAT(r.output, Catch::Contains("error"));
     }
     CHECK(dir.empty());

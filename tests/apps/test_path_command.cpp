@@ -102,7 +102,9 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   fs::remove_all(dir);
 }
 
-TEST_CASE("path command: HDF5 series through the cache; errors leave no file", "[apps][path]") {
+// (No ";" in test names: catch_discover_tests splits the name there and the halves match nothing.)
+TEST_CASE("path command: HDF5 series through the cache, and errors that leave no file",
+          "[apps][path]") {
   const fs::path dir = fresh_dir();
   const fs::path h5 = write_gyre(dir, 41);
   const fs::path out = dir / "s.ply", report = dir / "s.json";
