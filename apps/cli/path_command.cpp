@@ -213,10 +213,12 @@ void add_path_command(CLI::App& app) {
     Mesh& mesh = result.mesh;
     if (args->spacetime_out && !result.spacetime_positions.empty())
       mesh.positions = result.spacetime_positions;
-    // The mesh and its report are replaced together: a concurrent run of the same outputs
-    // cannot interleave its files with these.
+    // The mesh and its report are replaced together: both are written in full to temporaries
+    // before either is renamed (a failure replaces neither), and a concurrent run of the same
+    // outputs cannot interleave its files with these.
     const io::OutputLock lock(out);
-    io::write_mesh(mesh, out);
+    io::AtomicFileSet outputs;
+    io::write_mesh(mesh, out, outputs);
     if (!args->report.empty()) {
       nlohmann::json report = io::to_json(result.report);
       report["field"] = args->field;
@@ -230,8 +232,9 @@ void add_path_command(CLI::App& app) {
       if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
                            {"rss_bytes", current_rss_bytes()}};
-      io::write_json(report, args->report);
+      io::write_json(report, args->report, outputs);
     }
+    outputs.commit();
     const spacetime::PathReport& pr = result.path;
     if (!args->quiet) {
       std::printf(

@@ -74,15 +74,12 @@ void add_stream_command(CLI::App& app) {
       if (!result.report.message.empty()) result.report.message += "; ";
       result.report.message += cap_text;
     }
-    // The mesh and its report are replaced together: a concurrent run of the same outputs
-    // cannot interleave its files with these.
+    // The mesh and its report are replaced together: both are written in full to temporaries
+    // before either is renamed (a failure replaces neither), and a concurrent run of the same
+    // outputs cannot interleave its files with these.
     const io::OutputLock lock(out);
-    io::write_mesh(result.mesh, out);
-    if (!args->exr.empty()) {
-      io::FrontImageOptions image;
-      image.s_bins = args->exr_bins;
-      io::write_front_image(result.mesh, args->exr, image);
-    }
+    io::AtomicFileSet outputs;
+    io::write_mesh(result.mesh, out, outputs);
     if (!args->report.empty()) {
       nlohmann::json report = io::to_json(result.report);
       report["field"] = args->job.field;
@@ -92,8 +89,14 @@ void add_stream_command(CLI::App& app) {
       report["limits"] = args->limits.to_json();
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
                            {"rss_bytes", current_rss_bytes()}};
-      io::write_json(report, args->report);
+      io::write_json(report, args->report, outputs);
     }
+    if (!args->exr.empty()) {
+      io::FrontImageOptions image;
+      image.s_bins = args->exr_bins;
+      io::write_front_image(result.mesh, args->exr, image);
+    }
+    outputs.commit();
     if (!args->quiet) {
       std::cout << summarize(args->job, result.report) << "\nWrote " << args->out;
       if (!args->report.empty()) std::cout << " and " << args->report;

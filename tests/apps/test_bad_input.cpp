@@ -580,7 +580,9 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
     CHECK(entries().empty());
   }
   {
-    // The mesh fits, its report does not: sizes measured on a roomy disk first.
+    // The mesh fits, its report does not: sizes measured on a roomy disk first. The two are
+    // replaced as a pair: neither is, and the message gives the cause. Once with no earlier
+    // outputs, once over an earlier mesh and report of the same names.
     const std::string args = "stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 4 "
                              "--steps 3 --out ";
     const Run roomy = run(args + q(dir / "s.ply") + " --report " + q(dir / "s.json"));
@@ -588,18 +590,30 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
     const std::uintmax_t page = 4096;
     const std::uintmax_t mesh_pages = (fs::file_size(dir / "s.ply") + page - 1) / page;
     REQUIRE(fs::file_size(dir / "s.json") > page);  // the report needs more than the page left
-    const Tmpfs disk(small, "size=" + std::to_string((mesh_pages + 1) * page));
-    REQUIRE(disk.mounted);
-    const Run r = run(args + q(small / "s.ply") + " --report " + q(small / "s.json"));
-    INFO(r.output);
-    CHECK(r.status == 2);
-    CHECK_THAT(r.output, Contains("cannot write " + (small / "s.json").string()));
-    CHECK_FALSE(fs::exists(small / "s.json"));
-    // No temporary is left. The mesh was renamed before the report failed: it is left, whole.
-    for (const std::string& name : entries()) CHECK(name.find(".tmp-") == std::string::npos);
-    if (fs::exists(small / "s.ply"))
-      CHECK(orthofront::io::read_mesh(small / "s.ply").vertex_count() ==
-            orthofront::io::read_mesh(dir / "s.ply").vertex_count());
+    for (const bool earlier : {false, true}) {
+      INFO((earlier ? "over an earlier mesh and report" : "no earlier outputs"));
+      // One page each for the earlier mesh and report, the new mesh, one page to spare.
+      const Tmpfs disk(small, "size=" + std::to_string((mesh_pages + (earlier ? 3 : 1)) * page));
+      REQUIRE(disk.mounted);
+      if (earlier) {
+        std::ofstream(small / "s.ply") << "earlier mesh";
+        std::ofstream(small / "s.json") << "earlier report";
+      }
+      const Run r = run(args + q(small / "s.ply") + " --report " + q(small / "s.json"));
+      INFO(r.output);
+      CHECK(r.status == 2);
+      CHECK_THAT(r.output, Contains("cannot write " + (small / "s.json").string()) &&
+                               Contains("No space left on device") && Contains("bytes free in"));
+      CHECK_THAT(r.output, !Contains("stream error"));
+      if (earlier) {
+        CHECK(entries().size() == 2);
+        CHECK(read_file(small / "s.ply") == "earlier mesh");
+        CHECK(read_file(small / "s.json") == "earlier report");
+      } else {
+        CHECK(entries().empty());  // no mesh, no report, no temporary
+      }
+      for (const std::string& name : entries()) CHECK(name.find(".tmp-") == std::string::npos);
+    }
   }
 }
 

@@ -544,6 +544,57 @@ TEST_CASE("write_atomically never leaves a partial file", "[io][atomic]") {
   CHECK(read_text(target) == "complete");  // a failed rewrite keeps the previous file
 }
 
+TEST_CASE("AtomicFileSet replaces its files together or not at all", "[io][atomic]") {
+  TempDir dir;
+  const fs::path mesh = dir / "s.vtp";
+  const fs::path report = dir / "s.json";
+  const auto writes = [](const std::string& text) {
+    return [text](std::ofstream& out) { out << text; };
+  };
+  {
+    orthofront::io::AtomicFileSet files;
+    files.add(mesh, writes("mesh 1"));
+    files.add(report, writes("report 1"));
+    CHECK_FALSE(fs::exists(mesh));  // nothing is replaced before commit
+    CHECK(dir.entries().size() == 2);
+    files.commit();
+  }
+  CHECK(dir.entries() == std::vector<std::string>{"s.json", "s.vtp"});
+  CHECK(read_text(mesh) == "mesh 1");
+  CHECK(read_text(report) == "report 1");
+  {
+    INFO("the second write fails: the first file is not replaced, no temporary is left");
+    orthofront::io::AtomicFileSet files;
+    files.add(mesh, writes("mesh 2"));
+    const std::string message = thrown<IoError>([&] {
+      files.add(report, [](std::ofstream& out) {
+        out << "partial";
+        throw std::runtime_error("report writer gave up");
+      });
+    });
+    CHECK_THAT(message, Contains("s.json") && Contains("report writer gave up"));
+    CHECK(dir.entries() == std::vector<std::string>{"s.json", "s.vtp"});
+    files.commit();  // nothing left to commit
+    CHECK(read_text(mesh) == "mesh 1");
+    CHECK(read_text(report) == "report 1");
+  }
+  {
+    INFO("a set destroyed before commit replaces nothing");
+    orthofront::io::AtomicFileSet files;
+    files.add(mesh, writes("mesh 3"));
+  }
+  CHECK(dir.entries() == std::vector<std::string>{"s.json", "s.vtp"});
+  CHECK(read_text(mesh) == "mesh 1");
+  {
+    INFO("one file twice in a set is refused");
+    orthofront::io::AtomicFileSet files;
+    files.add(mesh, writes("mesh 4"));
+    CHECK_THAT(thrown<IoError>([&] { files.add(dir.path() / "." / "s.vtp", writes("x")); }),
+               Contains("s.vtp") && Contains("also written"));
+    CHECK(dir.entries() == std::vector<std::string>{"s.json", "s.vtp"});
+  }
+}
+
 namespace {
 
 /// A python interpreter that can import VTK, or "" when there is none.

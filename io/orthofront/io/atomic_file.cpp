@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <exception>
 #include <string>
 #include <system_error>
@@ -17,6 +18,30 @@ namespace {
 
 std::string errno_text(int err) {
   return err != 0 ? std::generic_category().message(err) : std::string("stream error");
+}
+
+std::filesystem::path folder_of(const std::filesystem::path& path) {
+  std::filesystem::path dir = path.parent_path();
+  return dir.empty() ? std::filesystem::path(".") : dir;
+}
+
+/// Why writing `temp` failed: the system's error `err` and, when the disk is full, the bytes
+/// left there (as the HDF5 writer says it). A stream can lose errno (err = 0): a folder with
+/// (almost) nothing free is then still named as the likely cause.
+std::string write_cause(const std::filesystem::path& temp, int err) {
+  const std::filesystem::path dir = folder_of(temp);
+  std::error_code ec;
+  const auto space = std::filesystem::space(dir, ec);
+  const std::string free_text =
+      ec ? std::string() : std::to_string(space.available) + " bytes free in " + dir.string();
+  if (err == ENOSPC || err == EDQUOT) {
+    std::string text = std::generic_category().message(err);
+    if (!free_text.empty()) text += (err == ENOSPC ? " (disk full: " : " (") + free_text + ")";
+    return text;
+  }
+  if (err == 0 && !ec && space.available < (std::uintmax_t{1} << 20))
+    return "no system error reported, but the disk is probably full (" + free_text + ")";
+  return errno_text(err);
 }
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
@@ -38,6 +63,52 @@ void discard(std::ofstream& out, const std::filesystem::path& temp) {
   std::error_code ignored;
   std::filesystem::remove(temp, ignored);
 }
+
+/// Writes `temp` in full through `write` and forces it to disk; throws IoError naming `path`
+/// (the temporary is then removed).
+void write_temporary(const std::filesystem::path& path, const std::filesystem::path& temp,
+                     const std::function<void(std::ofstream&)>& write) {
+  std::ofstream out;
+  try {
+    errno = 0;
+    out.open(temp, std::ios::binary | std::ios::trunc);
+    if (!out) fail(path, "cannot create " + temp.string() + ": " + errno_text(errno));
+    errno = 0;
+    write(out);
+    out.exceptions(std::ios::goodbit);
+    // The stream's write(2) that failed left its errno: read it before anything else can
+    // overwrite it (the buffered rest is written by flush(), its failure likewise).
+    int err = out.fail() ? errno : 0;
+    if (!out.fail()) {
+      errno = 0;
+      out.flush();
+      if (out.fail()) err = errno;
+    }
+    const bool failed = out.fail();
+    errno = 0;
+    out.close();
+    if (!failed && out.fail()) err = errno;
+    if (out.fail()) fail(path, "writing " + temp.string() + " failed: " + write_cause(temp, err));
+    if (const int sync_err = sync_file(temp, 0); sync_err != 0) {
+      fail(path, "fsync of " + temp.string() + " failed: " + write_cause(temp, sync_err));
+    }
+  } catch (const IoError&) {
+    discard(out, temp);
+    throw;
+  } catch (const std::exception& e) {
+    discard(out, temp);
+    // Keeps the cause reachable through std::rethrow_if_nested.
+    std::throw_with_nested(IoError("cannot write " + path.string() + ": " + e.what()));
+  } catch (...) {
+    // Not an error of ours (e.g. thread cancellation): clean up and let it pass unchanged.
+    discard(out, temp);
+    throw;
+  }
+}
+
+/// The rename is durable only once the directory entry is; failures here (file systems that
+/// cannot sync directories) leave a complete file behind, so they are not errors.
+void sync_folder(const std::filesystem::path& path) { sync_file(folder_of(path), O_DIRECTORY); }
 
 }  // namespace
 
@@ -65,40 +136,63 @@ std::filesystem::path temporary_path(const std::filesystem::path& path) {
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(std::ofstream&)>& write) {
   const std::filesystem::path temp = temporary_path(path);
-  std::ofstream out;
+  write_temporary(path, temp, write);
+  std::error_code ec;
+  std::filesystem::rename(temp, path, ec);
+  if (ec) {
+    std::filesystem::remove(temp, ec);
+    fail(path, "cannot rename " + temp.string() + ": " + ec.message());
+  }
+  sync_folder(path);
+}
+
+AtomicFileSet::~AtomicFileSet() { discard(); }
+
+void AtomicFileSet::discard() noexcept {
+  for (const auto& [file, temp] : staged_) {
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+  }
+  staged_.clear();
+}
+
+void AtomicFileSet::add(const std::filesystem::path& path,
+                        const std::function<void(std::ofstream&)>& write) {
   try {
-    errno = 0;
-    out.open(temp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot create " + temp.string() + ": " + errno_text(errno));
-    write(out);
-    out.exceptions(std::ios::goodbit);
-    errno = 0;
-    out.flush();
-    out.close();
-    if (out.fail()) fail(path, "writing " + temp.string() + " failed: " + errno_text(errno));
-    if (const int err = sync_file(temp, 0); err != 0) {
-      fail(path, "fsync of " + temp.string() + " failed: " + errno_text(err));
-    }
     std::error_code ec;
-    std::filesystem::rename(temp, path, ec);
-    if (ec) fail(path, "cannot rename " + temp.string() + ": " + ec.message());
-  } catch (const IoError&) {
-    discard(out, temp);
-    throw;
-  } catch (const std::exception& e) {
-    discard(out, temp);
-    // Keeps the cause reachable through std::rethrow_if_nested.
-    std::throw_with_nested(IoError("cannot write " + path.string() + ": " + e.what()));
+    const std::filesystem::path key = std::filesystem::weakly_canonical(path, ec);
+    for (const auto& staged : staged_) {
+      std::error_code ec2;
+      if (!ec && std::filesystem::weakly_canonical(staged.first, ec2) == key && !ec2)
+        fail(path, "it is also written as " + staged.first.string() + " in the same run");
+    }
+    const std::filesystem::path temp = temporary_path(path);
+    write_temporary(path, temp, write);
+    staged_.emplace_back(path, temp);
   } catch (...) {
-    // Not an error of ours (e.g. thread cancellation): clean up and let it pass unchanged.
-    discard(out, temp);
+    discard();
     throw;
   }
-  // The rename is durable only once the directory entry is; failures here (file systems that
-  // cannot sync directories) leave a complete file behind, so they are not errors.
-  std::filesystem::path dir = path.parent_path();
-  if (dir.empty()) dir = ".";
-  sync_file(dir, O_DIRECTORY);
+}
+
+void AtomicFileSet::commit() {
+  // Everything is written: what is left can only fail on a folder that changed meanwhile.
+  for (std::size_t i = 0; i < staged_.size(); ++i) {
+    const std::filesystem::path file = staged_[i].first, temp = staged_[i].second;
+    std::error_code ec;
+    std::filesystem::rename(temp, file, ec);
+    if (ec) {
+      std::string done;
+      for (std::size_t j = 0; j < i; ++j) done += (j ? ", " : "") + staged_[j].first.string();
+      const std::string message = "cannot rename " + temp.string() + ": " + ec.message() +
+                                  (done.empty() ? "" : " (" + done + " already replaced)");
+      staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));
+      discard();
+      fail(file, message);
+    }
+  }
+  for (const auto& staged : staged_) sync_folder(staged.first);
+  staged_.clear();
 }
 
 OutputLock::OutputLock(const std::filesystem::path& path) {

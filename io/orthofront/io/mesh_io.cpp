@@ -97,12 +97,12 @@ bool is_mesh_extension(const std::filesystem::path& path) {
   return format_of(path) != MeshFormat::kUnknown;
 }
 
-void write_mesh(const Mesh& mesh, const std::filesystem::path& path) {
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, AtomicFileSet& files) {
   const MeshFormat format = format_of(path);
   if (format == MeshFormat::kUnknown) unknown_extension(path);
   check_consistent(mesh, path);
   check_writable(path);
-  write_atomically(path, [&](std::ofstream& out) {
+  files.add(path, [&](std::ofstream& out) {
     switch (format) {
       case MeshFormat::kPly:
         detail::write_ply(mesh, out);
@@ -117,6 +117,12 @@ void write_mesh(const Mesh& mesh, const std::filesystem::path& path) {
         break;
     }
   });
+}
+
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path) {
+  AtomicFileSet files;
+  write_mesh(mesh, path, files);
+  files.commit();
 }
 
 Mesh read_mesh(const std::filesystem::path& path) {

@@ -8,9 +8,15 @@
 
 namespace orthofront::io {
 
+class AtomicFileSet;
+
 /// Writes `mesh` to `path` atomically; the format follows the extension (.ply, .obj, .vtp).
 /// Throws IoError / InvalidArgument (unknown extension) naming the path.
 void write_mesh(const Mesh& mesh, const std::filesystem::path& path);
+
+/// As above, but into `files`: `path` is replaced only when files.commit() is called (with the
+/// other files of the set, e.g. the mesh's report).
+void write_mesh(const Mesh& mesh, const std::filesystem::path& path, AtomicFileSet& files);
 
 /// Reads a mesh written by write_mesh (and ordinary files of these formats). Attributes that a
 /// format does not carry are left empty. Throws IoError / FormatError naming file and value.

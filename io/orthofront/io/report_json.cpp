@@ -121,4 +121,10 @@ void write_json(const nlohmann::json& value, const std::filesystem::path& path) 
   write_atomically(path, [&](std::ofstream& out) { out << text; });
 }
 
+void write_json(const nlohmann::json& value, const std::filesystem::path& path,
+                AtomicFileSet& files) {
+  const std::string text = value.dump(2) + "\n";
+  files.add(path, [&](std::ofstream& out) { out << text; });
+}
+
 }  // namespace orthofront::io

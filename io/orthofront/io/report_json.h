@@ -9,11 +9,17 @@
 
 namespace orthofront::io {
 
+class AtomicFileSet;
+
 nlohmann::json to_json(const StreamSurfaceOptions& options);
 nlohmann::json to_json(const QualityReport& quality);
 nlohmann::json to_json(const SurfaceReport& report);
 
 /// Writes `value` pretty-printed to `path` atomically (temporary name, then rename).
 void write_json(const nlohmann::json& value, const std::filesystem::path& path);
+
+/// As above, but into `files`: `path` is replaced only when files.commit() is called.
+void write_json(const nlohmann::json& value, const std::filesystem::path& path,
+                AtomicFileSet& files);
 
 }  // namespace orthofront::io
