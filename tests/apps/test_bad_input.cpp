@@ -319,9 +319,12 @@ TEST_CASE("bad input: header dimensions that do not match the data", "[apps][bad
   const Case cases[] = {
       {"dims.vec", write_vec, "5", "6 x 6 x 5"},
       {"dims.am", write_am, "6 6 5", "do the type and sizes in the header match the data"},
-      // NRRD takes the header's sizes and reads no further: a header claiming more than the data.
+      // NRRD: a header claiming more than the data ...
       {"dims.nrrd", write_nrrd, "6 6 7", "sizes 3 6 6 7 of float need 3024"},
       {"dims.nhdr", write_nhdr, "6 6 7", "sizes 3 6 6 7 of float need 3024"},
+      // ... and one claiming fewer (raw data without skips must be the samples alone).
+      {"fewer.nrrd", write_nrrd, "6 6 5", "holds 2592 data bytes but sizes 3 6 6 5 of float need 2160"},
+      {"fewer.nhdr", write_nhdr, "6 6 5", "fewer.nhdr.raw holds 2592 data bytes but sizes 3 6 6 5"},
       {"dims.vti", write_vti, "0 5 0 5 0 4", "the extent needs 540"},
       {"dims.vtk", write_vtk, "6 6 5", "point_data 216 does not match dimensions 6 x 6 x 5"},
   };

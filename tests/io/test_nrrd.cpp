@@ -74,6 +74,15 @@ TEST_CASE("nrrd: synthetic files read back exactly", "[nrrd]") {
                                    "junk" + float_bytes(expected.values, true));
     check(read_nrrd(dir / "a.nrrd"));
   }
+  SECTION("byte skip and line skip: bytes around the samples are allowed") {
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: raw\nbyte skip: 4\n\n" +
+                                   "junk" + float_bytes(expected.values, true) + "trailer");
+    check(read_nrrd(dir / "a.nrrd"));
+    write_file(dir / "b.raw", "a line of text\n" + float_bytes(expected.values, true) + "trailer");
+    write_file(dir / "b.nhdr",
+               kHeader3D + "endian: little\nencoding: raw\nline skip: 1\ndata file: b.raw\n");
+    check(read_nrrd(dir / "b.nhdr"));
+  }
 }
 
 TEST_CASE("nrrd: component axis last, spacings and axis mins", "[nrrd]") {
@@ -113,6 +122,26 @@ TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]"
                kHeader3D + "endian: little\nencoding: raw\n\n" + data.substr(0, 100));
     CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "short.nrrd"); }),
                Contains("short.nrrd") && Contains("truncated") && Contains("100"));
+  }
+  SECTION("a header that claims fewer samples than the raw data holds") {
+    // sizes 3 5 4 2 need 480 bytes; the data holds the 720 of 3 5 4 3.
+    std::string header = kHeader3D;
+    header.replace(header.find("sizes: 3 5 4 3"), 14, "sizes: 3 5 4 2");
+    write_file(dir / "long.nrrd", header + "endian: little\nencoding: raw\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "long.nrrd"); }),
+               Contains("long.nrrd") && Contains("holds 720 data bytes") &&
+                   Contains("sizes 3 5 4 2 of float need 480") &&
+                   Contains("claims fewer samples than the data holds"));
+    // Detached: the data file named too.
+    write_file(dir / "long.raw", data);
+    write_file(dir / "long.nhdr", header + "endian: little\nencoding: raw\ndata file: long.raw\n");
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "long.nhdr"); }),
+               Contains("long.nhdr") && Contains("long.raw holds 720 data bytes") &&
+                   Contains("sizes 3 5 4 2 of float need 480"));
+    // One stray byte after the samples is refused as well.
+    write_file(dir / "byte.nrrd", kHeader3D + "endian: little\nencoding: raw\n\n" + data + "\n");
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "byte.nrrd"); }),
+               Contains("byte.nrrd") && Contains("holds 721 data bytes") && Contains("need 720"));
   }
   SECTION("truncated gzip data") {
     const std::string gz = orthofront::io::detail::gzip_deflate(data);

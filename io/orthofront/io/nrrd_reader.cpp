@@ -376,10 +376,14 @@ class NrrdParser {
     } else if (!header_complete_) {
       throw error("truncated header: no blank line before the data");
     }
+    // Skips say that the data file holds other bytes besides the samples: only then may it
+    // hold more than the sizes need.
+    bool skips = false;
     if (has("line skip")) {
       int lines = 0;
       if (!detail::parse_number(field("line skip"), lines) || lines < 0)
         throw error("bad line skip '" + field("line skip") + "'");
+      skips = lines > 0;
       for (int i = 0; i < lines; ++i) {
         const std::size_t nl = data.find('\n');
         if (nl == std::string_view::npos) throw error("truncated: line skip goes past the data");
@@ -391,6 +395,7 @@ class NrrdParser {
     if (has("byte skip")) {
       if (!detail::parse_number(field("byte skip"), byte_skip) || byte_skip < -1)
         throw error("bad byte skip '" + field("byte skip") + "'");
+      skips = skips || byte_skip != 0;
     }
     if (encoding == "ascii") {
       if (data.size() < count)  // every value takes at least one character
@@ -448,6 +453,15 @@ class NrrdParser {
         throw error("truncated: " + data_name + " holds " + std::to_string(data.size()) +
                     " data bytes; sizes " + field("sizes") + " of " + field("type") + " need " +
                     std::to_string(bytes));
+      }
+      // Raw data without skips is the samples and nothing else (as teem writes it): more bytes
+      // mean sizes or type that do not describe the data, which would be read misaligned.
+      if (!skips && data.size() > bytes) {
+        throw error(data_name + " holds " + std::to_string(data.size()) + " data bytes but sizes " +
+                    field("sizes") + " of " + field("type") + " need " + std::to_string(bytes) +
+                    ": the header claims fewer samples than the data holds (do the sizes and "
+                    "type match the data? bytes besides the samples need 'byte skip' or "
+                    "'line skip')");
       }
     }
     out.resize(count);
