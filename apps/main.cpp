@@ -25,7 +25,15 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version print and succeed; every other parse error is bad input: exit 2 as
+    // for any other bad value (CLI11's own codes run from 101 to 120).
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << "orthofront: error: " << e.what() << "\n";
+    if (const CLI::App* command = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front())
+      std::cerr << "Run 'orthofront " << command->get_name() << " --help' for the options.\n";
+    else
+      std::cerr << "Run 'orthofront --help' for the commands.\n";
+    return 2;
   } catch (const orthofront::Error& e) {
     std::cerr << "orthofront: error: " << e.what() << "\n";
     return 2;

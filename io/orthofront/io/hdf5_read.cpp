@@ -5,14 +5,18 @@
 #include <tbb/parallel_for.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <mutex>
 
 #include "orthofront/error.h"
 #include "orthofront/field/huge_pages.h"
+#include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_detail.h"
 
@@ -21,6 +25,13 @@ namespace orthofront::io {
 using detail::H5Id;
 
 namespace {
+
+/// True in the child process that vets a file (vet_hdf5_file): its own opens are not vetted again,
+/// and it checks every dataset's storage against the file's length.
+bool vetting_child = false;
+
+void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
+                   const Hdf5ReadOptions& options);
 
 std::string number(double value) {
   char text[32];
@@ -112,6 +123,7 @@ struct Hdf5TimeSeries::Impl {
       throw IoError("cannot open " + path.string() + ": it is a directory");
     if (H5Fis_hdf5(path.c_str()) <= 0)
       throw FormatError(path.string() + " is not an HDF5 file (or cannot be read)");
+    if (!vetting_child) vet_hdf5_file(path, group_path, read_options);
     file = H5Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
     if (!file.valid()) throw IoError("cannot open HDF5 file " + path.string());
 
@@ -324,6 +336,70 @@ struct Hdf5TimeSeries::Impl {
                               (filters[i] == H5Z_FILTER_SHUFFLE && i + 1 < filters.size()));
       raw = options.raw_chunks && (whole_slices || bricked) && known_filters &&
             std::endian::native == std::endian::little && H5Tequal(type.get(), H5T_IEEE_F32LE) > 0;
+    }
+    if (vetting_child) check_storage();
+  }
+
+  /// Every sample dataset's storage lies inside the file: contiguous data, and each chunk the
+  /// index lists (the index itself is walked in full). HDF5 reads what its metadata says without
+  /// such checks, and a damaged index or layout makes it copy out of bounds.
+  void check_storage() const {
+    const auto file_bytes = static_cast<haddr_t>(std::filesystem::file_size(d.file));
+    const auto check_set = [&](hid_t set, const std::string& name) {
+      const std::string what = where() + ": dataset '" + name + "'";
+      H5Id plist(H5Dget_create_plist(set), H5Pclose);
+      H5Id space(H5Dget_space(set), H5Sclose);
+      const int rank = H5Sget_simple_extent_ndims(space.get());
+      if (!plist.valid() || !space.valid() || rank < 1 || rank > 8)
+        throw FormatError(what + ": unreadable layout or shape (damaged file?)");
+      std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+      H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+      const H5D_layout_t kind = H5Pget_layout(plist.get());
+      if (kind == H5D_CONTIGUOUS) {
+        const haddr_t offset = H5Dget_offset(set);
+        const hsize_t stored = H5Dget_storage_size(set);
+        if (offset != HADDR_UNDEF && (offset > file_bytes || stored > file_bytes - offset))
+          throw FormatError(what + ": its samples lie past the end of the file (damaged file?)");
+        return;
+      }
+      if (kind != H5D_CHUNKED) return;  // compact data lives in the object header HDF5 parsed
+      std::vector<hsize_t> chunk(dims.size());
+      if (H5Pget_chunk(plist.get(), rank, chunk.data()) != rank)
+        throw FormatError(what + ": unreadable chunk shape (damaged file?)");
+      std::vector<hsize_t> counts(dims.size()), at(dims.size(), 0);
+      std::uint64_t total = 1;
+      for (std::size_t a = 0; a < dims.size(); ++a) {
+        if (chunk[a] == 0) throw FormatError(what + ": chunk of size 0 (damaged file?)");
+        counts[a] = (dims[a] + chunk[a] - 1) / chunk[a];
+        total *= std::max<hsize_t>(counts[a], 1);
+        if (total > (std::uint64_t{1} << 26))
+          throw FormatError(what + ": more than 2^26 chunks (damaged file?)");
+      }
+      for (std::uint64_t c = 0; c < total; ++c) {
+        std::uint64_t rest = c;
+        for (std::size_t a = dims.size(); a-- > 0;) {
+          at[a] = rest % std::max<hsize_t>(counts[a], 1) * chunk[a];
+          rest /= std::max<hsize_t>(counts[a], 1);
+        }
+        unsigned mask = 0;
+        haddr_t address = HADDR_UNDEF;
+        hsize_t bytes = 0;
+        if (H5Dget_chunk_info_by_coord(set, at.data(), &mask, &address, &bytes) < 0)
+          throw FormatError(what + ": unreadable chunk index (damaged file?)");
+        if (address != HADDR_UNDEF && (address > file_bytes || bytes > file_bytes - address))
+          throw FormatError(what + ": a chunk lies past the end of the file (damaged file?)");
+      }
+    };
+    if (d.storage == Hdf5Storage::per_step) {
+      for (std::size_t s = 0; s < d.step_count(); ++s) {
+        // A missing step is reported when it is read (the surface stops there), not at open.
+        if (std::find(d.missing_steps.begin(), d.missing_steps.end(), s) != d.missing_steps.end())
+          continue;
+        H5Id holder;
+        check_set(step_dataset(s, holder), detail::child_path(d.dataset, step_name(s)));
+      }
+    } else {
+      check_set(dataset.get(), d.dataset);
     }
   }
 
@@ -787,6 +863,63 @@ VectorGrid read_hdf5_grid(const std::filesystem::path& file, const std::string& 
   series->read(step, grid.values);
   return grid;
 }
+
+namespace {
+
+/// libhdf5 trusts a file's metadata: fuzzing found heap overflows in H5Aexists and in H5Dread
+/// (H5VM_memcpyvv) on damaged files. Each file is opened first in a child process under limits
+/// (io/child_read.h), once per file version and group: the child reads the description, walks
+/// every dataset's storage (check_storage) and reads the first and last steps the way this
+/// process will. Later steps' chunk contents are decoded by the project's own bounded decoders.
+void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
+                   const Hdf5ReadOptions& options) {
+  // Each file version is vetted once; a refusal is remembered too (a hang costs its time limit).
+  static std::mutex mutex;
+  static std::map<std::string, std::string> vetted;  // key -> "" (fine) or the refusal
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  const auto stamp = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
+  const std::string key = std::filesystem::absolute(path).string() + '\n' + group + '\n' +
+                          std::to_string(bytes) + '\n' + std::to_string(stamp) +
+                          (options.raw_chunks ? "\nraw" : "\nhdf5");
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto known = vetted.find(key);
+    if (known != vetted.end()) {
+      if (known->second.empty()) return;
+      throw FormatError(known->second);
+    }
+  }
+  ChildReadLimits limits;
+  limits.memory_bytes = (std::size_t{1} << 30) + 4 * static_cast<std::size_t>(ec ? 0 : bytes);
+  limits.seconds = child_read_seconds(ec ? 0 : bytes);
+  std::string refusal;
+  try {
+    read_in_child(path.string(), "HDF5",
+                  [&] {
+                    vetting_child = true;
+                    Hdf5ReadOptions o = options;
+                    o.steady_as_single_step = true;
+                    const auto series = open_hdf5_series(path, group, o);
+                    std::vector<float> values(series->step_floats());
+                    const auto& missing = series->description().missing_steps;
+                    for (const std::size_t step : {std::size_t{0}, series->step_count() - 1}) {
+                      if (std::find(missing.begin(), missing.end(), step) == missing.end())
+                        series->read(step, values);
+                    }
+                  },
+                  limits);
+  } catch (const FormatError& e) {
+    refusal = e.what();
+  }
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    vetted.emplace(key, refusal);
+  }
+  if (!refusal.empty()) throw FormatError(refusal);
+}
+
+}  // namespace
 
 bool is_hdf5_file(const std::filesystem::path& file) {
   detail::silence_hdf5();

@@ -8,12 +8,14 @@
 #include <fstream>
 #include <limits>
 #include <list>
+#include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
 
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
+#include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/vdb_detail.h"
@@ -175,6 +177,74 @@ int metadata_int(const openvdb::GridBase& g, const char* key, int fallback) {
   }
 }
 
+/// Memory and time for reading a file of `bytes` in a child: a valid file expands to at most a few
+/// times its size (tiles stay tiles); a generous margin over that still stops a 12 KB file from
+/// claiming gigabytes.
+ChildReadLimits vdb_read_limits(std::size_t bytes) {
+  ChildReadLimits limits;
+  limits.memory_bytes = (std::size_t{1} << 30) + 64 * bytes;
+  limits.seconds = child_read_seconds(bytes);
+  return limits;
+}
+
+/// Every read this process may make of a file, in full: all grids without delayed loading (as
+/// read_vdb_file), and each grid with delayed loading and then every leaf buffer loaded (as
+/// load_vdb_grid and the series, which touch leaves later).
+void read_vdb_file_every_way(const std::filesystem::path& path) {
+  {
+    openvdb::io::File file(path.string());
+    file.open(false);
+    (void)file.getGrids();
+    file.close();
+  }
+  openvdb::io::File file(path.string());
+  file.open(true);
+  const auto metadata = file.readAllGridMetadata();
+  for (const auto& grid : *metadata) file.readGrid(grid->getName())->readNonresidentBuffers();
+  file.close();
+}
+
+/// OpenVDB's reader trusts its input: a corrupt file can fail an assertion, loop or allocate
+/// gigabytes in it (fuzzing found all three). Each file is read first in a child process under
+/// limits (io/child_read.h), once per file version, before this process reads it.
+void vet_vdb_file(const std::filesystem::path& path, const std::string& where) {
+  // Each file version is vetted once; a refusal is remembered too (a hang costs its time limit).
+  static std::mutex mutex;
+  static std::map<std::string, std::string> vetted;  // key -> "" (fine) or the refusal
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  const auto stamp = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
+  const std::string key = std::filesystem::absolute(path).string() + '\n' + std::to_string(bytes) +
+                          '\n' + std::to_string(stamp);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto known = vetted.find(key);
+    if (known != vetted.end()) {
+      if (known->second.empty()) return;
+      throw FormatError(known->second);
+    }
+  }
+  std::string refusal;
+  try {
+    read_in_child(where, "OpenVDB",
+                  [&] {
+                    try {
+                      read_vdb_file_every_way(path);
+                    } catch (...) {
+                      rethrow_vdb(where);
+                    }
+                  },
+                  vdb_read_limits(ec ? 0 : bytes));
+  } catch (const FormatError& e) {
+    refusal = e.what();
+  }
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    vetted.emplace(key, refusal);
+  }
+  if (!refusal.empty()) throw FormatError(refusal);
+}
+
 }  // namespace
 
 LoadedVdbGrid select_vdb_grid(const openvdb::GridPtrVec& grids, const std::string& selector,
@@ -223,6 +293,7 @@ openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
     if (!probe || std::filesystem::is_directory(path))
       throw IoError("cannot read " + path.string() + ": no such file or not readable");
   }
+  vet_vdb_file(path, path.string());
   try {
     openvdb::io::File file(path.string());
     file.open(false);
@@ -236,6 +307,20 @@ openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
 
 openvdb::GridPtrVecPtr read_vdb_stream(std::istream& in, const std::string& file) {
   initialize_openvdb();
+  // As for files (vet_vdb_file): the stream is read in a child first.
+  const std::streampos start = in.tellg();
+  read_in_child(file, "OpenVDB",
+                [&] {
+                  try {
+                    openvdb::io::Stream stream(in, false);
+                    (void)stream.getGrids();
+                  } catch (...) {
+                    rethrow_vdb(file);
+                  }
+                },
+                vdb_read_limits(0));
+  in.clear();
+  in.seekg(start);
   try {
     openvdb::io::Stream stream(in, false);
     return stream.getGrids();
@@ -252,6 +337,7 @@ LoadedVdbGrid load_vdb_grid(const std::filesystem::path& path, const std::string
     if (!probe || std::filesystem::is_directory(path))
       throw IoError("cannot read " + path.string() + ": no such file or not readable");
   }
+  vet_vdb_file(path, where);
   openvdb::GridPtrVec chosen;
   try {
     openvdb::io::File file(path.string());
@@ -410,6 +496,7 @@ std::vector<VdbGridInfo> list_vdb_grids(const std::filesystem::path& path) {
     if (!probe || std::filesystem::is_directory(path))
       throw IoError("cannot read " + path.string() + ": no such file or not readable");
   }
+  detail::vet_vdb_file(path, path.string());
   openvdb::GridPtrVecPtr grids;
   try {
     openvdb::io::File file(path.string());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -108,6 +109,8 @@ class VtiParser {
     Extent e{};
     const std::vector<double> v = numbers(*text, key, 6);
     for (std::size_t i = 0; i < 6; ++i) {
+      // Converting a double beyond int64's range is undefined: refuse it first.
+      if (!(std::fabs(v[i]) < 0x1p62)) throw error(std::string("bad ") + key + " '" + *text + "'");
       e[i] = static_cast<std::int64_t>(v[i]);
       if (static_cast<double>(e[i]) != v[i]) throw error(std::string("bad ") + key + " '" + *text + "'");
     }

@@ -45,9 +45,12 @@ std::size_t parse_bytes(const std::string& text) {
   else if (unit == "MB") factor = 1e6;
   else if (unit == "GB") factor = 1e9;
   if (pos == 0 || r.ec != std::errc() || r.ptr != text.data() + pos || factor == 0 ||
-      !(number > 0) || !std::isfinite(number * factor))
+      !(number * factor >= 1))
     throw InvalidArgument("memory size '" + text +
                           "' is not a positive size such as 512MiB, 2GiB, 100MB or 65536");
+  // Beyond 2^62 bytes the conversion below would overflow; no memory is that large.
+  if (!(number * factor < 0x1p62))
+    throw InvalidArgument("memory size '" + text + "' is too large");
   return static_cast<std::size_t>(number * factor);
 }
 

@@ -1,0 +1,196 @@
+#include "orthofront/io/child_read.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <new>
+#include <string>
+
+#include "orthofront/error.h"
+#include "orthofront/io/error.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define ORTHOFRONT_CHILD_READ_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ORTHOFRONT_CHILD_READ_SANITIZED 1
+#endif
+#endif
+#ifdef ORTHOFRONT_CHILD_READ_SANITIZED
+#include <sanitizer/common_interface_defs.h>
+#endif
+
+namespace orthofront::io {
+
+namespace {
+
+// Exit codes of the child.
+constexpr int kRead = 0;
+constexpr int kError = 1;       // one of the project's errors; its message follows on the pipe
+constexpr int kOutOfMemory = 3;
+constexpr int kOtherError = 4;  // any other exception; its what() follows
+
+/// The address space this process maps now (VmSize), from /proc/self/statm.
+std::size_t mapped_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t pages = 0;
+  statm >> pages;
+  return pages * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+}
+
+void write_all(int fd, const std::string& text) {
+  const char* at = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, at, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    at += n;
+    left -= static_cast<std::size_t>(n);
+  }
+}
+
+[[noreturn]] void run_child(int fd, const std::function<void()>& read, const ChildReadLimits& limits,
+                            std::size_t mapped) {
+#ifndef ORTHOFRONT_CHILD_READ_SANITIZED
+  if (limits.memory_bytes > 0) {
+    const rlimit cap{mapped + limits.memory_bytes, mapped + limits.memory_bytes};
+    ::setrlimit(RLIMIT_AS, &cap);
+  }
+#else
+  (void)limits;
+  (void)mapped;
+#endif
+  // What a crashing library prints (glibc's malloc assertions, HDF5's error stack) would bury the
+  // one-line message the parent gives; the child's output goes nowhere.
+  const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+  if (null_fd >= 0) {
+    ::dup2(null_fd, STDOUT_FILENO);
+    ::dup2(null_fd, STDERR_FILENO);
+  }
+  // The parent kills the child at the time limit; Ctrl-C is the parent's to handle.
+  std::signal(SIGINT, SIG_IGN);
+  std::signal(SIGTERM, SIG_DFL);
+  // A crash ends the child by its signal, which the parent reports; handlers inherited from the
+  // parent (a fuzzer's, a sanitizer's death callback) would treat it as the parent's own crash.
+  for (const int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
+#ifdef ORTHOFRONT_CHILD_READ_SANITIZED
+  __sanitizer_set_death_callback(nullptr);
+#endif
+  int code = kRead;
+  try {
+    read();
+  } catch (const Error& e) {
+    write_all(fd, e.what());
+    code = kError;
+  } catch (const std::bad_alloc&) {
+    code = kOutOfMemory;
+  } catch (const std::exception& e) {
+    write_all(fd, e.what());
+    code = kOtherError;
+  } catch (...) {
+    code = kOtherError;
+  }
+  // _exit: no atexit handlers or static destructors of the parent's state run in the child.
+  ::_exit(code);
+}
+
+std::string mib(std::size_t bytes) { return std::to_string((bytes + (1 << 20) - 1) >> 20) + " MiB"; }
+
+}  // namespace
+
+double child_read_seconds(std::size_t bytes) {
+  if (const char* text = std::getenv("ORTHOFRONT_READ_TIMEOUT")) {
+    char* end = nullptr;
+    const double seconds = std::strtod(text, &end);
+    if (end != text && *end == '\0' && seconds > 0) return seconds;
+  }
+  return 10 + static_cast<double>(bytes) / 20e6;
+}
+
+void read_in_child(const std::string& file, const std::string& format,
+                   const std::function<void()>& read, const ChildReadLimits& limits) {
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0)
+    throw IoError("cannot read " + file + ": pipe: " + std::strerror(errno));
+  const std::size_t mapped = mapped_bytes();
+  // Buffered output would otherwise be written twice, once by the child.
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw IoError("cannot read " + file + ": fork: " + std::strerror(errno));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    run_child(fds[1], read, limits, mapped);
+  }
+  ::close(fds[1]);
+
+  // The child's message, until it closes the pipe by exiting, or until the time limit.
+  std::string message;
+  bool timed_out = false;
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(limits.seconds));
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fds[0], POLLIN, 0};
+    const int ready = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 1000)));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) continue;
+    char buffer[4096];
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    // A message is a line or two; anything beyond is not read into memory.
+    if (message.size() < 8192) message.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  if (timed_out) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+
+  const std::string what = file + ": corrupt or unreadable " + format + " file: ";
+  if (timed_out) {
+    throw FormatError(what + "reading it did not finish within " +
+                      std::to_string(static_cast<long>(std::lround(limits.seconds))) +
+                      " s (a damaged file can make the reader loop)");
+  }
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    throw FormatError(what + "the " + format + " reader crashed on it (signal " + std::to_string(sig) +
+                      ", " + ::strsignal(sig) + ")");
+  }
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : kOtherError;
+  if (code == kRead) return;
+  if (code == kError) throw FormatError(message);
+  if (code == kOutOfMemory) {
+    throw FormatError(what + "reading it needs more than " + mib(limits.memory_bytes) +
+                      " of memory (sizes in the file that its length cannot hold)");
+  }
+  throw FormatError(what + (message.empty() ? "the reader failed (exit status " +
+                                                  std::to_string(code) + ")"
+                                            : message));
+}
+
+}  // namespace orthofront::io
