@@ -152,6 +152,8 @@ void add_path_command(CLI::App& app) {
     o.time_scale = args->time_scale;
     o.max_band = args->max_band;
     o.engine.lag_ramp = args->band_ramp;
+    o.seed_name = args->seed;  // errors name the seed and field as given here
+    o.field_name = args->field;
     PathStatus status(args->options.max_vertices);
     o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
 

@@ -434,7 +434,11 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
        "lies outside the domain of field 'saddle3d'"},
       {stream + "line:3.99,2,0.1:8,2,0.1", "line:3.99,2,0.1:8,2,0.1",
        "1 of 20 seed vertices inside, at least 2 needed"},
-      {path + "line:5,5,0:6,6,0", "0 vertices inside", "inside the field's domain"},
+      {path + "line:5,5,0:6,6,0", "line:5,5,0:6,6,0",
+       "lies outside the domain of field 'double-gyre' at t0 = 0 (0 of 20 seed vertices inside, "
+       "at least 2 needed; e.g. the point (5, 5) is outside the domain [0, 2] x [0, 1]"},
+      {path + "line:1.99,0.5,0:3,0.5,0", "line:1.99,0.5,0:3,0.5,0",
+       "1 of 20 seed vertices inside, at least 2 needed"},
       {stream + "line:1,1,1:1,1,1", "line:1,1,1:1,1,1", "the two ends coincide"},
       {path + "line:1,0.5,0:1,0.5,0", "line:1,0.5,0:1,0.5,0", "the two ends coincide"},
       {stream + "circle:1,1,1:0,0,1:0", "circle:1,1,1:0,0,1:0", "radius 0 is not positive"},

@@ -345,3 +345,68 @@ TEST_CASE("a path surface cut short by a budget says so", "[spacetime][path]") {
   o.engine.max_vertices = 10'000'000;
   CHECK(build_path_surface(*flow, seed, 8, o).path.complete);  // reaching t1 is complete
 }
+
+namespace {
+
+// The double gyre without data (as NaN in a file) where y > 0.6.
+class NoDataAbove final : public UnsteadyField {
+ public:
+  explicit NoDataAbove(const UnsteadyField& f) : f_(f) {}
+  int dimension() const override { return f_.dimension(); }
+  FieldStatus velocity(const Vec3& x, double t, Vec3& v) const override {
+    const FieldStatus st = f_.velocity(x, t, v);
+    return st == FieldStatus::inside && x[1] > 0.6 ? FieldStatus::no_data : st;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J,
+                                Vec3& dvdt) const override {
+    const FieldStatus st = f_.velocity_jacobian(x, t, v, J, dvdt);
+    return st == FieldStatus::inside && x[1] > 0.6 ? FieldStatus::no_data : st;
+  }
+  Box<3> domain() const override { return f_.domain(); }
+  TimeRange time_range() const override { return {0, 5}; }
+  std::string describe() const override { return "gyre with a hole"; }
+
+ private:
+  const UnsteadyField& f_;
+};
+
+}  // namespace
+
+TEST_CASE("path surface: a seed outside the domain or without data names seed, field and domain",
+          "[spacetime][path]") {
+  using Catch::Contains;
+  const auto gyre = make_unsteady_field("double-gyre");
+  const NoDataAbove flow(*gyre);
+  PathSurfaceOptions o = path_options(1.0, 2.0, 0.05);
+  const auto message = [&](const SeedCurve& seed) {
+    try {
+      build_path_surface(flow, seed, 20, o);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    FAIL("no InvalidArgument thrown");
+    return std::string();
+  };
+  const SeedCurve outside = SeedCurve::line(Vec3(5, 5, 0), Vec3(6, 6, 0));
+  // Without names: the seed curve and the field's description.
+  CHECK_THAT(message(outside),
+             Contains("the seed curve lies outside the domain of field 'gyre with a hole' at "
+                      "t0 = 1 (0 of 20 seed vertices inside, at least 2 needed; e.g. the point "
+                      "(5, 5) is outside the domain [0, 2] x [0, 1], t in [0, 5])"));
+  // With the names a command line gave.
+  o.seed_name = "line:5,5,0:6,6,0";
+  o.field_name = "hole.h5";
+  CHECK_THAT(message(outside),
+             Contains("seed 'line:5,5,0:6,6,0' lies outside the domain of field 'hole.h5' at t0 = 1") &&
+                 Contains("t in [0, 5]; gyre with a hole)"));
+  // One vertex inside is not enough.
+  CHECK_THAT(message(SeedCurve::line(Vec3(1.99, 0.5, 0), Vec3(3, 0.5, 0))),
+             Contains("1 of 20 seed vertices inside, at least 2 needed"));
+  // Inside the domain but without data is not "outside".
+  o.seed_name = "line:0.2,0.8,0:1.8,0.8,0";
+  const std::string hole = message(SeedCurve::line(Vec3(0.2, 0.8, 0), Vec3(1.8, 0.8, 0)));
+  CHECK_THAT(hole, Contains("seed 'line:0.2,0.8,0:1.8,0.8,0' lies where field 'hole.h5' has no "
+                            "data at t0 = 1") &&
+                       Contains("e.g. at the point (0.2, 0.8)"));
+  CHECK_THAT(hole, !Contains("outside"));
+}

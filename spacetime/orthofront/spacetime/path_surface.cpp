@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "orthofront/error.h"
@@ -101,6 +102,63 @@ std::pair<double, std::string> choose_time_scale(const UnsteadyField& flow, cons
   return {diagonal / (o.t1 - o.t0), "domain / time range"};
 }
 
+// At least 2 seed vertices must lie inside the domain, with data, at t0 (the engine's own check
+// says less): the message names the seed, the field, t0 and the domain, and tells a seed where
+// the field has no data (NaN, fill values, zero vectors) from one outside.
+void check_seed(const UnsteadyField& flow, const Seed<3>& seed, const PathSurfaceOptions& o) {
+  const int d = flow.dimension();
+  std::size_t inside = 0, no_data = 0;
+  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero();
+  bool any_outside = false;
+  for (double s : seed.parameters) {
+    Vec3 v;
+    const Vec3 x = seed.point(s);
+    const FieldStatus status = flow.velocity(x, o.t0, v);
+    if (status == FieldStatus::inside) {
+      ++inside;
+    } else if (status == FieldStatus::no_data) {
+      if (no_data++ == 0) first_no_data = x;
+    } else if (!any_outside) {
+      any_outside = true;
+      first_outside = x;
+    }
+  }
+  if (inside >= 2) return;
+  const auto number = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return std::string(text);
+  };
+  const auto point = [&](const Vec3& x) {
+    std::string text = "(";
+    for (int a = 0; a < d; ++a) text += (a ? ", " : "") + number(x[a]);
+    return text + ")";
+  };
+  const Box<3> box = flow.domain();
+  std::string domain;
+  for (int a = 0; a < d; ++a)
+    domain += (a ? " x [" : "[") + number(box.lo[a]) + ", " + number(box.hi[a]) + "]";
+  const TimeRange times = flow.time_range();
+  if (std::isfinite(times.begin) || std::isfinite(times.end))
+    domain += ", t in [" + number(times.begin) + ", " + number(times.end) + "]";
+  const std::string seed_text =
+      o.seed_name.empty() ? "the seed curve" : "seed '" + o.seed_name + "'";
+  const std::string field_text =
+      "field '" + (o.field_name.empty() ? flow.describe() : o.field_name) + "'";
+  const std::string about = o.field_name.empty() ? "" : "; " + flow.describe();
+  if (no_data > 0 && !any_outside)
+    throw InvalidArgument(seed_text + " lies where " + field_text + " has no data at t0 = " +
+                          number(o.t0) + " (NaN, fill values or zero vectors; " +
+                          std::to_string(inside) + " of " + std::to_string(seed.parameters.size()) +
+                          " seed vertices with data, at least 2 needed; e.g. at the point " +
+                          point(first_no_data) + "; domain " + domain + about + ")");
+  throw InvalidArgument(seed_text + " lies outside the domain of " + field_text + " at t0 = " +
+                        number(o.t0) + " (" + std::to_string(inside) + " of " +
+                        std::to_string(seed.parameters.size()) +
+                        " seed vertices inside, at least 2 needed; e.g. the point " +
+                        point(first_outside) + " is outside the domain " + domain + about + ")");
+}
+
 struct Run {
   const UnsteadyField& flow;
   StreamedField* streamed = nullptr;
@@ -133,6 +191,7 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     around.prefetch_steps = 0;
     run.streamed->update_front(seeds, around);
   }
+  check_seed(run.flow, seed3, o);
   const auto [c, source] = choose_time_scale(run.flow, seed3, o);
   pr.time_scale = c;
   pr.time_scale_source = source;

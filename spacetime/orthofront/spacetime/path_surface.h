@@ -36,6 +36,9 @@ struct PathSurfaceOptions {
   /// bound, vertices more than max_band behind the lead keep pace (the front tilts in time there).
   double max_band = 0;
   std::function<bool(const PathProgress&)> progress;  ///< false stops (the surface is kept)
+  /// How error messages name the seed and the field (e.g. as given on a command line); empty:
+  /// "the seed curve" and the field's describe().
+  std::string seed_name, field_name;
 };
 
 /// The time band of one front step: the range of times evaluated during it.
@@ -75,7 +78,8 @@ struct PathSurfaceResult {
 
 /// Path surface of an analytic (or any in-memory) unsteady field from `seed` sampled with
 /// `seed_count` vertices at time t0. Seeds use the first d coordinates.
-/// Throws InvalidArgument for bad times, scale or a seed outside the domain.
+/// Throws InvalidArgument for bad times, scale or a seed outside the domain (fewer than 2 seed
+/// vertices inside it at t0, or where it has no data; the message names seed, field and domain).
 PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve& seed,
                                      int seed_count, const PathSurfaceOptions& options);
 
