@@ -288,7 +288,7 @@ TEST_CASE("sampled fields converge to the analytic field at second order", "[gri
   }
 }
 
-TEST_CASE("NaN and zero corners give no_data; an engine run across them stays finite",
+TEST_CASE("NaN and zero corners give no_data, and an engine run across them stays finite",
           "[grid][nodata]") {
   const auto saddle = make_analytic_field("saddle3d");
   auto grid = std::make_shared<VectorGrid>(*sampled(*saddle, 81, 81, 81));  // spacing 0.1
