@@ -45,12 +45,12 @@ for t in "${targets[@]}"; do
   before=$(find "$build/findings/$t" -type f | wc -l)
   out="$build/findings/$t.log"
   # Limits: 2 GiB resident, 1 GiB in one allocation (a reader must check sizes before allocating
-  # them), 20 s per input (a hang). Findings do not stop the run (-fork keeps going).
+  # them), 60 s per input (a hang: the child reads of OpenVDB and HDF5 files stop at 10 s). Findings do not stop the run (-fork keeps going).
   seeds=("$build/corpus/$t")
   [ -d "$root/fuzz/regressions/$t" ] && seeds+=("$root/fuzz/regressions/$t")
   "$build/fuzz/fuzz_$t" "${seeds[@]}" -fork="$jobs" \
     -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 -max_total_time="$seconds" \
-    -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=20 -max_len=65536 \
+    -rss_limit_mb=2048 -malloc_limit_mb=1024 -timeout=60 -max_len=65536 \
     -artifact_prefix="$build/findings/$t/" >"$out" 2>&1 || true
   execs=$(grep -o 'exec/s: [0-9]*\|#[0-9]*' "$out" | grep -o '^#[0-9]*' | tail -1 | tr -d '#')
   after=$(find "$build/findings/$t" -type f | wc -l)

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <list>
@@ -435,6 +436,20 @@ VectorGrid densify(const LoadedVdbGrid& grid, const openvdb::CoordBBox& box, con
   }
   out.components = grid.components;
   const std::size_t points = checked_point_count(g.size, out.components, file, "VDB box");
+  // A sparse grid's box can be vast (two voxels far apart, or a damaged file): a dense copy must
+  // fit in memory, judged against half the machine's physical memory before allocating.
+  const double dense_bytes = static_cast<double>(points) * out.components * sizeof(float);
+  const double memory = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) *
+                        static_cast<double>(::sysconf(_SC_PAGESIZE));
+  if (memory > 0 && dense_bytes > memory / 2) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  " over its active box %d x %d x %d would need %.3g GiB, more than half of this "
+                  "machine's %.3g GiB",
+                  dim.x(), dim.y(), dim.z(), dense_bytes / 0x1p30, memory / 0x1p30);
+    throw FormatError(what + ": a dense copy" + text +
+                      " (a sparse grid over a vast region, or a damaged file)");
+  }
   out.values.assign(points * static_cast<std::size_t>(out.components),
                     std::numeric_limits<float>::quiet_NaN());
   if (grid.grid_f) {
