@@ -162,7 +162,7 @@ const std::vector<Format>& formats() {
       {".vti", write_vti, "not a vtk xml file", "truncated"},
       {".vtk", write_vtk, "truncated", "truncated"},
       {".vdb", write_vdb, "not a readable openvdb file", "not a readable openvdb file"},
-      {".h5", write_h5, "not an hdf5 file", "cannot open hdf5 file"},
+      {".h5", write_h5, "not an hdf5 file", "truncated: the file has"},
   };
   return all;
 }
@@ -300,8 +300,82 @@ TEST_CASE("bad input: missing, empty and truncated time series for `path`", "[ap
       truncate_to(cut, 0.6);
       const Run r = path_into(cut);
       check_refused(r, std::string("cut") + ext,
-                    ext == std::string(".h5") ? "cannot open hdf5 file" : "not a readable openvdb file",
+                    ext == std::string(".h5") ? "truncated: the file has" : "not a readable openvdb file",
                     out);
+    }
+  }
+}
+
+TEST_CASE("bad input: command-line syntax errors exit 2 naming the option", "[apps][bad-input]") {
+  struct Case {
+    const char* args;
+    const char* words;
+  };
+  const Case cases[] = {
+      {"stream --field saddle --seed line:0,0,0:1,1,0 --edge abc", "--edge"},
+      {"stream --field saddle", "--seed"},
+      {"stream --field saddle --seed line:0,0,0:1,1,0 --out s.vtp --no-such-option",
+       "--no-such-option"},
+      {"path --field double-gyre --seed line:0.1,0.5,0:0.6,0.5,0 --cache-unit foo", "--cache-unit"},
+      {"no-such-command", "subcommand"},
+  };
+  for (const Case& c : cases) {
+    const Run r = run(c.args);
+    INFO(c.args << "\n" << r.output);
+    CHECK(r.status == 2);
+    CHECK_THAT(r.output, Contains("orthofront: error:"));
+    CHECK_THAT(r.output, Contains(c.words));
+    CHECK_THAT(r.output, Contains("--help"));
+  }
+  // Help and version still succeed.
+  CHECK(run("--version").status == 0);
+  CHECK(run("stream --help").status == 0);
+}
+
+TEST_CASE("bad input: corrupt HDF5 and OpenVDB files that crash or hang or flood their libraries",
+          "[apps][bad-input]") {
+  // Inputs found by fuzzing (fuzz/regressions): each made libhdf5 or libopenvdb overflow a buffer,
+  // abort, loop or allocate gigabytes in this process. Now the first read runs in a child.
+  struct Case {
+    const char* file;
+    const char* ext;
+    const char* info_words;    // what `info` says
+    const char* stream_words;  // what `stream --field` says
+  };
+  const Case cases[] = {
+      // H5Dread copied past a buffer: the dataset claims more bytes than the file holds.
+      {"hdf5/crash-caa26d86077d0807e03da9a4293dbe666c965f37", ".h5", "bytes of samples in a file",
+       "bytes of samples in a file"},
+      // H5Aexists overflowed reading a damaged attribute message.
+      {"hdf5/crash-288fca76bd7d53fddabc8556c1614b507ab3c313", ".h5", "attribute", "attribute"},
+      {"vdb_file/crash-ff1de5cd7d629500057d850528d7abdb5ae2e9f3", ".vdb", "crashed", "crashed"},
+      {"vdb_file/crash-e3a67af30de8a21fd049cd0801885394e5008e4d", ".vdb", "did not finish",
+       "did not finish"},
+      // Two voxels 10^4 apart: a dense copy (info) would need 124 GB; sampled sparsely (stream),
+      // the seed finds no data.
+      {"grid_vdb/crash-e424375d92825105a624e054ddf92bc7e418e75f", ".vdb", "dense copy",
+       "has no data"},
+  };
+  const fs::path regressions = fs::path(ORTHOFRONT_SOURCE_DIR) / "fuzz" / "regressions";
+  ::setenv("ORTHOFRONT_READ_TIMEOUT", "2", 1);  // the looping file: 2 s, not 10
+  TempDir dir("corrupt");
+  TempDir out("corrupt-out");
+  for (const Case& c : cases) {
+    const fs::path file = dir / (std::string("bad") + c.ext);
+    fs::copy_file(regressions / c.file, file, fs::copy_options::overwrite_existing);
+    const std::pair<std::string, const char*> commands[] = {
+        {"info '" + file.string() + "'", c.info_words},
+        {"stream --field '" + file.string() + "' --seed line:1,1,1:2,2,1 --out '" +
+             (out / "s.vtp").string() + "'",
+         c.stream_words}};
+    for (const auto& [command, words] : commands) {
+      const Run r = run(command);
+      INFO(c.file << ": " << command << "\n" << r.output);
+      CHECK(r.status == 2);
+      CHECK_THAT(r.output, Contains("orthofront: error:"));
+      CHECK_THAT(r.output, Contains(file.string()));
+      CHECK_THAT(lower(r.output), Contains(words));
+      CHECK(out.entries().empty());
     }
   }
 }

@@ -10,6 +10,20 @@
 
 namespace orthofront::io::detail {
 
+std::string hdf5_error_cause() {
+  std::string cause;
+  // Entries are walked from the innermost call (H5E_WALK_UPWARD): the first one says what failed.
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_UPWARD,
+      [](unsigned n, const H5E_error2_t* error, void* data) -> herr_t {
+        auto* text = static_cast<std::string*>(data);
+        if (n == 0 && error != nullptr && error->desc != nullptr) *text = error->desc;
+        return 0;
+      },
+      &cause);
+  return cause;
+}
+
 void silence_hdf5() {
   static std::once_flag once;
   std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });

@@ -53,6 +53,11 @@ class H5Id {
 /// Turns off HDF5's printing of its error stack (the project reports errors itself). Idempotent.
 void silence_hdf5();
 
+/// The innermost description on HDF5's error stack of this thread ("truncated file: eof = 1000,
+/// sblock->base_addr = 0, stored_eof = 5769"), for messages; empty when the stack is empty.
+std::string hdf5_error_cause();
+
+
 /// "/" for "", "/", and "a/b/" -> "/a/b".
 std::string normalize_group(const std::string& group);
 /// group + "/" + name without doubling the slash at the root.

@@ -125,7 +125,18 @@ struct Hdf5TimeSeries::Impl {
       throw FormatError(path.string() + " is not an HDF5 file (or cannot be read)");
     if (!vetting_child) vet_hdf5_file(path, group_path, read_options);
     file = H5Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-    if (!file.valid()) throw IoError("cannot open HDF5 file " + path.string());
+    if (!file.valid()) {
+      // HDF5 says why on its error stack; a truncated file is the common case, worth plain words.
+      const std::string cause = detail::hdf5_error_cause();
+      unsigned long long eof = 0, base = 0, stored = 0;
+      if (std::sscanf(cause.c_str(), "truncated file: eof = %llu, sblock->base_addr = %llu, stored_eof = %llu",
+                      &eof, &base, &stored) == 3)
+        throw IoError("cannot open HDF5 file " + path.string() + ": truncated: the file has " +
+                      std::to_string(eof) + " bytes, its superblock says " + std::to_string(stored) +
+                      " (cut short in a copy or download, or still being written?)");
+      throw IoError("cannot open HDF5 file " + path.string() +
+                    (cause.empty() ? std::string() : ": " + cause));
+    }
 
     const std::string object_path = detail::normalize_group(group_path);
     std::string velocity_name = "velocity";
@@ -355,6 +366,11 @@ struct Hdf5TimeSeries::Impl {
       std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
       H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
       const H5D_layout_t kind = H5Pget_layout(plist.get());
+      // Whatever the layout, the bytes stored are in the file.
+      if (H5Dget_storage_size(set) > file_bytes)
+        throw FormatError(what + ": claims " + std::to_string(H5Dget_storage_size(set)) +
+                          " bytes of samples in a file of " + std::to_string(file_bytes) +
+                          " (damaged file?)");
       if (kind == H5D_CONTIGUOUS) {
         const haddr_t offset = H5Dget_offset(set);
         const hsize_t stored = H5Dget_storage_size(set);
@@ -366,6 +382,10 @@ struct Hdf5TimeSeries::Impl {
       std::vector<hsize_t> chunk(dims.size());
       if (H5Pget_chunk(plist.get(), rank, chunk.data()) != rank)
         throw FormatError(what + ": unreadable chunk shape (damaged file?)");
+      H5Id type(H5Dget_type(set), H5Tclose);
+      hsize_t chunk_bytes = type.valid() ? H5Tget_size(type.get()) : 0;
+      for (const hsize_t n : chunk) chunk_bytes *= n;
+      const bool unfiltered = H5Pget_nfilters(plist.get()) == 0;
       std::vector<hsize_t> counts(dims.size()), at(dims.size(), 0);
       std::uint64_t total = 1;
       for (std::size_t a = 0; a < dims.size(); ++a) {
@@ -388,6 +408,11 @@ struct Hdf5TimeSeries::Impl {
           throw FormatError(what + ": unreadable chunk index (damaged file?)");
         if (address != HADDR_UNDEF && (address > file_bytes || bytes > file_bytes - address))
           throw FormatError(what + ": a chunk lies past the end of the file (damaged file?)");
+        // Unfiltered chunks are stored at their exact size; HDF5 copies that many bytes out of
+        // a buffer of the stored size.
+        if (address != HADDR_UNDEF && unfiltered && bytes != chunk_bytes)
+          throw FormatError(what + ": a chunk of " + std::to_string(bytes) + " bytes where " +
+                            std::to_string(chunk_bytes) + " are stored (damaged file?)");
       }
     };
     if (d.storage == Hdf5Storage::per_step) {

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -172,7 +173,16 @@ int metadata_int(const openvdb::GridBase& g, const char* key, int fallback) {
   try {
     throw;
   } catch (const openvdb::Exception& e) {
-    throw FormatError(file + ": not a readable OpenVDB file: " + e.what());
+    // OpenVDB quotes bytes of a damaged file in its messages (a grid type of 8 KB of blanks):
+    // runs of white space become one blank, and the message is cut at 300 characters.
+    std::string what;
+    for (const char c : std::string(e.what())) {
+      const bool blank = std::isspace(static_cast<unsigned char>(c)) != 0;
+      if (blank && (what.empty() || what.back() == ' ')) continue;
+      what += std::isprint(static_cast<unsigned char>(c)) != 0 && !blank ? c : ' ';
+    }
+    if (what.size() > 300) what = what.substr(0, 300) + "...";
+    throw FormatError(file + ": not a readable OpenVDB file: " + what);
   } catch (const std::ios_base::failure& e) {
     throw IoError("cannot read " + file + ": " + e.what());
   }

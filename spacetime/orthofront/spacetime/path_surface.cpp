@@ -192,9 +192,11 @@ PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_coun
     run.streamed->update_front(seeds, around);
   }
   check_seed(run.flow, seed3, o);
-  const auto [c, source] = choose_time_scale(run.flow, seed3, o);
+  // Not a structured binding: lambdas below capture c (clang before 16 refuses bindings there).
+  const std::pair<double, std::string> scale = choose_time_scale(run.flow, seed3, o);
+  const double c = scale.first;
   pr.time_scale = c;
-  pr.time_scale_source = source;
+  pr.time_scale_source = scale.second;
   const LiftedField<N> lifted(tracked, c, TimeRange{o.t0, o.t1});
   Seed<N> seed;
   seed.parameters = seed3.parameters;
