@@ -718,7 +718,7 @@ class Engine {
     }
     StageTimer timer(report_.times.stitch);
     if (old) {
-      emit_moved(f, step);
+      emit_moved(f, *old, step);
       stitch(*old, f);
     }
   }
@@ -736,16 +736,27 @@ class Engine {
     const auto waiting = [still](const FrontVertex<N>& fv) {
       return fv.origin >= 0 && (fv.x - fv.anchor).norm() <= still;
     };
+    // Nor is one between two that did not move at all (α clamped to 0): neither can be given a
+    // new mesh vertex (see renew_across_merges), so every face across the merge would be made of
+    // old mesh vertices only.
+    const auto stuck = [this](const FrontVertex<N>& a, const FrontVertex<N>& b) {
+      return !has_moved(a) && !has_moved(b);
+    };
     for (std::size_t i = 1; i + 1 < n; ++i) {
       const double joined = (f.v[i].x - out.back().x).norm() + (f.v[i + 1].x - f.v[i].x).norm();
-      if (joined < limit && !(waiting(out.back()) && waiting(f.v[i]) && waiting(f.v[i + 1]))) {
+      // A closed front keeps three vertices at least: with two, both of its segments join the
+      // same two vertices, and the faces stitched to them share both edges (non-manifold).
+      const bool loop_kept = !f.closed || out.size() + (n - 1 - i) >= 3;
+      if (joined < limit && loop_kept &&
+          !(waiting(out.back()) && waiting(f.v[i]) && waiting(f.v[i + 1])) &&
+          !stuck(out.back(), f.v[i + 1])) {
         ++report_.merges;
         continue;
       }
       out.push_back(f.v[i]);
     }
     out.push_back(f.v[n - 1]);
-    if (f.closed && out.size() > 3) {
+    if (f.closed && out.size() > 3 && !stuck(out[out.size() - 2], out.front())) {
       // The closing pair: drop the last vertex when it and its closing segment are short.
       const double joined =
           (out.back().x - out[out.size() - 2].x).norm() + (out.front().x - out.back().x).norm();
@@ -908,8 +919,14 @@ class Engine {
     }
   }
 
+  /// Whether a vertex of the front moved away from its mesh vertex (one whose α was clamped to
+  /// 0 did not: a copy of its mesh vertex would make zero-area faces). Inserted ones are new.
+  bool has_moved(const FrontVertex<N>& fv) const {
+    return fv.origin < 0 || (fv.x - fv.anchor).norm() > 1e-12 * opt_.edge;
+  }
+
   /// Gives moved vertices new mesh vertices (all of them without row skipping).
-  void emit_moved(Front<N>& f, int step) {
+  void emit_moved(Front<N>& f, const Front<N>& old, int step) {
     const std::size_t n = f.v.size();
     std::vector<char> fresh(n, 0);
     const double min_move = opt_.skip_fraction * opt_.edge;
@@ -919,9 +936,10 @@ class Engine {
       // Without row skipping every vertex that moved at all gets a new mesh vertex; one whose α
       // was clamped to 0 did not move and keeps its own (a copy would make a zero-area face).
       const bool every_row = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline;
-      fresh[i] = every_row ? distance > 1e-12 * opt_.edge : distance >= min_move;
+      fresh[i] = every_row ? has_moved(f.v[i]) : distance >= min_move;
     }
     if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) smooth_rows(f, fresh);
+    renew_across_merges(f, old, fresh);
     for (std::size_t i = 0; i < n; ++i) {
       if (f.v[i].origin < 0) continue;
       if (fresh[i]) {
@@ -930,6 +948,35 @@ class Engine {
       } else {
         ++report_.skipped_vertex_steps;
       }
+    }
+  }
+
+  /// Two vertices of the front that both keep their old mesh vertices, with nothing inserted
+  /// between them but vertices merged away (merge_short), would make stitch join an old chain of
+  /// three or more mesh vertices to a new "chain" of those two old ones: every face between lies
+  /// on the previous front, made of its mesh vertices only. Where that front turned back on
+  /// itself (the tip of a fan, whose two front edges belong to one triangle) such a face is a
+  /// copy of one already behind it, with the opposite orientation: non-manifold edges. So the
+  /// one of the two that moved further gets a new mesh vertex (merge_short merges between no two
+  /// that did not move at all). Where only one end of a chain is old, zipper avoids such faces.
+  void renew_across_merges(const Front<N>& f, const Front<N>& old,
+                           std::vector<char>& fresh) const {
+    const std::size_t n = f.v.size(), n_old = old.v.size();
+    const std::size_t segments = f.closed ? n : (n > 0 ? n - 1 : 0);
+    for (std::size_t i = 0; i < segments; ++i) {
+      const std::size_t j = (i + 1) % n;
+      const FrontVertex<N>& a = f.v[i];
+      const FrontVertex<N>& b = f.v[j];
+      if (a.origin < 0 || b.origin < 0 || fresh[i] || fresh[j]) continue;
+      // Old vertices from a.origin to b.origin, as stitch walks them (forward, wrapping on a
+      // closed previous front; a single vertex on a closed front goes all the way round).
+      const auto oa = static_cast<std::size_t>(a.origin), ob = static_cast<std::size_t>(b.origin);
+      if (ob < oa && !old.closed) continue;
+      const std::size_t span = ob > oa ? ob - oa : ob + n_old - oa;
+      if (span < 2) continue;  // adjacent on the previous front too: one quad, no merge
+      const double da = (a.x - a.anchor).norm(), db = (b.x - b.anchor).norm();
+      const std::size_t k = da >= db ? i : j;
+      if (has_moved(f.v[k])) fresh[k] = 1;
     }
   }
 
@@ -967,7 +1014,16 @@ class Engine {
         add_face({a[i], a[i + 1], b[j + 1], b[j]}, 4);
         ++i, ++j;
       } else if (ra > rb) {
-        if (rb == 0 || distance(a[i + 1], b[j]) <= distance(a[i + 1], b[j + 1])) {
+        // An end of B that kept its old mesh vertex (a waiting vertex next to a merge) is an old
+        // vertex: a triangle from it to a segment of A that does not contain it lies on the
+        // previous front, made of old mesh vertices only (see renew_across_merges). Step past it
+        // on B first, and keep the last segment of B for the end when B ends on an old vertex.
+        const bool b_old = (j == 0 && b[0] == a[0]) || (j == mb && b[mb] == a[ma]);
+        const bool next_old = j + 1 == mb && b[mb] == a[ma];
+        bool triangle = rb == 0 || distance(a[i + 1], b[j]) <= distance(a[i + 1], b[j + 1]);
+        if (b_old && b[j] != a[i] && b[j] != a[i + 1] && rb > 0 && !next_old) triangle = false;
+        if (next_old && !b_old) triangle = true;
+        if (triangle) {
           add_face({a[i], a[i + 1], b[j], -1}, 3);
           ++i;
         } else {
