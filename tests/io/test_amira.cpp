@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "io/grid_test_support.h"
+#include "io/hostile_file.h"
 #include "orthofront/io/amira_reader.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/zlib_codec.h"
@@ -185,6 +186,59 @@ TEST_CASE("amira: bad files are rejected naming the file and the value", "[amira
     write_file(dir / "other.am", "# HyperSurface 0.1 BINARY\n");
     CHECK_THAT(thrown<FormatError>([&] { read_amira(dir / "other.am"); }),
                Contains("other.am") && Contains("not an AmiraMesh file"));
+  }
+}
+
+TEST_CASE("amira: a tiny file whose header claims a huge lattice is refused before allocating",
+          "[amira]") {
+  // Each file is a few hundred bytes; its header claims up to 768 GB. The same files are in
+  // fuzz/regressions/grid_am.
+  TempDir dir("amira");
+  const std::string binary_head =
+      "# AmiraMesh BINARY-LITTLE-ENDIAN 2.1\ndefine Lattice 4000 4000 4000\n"
+      "Lattice { float[3] Velocity } @1\n# Data section follows\n@1\n";
+  struct Case {
+    const char* name;
+    std::string bytes;
+    std::vector<std::string> message;
+  };
+  const std::vector<Case> cases = {
+      {"binary.am", binary_head + std::string(16, '\x3f'),
+       {"truncated", "data section @1 (Lattice { float[3] Velocity } @1)",
+        "needs 768000000000 bytes, the file holds 16"}},
+      {"ascii.am",
+       "# AmiraMesh 3D ASCII 2.0\ndefine Lattice 4000 4000 4000\n"
+       "Lattice { float[3] Velocity } @1\n# Data section follows\n@1\n1 2 3\n4 5 6\n",
+       {"truncated", "Velocity", "holds 6 of 192000000000 values"}},
+      // 12 compressed bytes cannot inflate to the 1.2 GB of a 1000 x 1000 x 100 float[3] lattice.
+      {"zip.am",
+       "# AmiraMesh BINARY-LITTLE-ENDIAN 2.1\ndefine Lattice 1000 1000 100\n"
+       "Lattice { float[3] Velocity } @1(HxZip,12)\n# Data section follows\n@1\n" +
+           std::string(12, '\x78'),
+       {"Velocity", "12 compressed bytes cannot hold the expected 1200000000 bytes"}},
+      // Rectilinear coordinates: 10^11 floats (400 GB) declared, 8 bytes present.
+      {"coordinates.am",
+       "# AmiraMesh BINARY-LITTLE-ENDIAN 2.1\ndefine Lattice 2 2 2\n"
+       "define Coordinates 100000000000\nParameters {\n    CoordType \"rectilinear\"\n}\n"
+       "Lattice { float[3] Velocity } @1\nCoordinates { float xyz } @2\n"
+       "# Data section follows\n@2\n" + std::string(8, '\0'),
+       {"truncated", "Coordinates { float xyz } @2", "needs 400000000000 bytes, the file holds 8"}},
+      // A component count beyond int once escaped as std::out_of_range from std::stoi.
+      {"components.am",
+       "# AmiraMesh BINARY-LITTLE-ENDIAN 2.1\ndefine Lattice 2 2 2\n"
+       "Lattice { float[99999999999] Velocity } @1\n# Data section follows\n@1\n0123",
+       {"bad component count '99999999999' of Velocity"}},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    write_file(dir / c.name, c.bytes);
+    std::string message;
+    const test_support::Footprint f = test_support::footprint(
+        [&] { message = thrown<FormatError>([&] { read_amira(dir / c.name); }); });
+    CHECK_THAT(message, Contains(c.name));
+    for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
+    CHECK(f.seconds < test_support::kHostileSeconds);
+    CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
   }
 }
 

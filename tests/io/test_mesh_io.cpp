@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "io/hostile_file.h"
 #include "temp_dir.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
@@ -300,6 +301,40 @@ TEST_CASE("truncated binary PLY files are rejected naming the file", "[io][mesh]
   write_text(path, data.substr(0, body - 5));
   CHECK_THAT(thrown<FormatError>([&] { read_mesh(path); }),
              Contains("cut.ply") && Contains("end_header"));
+}
+
+TEST_CASE("a tiny PLY file claiming 2e9 vertices is refused before allocating for them",
+          "[io][mesh][ply]") {
+  // The reservation is bounded by what the rest of the body can hold, not by the header's count.
+  // The same file is in fuzz/regressions/mesh_ply.
+  TempDir dir;
+  const fs::path path = dir / "huge.ply";
+  for (const std::string format : {"binary_little_endian", "ascii"}) {
+    INFO(format);
+    write_text(path, "ply\nformat " + format +
+                         " 1.0\nelement vertex 2000000000\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 2000000000\n"
+                         "property list uchar int vertex_indices\nend_header\n" +
+                         (format == "ascii" ? std::string("0 0 0\n1 0 0\n")
+                                            : std::string(24, '\0')));
+    std::string message;
+    const test_support::Footprint f =
+        test_support::footprint([&] { message = thrown<FormatError>([&] { read_mesh(path); }); });
+    CHECK_THAT(message, Contains("huge.ply") && Contains("vertex count 2000000000") &&
+                            Contains("file ends after 2 vertices"));
+    CHECK(f.seconds < test_support::kHostileSeconds);
+    CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
+  }
+  // An element without properties takes no bytes whatever its count: it is not iterated.
+  write_text(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                   "property float y\nproperty float z\nelement nothing 18446744073709551615\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                   "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  Mesh mesh;
+  const test_support::Footprint f = test_support::footprint([&] { mesh = read_mesh(path); });
+  CHECK(mesh.positions.size() == 3);
+  CHECK(mesh.faces.size() == 1);
+  CHECK(f.seconds < test_support::kHostileSeconds);
 }
 
 TEST_CASE("faces with more than four vertices are a FormatError", "[io][mesh]") {

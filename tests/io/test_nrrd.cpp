@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "io/grid_test_support.h"
+#include "io/hostile_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/nrrd_reader.h"
 #include "orthofront/io/zlib_codec.h"
@@ -194,6 +195,20 @@ TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]"
       CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "huge.nrrd"); }),
                  Contains("huge.nrrd") && Contains("truncated") && Contains("40000"));
     }
+  }
+  SECTION("ascii data with fewer characters than values and separators need") {
+    // 300 values need at least 599 characters (a digit each and a separator between): 300
+    // digits without separators were once taken for enough and the values allocated.
+    write_file(dir / "dense.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 3 10 10\n"
+                                   "kinds: vector space space\nencoding: ascii\n\n" +
+                                       std::string(300, '1'));
+    std::string message;
+    const test_support::Footprint f = test_support::footprint(
+        [&] { message = thrown<FormatError>([&] { read_nrrd(dir / "dense.nrrd"); }); });
+    CHECK_THAT(message, Contains("dense.nrrd") && Contains("truncated") &&
+                            Contains("holds 300 characters, too few for the 300 values"));
+    CHECK(f.seconds < test_support::kHostileSeconds);
+    CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
   }
   SECTION("a detached data file that is a device") {
     write_file(dir / "zero.nrrd", kHeader3D + "endian: little\nencoding: raw\n"

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "io/grid_test_support.h"
+#include "io/hostile_file.h"
 #include "orthofront/io/base64.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/vec_reader.h"
@@ -291,4 +292,83 @@ TEST_CASE("vti: a compression header claiming 4 GiB is refused before allocating
                orthofront::io::detail::decode_vtk_block(block, layout, "big.vti: velocity");
              }),
              Contains("big.vti") && Contains("4294967295") && Contains("more than deflate"));
+}
+
+TEST_CASE("vti: compressed block sizes that wrap around 2^64 are refused", "[vti]") {
+  // Two block sizes whose sum wraps around to fit once sent the second block's start past the end
+  // of the data (std::out_of_range from substr). The same file is in fuzz/regressions/grid_vti.
+  const std::string payload = orthofront::io::detail::zlib_deflate(std::string(12, 'x'));
+  std::string block;
+  const auto put = [&](std::uint64_t v) { block.append(reinterpret_cast<const char*>(&v), 8); };
+  put(2);   // two blocks
+  put(12);  // of 12 bytes
+  put(0);   // the last one full
+  put(payload.size() + 100);
+  put(std::uint64_t{0} - 100);
+  block += payload;
+  orthofront::io::detail::VtkLayout layout;
+  layout.header_size = 8;
+  layout.compressor = "vtkZLibDataCompressor";
+  CHECK_THAT(thrown<FormatError>([&] {
+               orthofront::io::detail::decode_vtk_block(block, layout, "wrap.vti: velocity");
+             }),
+             Contains("wrap.vti: velocity declares more than 2^64 compressed bytes") &&
+                 Contains("truncated"));
+}
+
+TEST_CASE("vti: a tiny file whose WholeExtent claims a huge image is refused before allocating",
+          "[vti]") {
+  // The grid is filled before the pieces are read: a WholeExtent beyond what the file's bytes can
+  // hold (one ascii character and a separator per value, the scalar's bytes per binary value, at
+  // most 1032 times that when compressed) is refused first. The same files are in
+  // fuzz/regressions/grid_vti.
+  TempDir dir("vti");
+  const auto file = [](const std::string& whole, const std::string& compressor,
+                       const std::string& array) {
+    return "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\"" +
+           compressor + ">\n<ImageData WholeExtent=\"" + whole +
+           "\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n<Piece Extent=\"0 0 0 0 0 0\">\n"
+           "<PointData Vectors=\"velocity\">\n<DataArray type=\"Float32\" Name=\"velocity\" "
+           "NumberOfComponents=\"3\" " + array + "</DataArray>\n</PointData>\n</Piece>\n"
+           "</ImageData>\n</VTKFile>\n";
+  };
+  struct Case {
+    const char* name;
+    std::string bytes;
+    std::vector<std::string> message;
+  };
+  const std::vector<Case> cases = {
+      {"ascii.vti", file("0 3999 0 3999 0 3999", "", "format=\"ascii\">1 2 3"),
+       {"truncated: WholeExtent 4000 x 4000 x 4000 needs 192000000000 values of point data "
+        "'velocity'"}},
+      // 12 bytes "\x0c\0\0\0" + 3 floats, base64.
+      {"binary.vti", file("0 3999 0 3999 0 3999", "", "format=\"binary\">DAAAAAAAgD8AAABAAABAQA=="),
+       {"truncated: WholeExtent 4000 x 4000 x 4000 needs 192000000000 values"}},
+      {"zlib.vti",
+       file("0 999 0 999 0 999", " compressor=\"vtkZLibDataCompressor\"",
+            "format=\"binary\">AQAAAAwAAAAMAAAAEgAAAHicY2BosGdgYHAAIgcACUMBgA=="),
+       {"truncated: WholeExtent 1000 x 1000 x 1000 needs 3000000000 values"}},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    write_file(dir / c.name, c.bytes);
+    std::string message;
+    const test_support::Footprint f = test_support::footprint(
+        [&] { message = thrown<FormatError>([&] { read_vti(dir / c.name); }); });
+    CHECK_THAT(message, Contains(c.name));
+    for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
+    CHECK_THAT(message, Contains("bytes hold at most"));
+    CHECK(f.seconds < test_support::kHostileSeconds);
+    CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
+  }
+  // The same pieces under their own extent read back.
+  for (const Case& c : cases) {
+    std::string bytes = c.bytes;
+    const std::size_t at = bytes.find("WholeExtent=\"") + 13;
+    bytes.replace(at, bytes.find('"', at) - at, "0 0 0 0 0 0");
+    write_file(dir / "one.vti", bytes);
+    INFO(c.name);
+    const VectorGrid grid = read_vti(dir / "one.vti");
+    CHECK(grid.values == std::vector<float>{1, 2, 3});
+  }
 }

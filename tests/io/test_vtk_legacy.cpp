@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "io/grid_test_support.h"
+#include "io/hostile_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_file.h"
 #include "orthofront/io/vtk_legacy_reader.h"
@@ -138,5 +139,50 @@ TEST_CASE("vtk legacy: bad files are rejected naming the file and the value", "[
     write_file(dir / "enc.vtk", "# vtk DataFile Version 3.0\nx\nHEX\nDATASET STRUCTURED_POINTS\n");
     CHECK_THAT(thrown<FormatError>([&] { read_vtk_legacy(dir / "enc.vtk"); }),
                Contains("enc.vtk") && Contains("unsupported encoding 'hex'"));
+  }
+}
+
+TEST_CASE("vtk legacy: a tiny file whose header claims huge arrays is refused before allocating",
+          "[vtk]") {
+  // Each file is about 150 bytes; its header claims up to 768 GB. The same files are in
+  // fuzz/regressions/grid_vtk.
+  TempDir dir("vtk");
+  const std::string head = "# vtk DataFile Version 3.0\nhostile\n";
+  const std::string dims = "DATASET STRUCTURED_POINTS\nDIMENSIONS 4000 4000 4000\n"
+                           "POINT_DATA 64000000000\nVECTORS velocity float\n";
+  struct Case {
+    const char* name;
+    std::string bytes;
+    std::vector<std::string> message;
+  };
+  const std::vector<Case> cases = {
+      {"binary.vtk", head + "BINARY\n" + dims + std::string(16, '\x3f'),
+       {"truncated: VECTORS velocity needs 768000000000 bytes, the file holds 16"}},
+      {"ascii.vtk", head + "ASCII\n" + dims + "1 2 3\n4 5 6\n",
+       {"truncated: VECTORS velocity holds 6 of 192000000000 values"}},
+      {"rectilinear.vtk",
+       head + "BINARY\nDATASET RECTILINEAR_GRID\nDIMENSIONS 4000000000 1 1\n"
+              "X_COORDINATES 4000000000 float\n" + std::string(16, '\0'),
+       {"truncated: X_COORDINATES needs 16000000000 bytes, the file holds 16"}},
+      // components x tuples once wrapped around (signed overflow) to 0 values.
+      {"field.vtk",
+       head + "ASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 1 1\nPOINT_DATA 2\n"
+              "FIELD f 1\na 4611686018427387904 4 float\n1 2\n",
+       {"FIELD array a declares 4611686018427387904 x 4 values, more than any file holds"}},
+      {"cells.vtk",
+       head + "ASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 1 1\nPOINT_DATA 2\n"
+              "CELL_DATA -1\nSCALARS s float\n1\n",
+       {"bad CELL_DATA -1"}},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    write_file(dir / c.name, c.bytes);
+    std::string message;
+    const test_support::Footprint f = test_support::footprint(
+        [&] { message = thrown<FormatError>([&] { read_vtk_legacy(dir / c.name); }); });
+    CHECK_THAT(message, Contains(c.name));
+    for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
+    CHECK(f.seconds < test_support::kHostileSeconds);
+    CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
   }
 }

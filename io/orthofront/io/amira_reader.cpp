@@ -80,9 +80,8 @@ class AmiraParser {
     for (std::size_t a = 0; a < 3; ++a) g.size[a] = a < dims.size() ? dims[a] : 1;
     grid.components = vector.components;
     g.dimension = g.size[2] == 1 ? 2 : 3;  // one z sample: a 2D grid (of 2- or 3-vectors)
-    const std::size_t points =
-        detail::checked_point_count(g.size, grid.components, file_, "lattice size");
-    grid.values.resize(points * static_cast<std::size_t>(grid.components));
+    // Checks the sizes only: the values are allocated once their data section proved to hold them.
+    (void)detail::checked_point_count(g.size, grid.components, file_, "lattice size");
 
     const Declaration* coordinates = nullptr;
     if (coord_type_ == "rectilinear") {
@@ -202,12 +201,17 @@ class AmiraParser {
         Declaration d;
         d.location = m[1];
         d.type_name = m[2];
-        d.components = m[3].matched ? std::stoi(m[3]) : 1;
         d.name = m[4];
-        d.section = std::stoi(m[5]);
+        // The regex admits any run of digits: one beyond the type's range is an error, not a
+        // std::out_of_range escaping the reader.
+        if (m[3].matched && !detail::parse_number(m[3].str(), d.components))
+          throw error("bad component count '" + m[3].str() + "' of " + d.name + " in '" + line + "'");
+        if (!detail::parse_number(m[5].str(), d.section))
+          throw error("bad data section number '" + m[5].str() + "' in '" + line + "'");
         if (m[6].matched) {
           d.encoding = m[6];
-          d.encoded_size = static_cast<std::size_t>(std::stoull(m[7]));
+          if (!detail::parse_number(m[7].str(), d.encoded_size))
+            throw error("bad encoded size '" + m[7].str() + "' in '" + line + "'");
         }
         if (const auto type = amira_type(d.type_name)) {
           d.type = *type;
@@ -272,10 +276,17 @@ class AmiraParser {
       throw error("'" + d.text() + "' is not on a 2D or 3D lattice");
   }
 
+  /// The values a section holds per its declaration (components x lattice points), refused
+  /// beyond 2^40 so that byte counts computed from it cannot overflow.
   std::size_t value_count(const Declaration& d) const {
-    std::size_t n = static_cast<std::size_t>(d.components);
-    for (const std::int64_t s : location_dims(d.location)) n *= static_cast<std::size_t>(s);
-    return n;
+    double n = d.components;
+    for (const std::int64_t s : location_dims(d.location)) n *= static_cast<double>(s);
+    if (n > 1099511627776.0)
+      throw error("data section @" + std::to_string(d.section) + " (" + d.text() +
+                  ") declares an implausible " + std::to_string(n) + " values");
+    std::size_t count = static_cast<std::size_t>(d.components);
+    for (const std::int64_t s : location_dims(d.location)) count *= static_cast<std::size_t>(s);
+    return count;
   }
 
   /// Walks the data sections in file order; decodes `vector` into `values` and, when asked, the
@@ -314,7 +325,6 @@ class AmiraParser {
       pos = line_end + 1;
       const bool wanted = d == &vector || d == coordinates;
       std::vector<float>* target = d == &vector ? &values : &coordinate_values;
-      if (d == coordinates) coordinate_values.resize(value_count(*d));
       pos = read_section(*d, pos, wanted ? target : nullptr);
       if (d == &vector) have_vector = true;
       if (d == coordinates) have_coordinates = true;
@@ -342,13 +352,21 @@ class AmiraParser {
     }
   }
 
-  /// Reads (or skips, when `out` is null) one section starting at `pos`; returns the position after it.
+  /// Reads (or skips, when `out` is null) one section starting at `pos` into `out`, which is
+  /// sized only once the file proved to hold the declared count; returns the position after it.
   std::size_t read_section(const Declaration& d, std::size_t pos, std::vector<float>* out) const {
     const std::size_t count = value_count(d);
     const std::string what = "data section @" + std::to_string(d.section) + " (" + d.text() + ")";
+    const std::size_t rest = content_.size() - pos;
     if (encoding_ == Encoding::kAscii) {
       if (out != nullptr && !d.type_known)
         throw error(what + " has the unsupported type '" + d.type_name + "'");
+      // Values grow `out` as they are read: every value takes a character and a separator, so
+      // the bytes after the marker bound the reservation.
+      if (out != nullptr) {
+        out->clear();
+        out->reserve(std::min(count, (rest + 1) / 2));
+      }
       for (std::size_t i = 0; i < count; ++i) {
         while (pos < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos]))) ++pos;
         const std::size_t start = pos;
@@ -361,7 +379,7 @@ class AmiraParser {
         const std::string_view token = content_.substr(start, pos - start);
         if (!detail::parse_number(token, value))
           throw error(what + " has the bad value '" + std::string(token) + "'");
-        if (out != nullptr) (*out)[i] = static_cast<float>(value);
+        if (out != nullptr) out->push_back(static_cast<float>(value));
       }
       return pos;
     }
@@ -371,27 +389,30 @@ class AmiraParser {
     const std::size_t bytes = count * detail::scalar_size(d.type);
     const bool little = encoding_ == Encoding::kBinaryLittle;
     if (!d.encoding.empty()) {
-      if (pos + d.encoded_size > content_.size()) {
+      if (d.encoded_size > rest) {
         throw error("truncated: " + what + " needs " + std::to_string(d.encoded_size) +
-                    " compressed bytes, the file holds " + std::to_string(content_.size() - pos));
+                    " compressed bytes, the file holds " + std::to_string(rest));
       }
       if (out != nullptr) {
         if (d.encoding != "HxZip") {
           throw error(what + " uses the unsupported encoding '" + d.encoding +
                       "' (raw and HxZip are supported)");
         }
+        // Refuses `bytes` beyond deflate's 1032:1 of encoded_size before allocating.
         const std::string raw =
             detail::zlib_inflate(content_.substr(pos, d.encoded_size), bytes, file_ + ": " + what);
+        out->resize(count);
         detail::scalars_to_floats(d.type, reinterpret_cast<const unsigned char*>(raw.data()),
                                   count, little, out->data());
       }
       return pos + d.encoded_size;
     }
-    if (pos + bytes > content_.size()) {
+    if (bytes > rest) {
       throw error("truncated: " + what + " needs " + std::to_string(bytes) +
-                  " bytes, the file holds " + std::to_string(content_.size() - pos));
+                  " bytes, the file holds " + std::to_string(rest));
     }
     if (out != nullptr) {
+      out->resize(count);
       detail::scalars_to_floats(d.type, reinterpret_cast<const unsigned char*>(content_.data() + pos),
                                 count, little, out->data());
     }

@@ -185,7 +185,6 @@ class NrrdParser {
     // Nothing the size of the grid is allocated before the data proved to hold it.
     std::vector<float> stored;
     read_data(count, stored);
-    grid.values.resize(count);
     // Reorder: the stored layout has the component axis at c_axis; ours has it first.
     std::array<std::size_t, 4> stride{};
     std::size_t s = 1;
@@ -196,6 +195,7 @@ class NrrdParser {
     if (c_axis == 0) {
       grid.values = std::move(stored);
     } else {
+      grid.values.resize(count);
       std::array<std::size_t, 3> space_stride{0, 0, 0};
       for (std::size_t i = 0; i < space_axes.size(); ++i) space_stride[i] = stride[space_axes[i]];
       std::size_t out = 0;
@@ -398,7 +398,8 @@ class NrrdParser {
       skips = skips || byte_skip != 0;
     }
     if (encoding == "ascii") {
-      if (data.size() < count)  // every value takes at least one character
+      // Every value takes a character and a separator: n values need 2n - 1 characters.
+      if (count > (data.size() + 1) / 2)
         throw error("truncated: " + data_name + " holds " + std::to_string(data.size()) +
                     " characters, too few for the " + std::to_string(count) +
                     " values of sizes " + field("sizes"));

@@ -154,6 +154,9 @@ class BinarySource {
     return ReadStatus::kOk;
   }
   std::string_view last_token() const { return {}; }
+  /// The fewest bytes a value of `type` takes.
+  static std::size_t min_bytes(ScalarType type) { return scalar_size(type); }
+  std::size_t remaining() const { return static_cast<std::size_t>(end_ - pos_); }
 
  private:
   const unsigned char* pos_;
@@ -175,6 +178,9 @@ class AsciiSource {
     return parse_number(token_, value) ? ReadStatus::kOk : ReadStatus::kBad;
   }
   std::string_view last_token() const { return token_; }
+  /// The fewest bytes a value takes: a character and a separator.
+  static std::size_t min_bytes(ScalarType /*type*/) { return 2; }
+  std::size_t remaining() const { return body_.size() - pos_; }
 
  private:
   static bool is_space(char c) { return c == ' ' || c == '\n' || c == '\r' || c == '\t'; }
@@ -212,7 +218,7 @@ class BodyReader {
       } else if (element.name == "face" && !have_faces) {
         read_faces(element, mesh);
         have_faces = true;
-      } else {
+      } else if (!element.properties.empty()) {  // nothing to read for an element without any
         for (std::uint64_t i = 0; i < element.count; ++i) {
           for (const PlyProperty& property : element.properties) skip(element, i, property);
         }
@@ -266,9 +272,15 @@ class BodyReader {
     for (std::uint64_t k = 0; k < n; ++k) value(property.type, element, index, property);
   }
 
-  // A corrupt count must not make the reader allocate gigabytes before it finds the file short.
+  // A corrupt count must not make the reader allocate before it finds the file short: the
+  // reservation is no more elements than the rest of the body can hold (each takes at least one
+  // value per property) and at most 2^20; more grow as they are read.
   std::size_t reserve_hint(const PlyElement& element) const {
-    return static_cast<std::size_t>(std::min<std::uint64_t>(element.count, 1u << 20));
+    std::size_t min_element = 0;
+    for (const PlyProperty& property : element.properties)
+      min_element += Source::min_bytes(property.is_list ? property.count_type : property.type);
+    const std::uint64_t fit = (source_.remaining() + 1) / std::max<std::size_t>(min_element, 1);
+    return static_cast<std::size_t>(std::min<std::uint64_t>({element.count, fit, 1u << 20}));
   }
 
   void read_vertices(const PlyElement& element, Mesh& mesh) {

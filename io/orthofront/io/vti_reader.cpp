@@ -64,6 +64,18 @@ class VtiParser {
     const std::size_t points = detail::checked_point_count(g.size, grid.components, file_,
                                                            "WholeExtent size");
     const auto nc = static_cast<std::size_t>(grid.components);
+    // The grid is allocated (and filled) before the pieces are decoded: it must not be larger
+    // than the file's bytes can hold in the most generous encoding its pieces use.
+    double capacity = 0.0;
+    for (const Piece& piece : pieces_) {
+      if (const ArrayRef* ref = find(piece, name)) capacity = std::max(capacity, value_capacity(*ref));
+    }
+    if (static_cast<double>(points * nc) > capacity) {
+      throw error("truncated: WholeExtent " + detail::size_text(g) + " needs " +
+                  std::to_string(points * nc) + " values of point data '" + name +
+                  "' but the file's " + std::to_string(content_.size()) + " bytes hold at most " +
+                  std::to_string(static_cast<std::uint64_t>(capacity)));
+    }
     grid.values.assign(points * nc, std::numeric_limits<float>::quiet_NaN());
     for (std::size_t p = 0; p < pieces_.size(); ++p) {
       const Piece& piece = pieces_[p];
@@ -280,13 +292,27 @@ class VtiParser {
     throw error(message);
   }
 
+  /// The most values the whole file could give an array stored as `ref`: a character and a
+  /// separator per ascii value; the scalar's bytes per binary value, times deflate's 1032:1 at
+  /// most when compressed.
+  double value_capacity(const ArrayRef& ref) const {
+    const auto bytes = static_cast<double>(content_.size());
+    if (ref.format == "ascii") return (bytes + 1.0) / 2.0;
+    const auto type = detail::vtk_type(ref.type_name);
+    const double scalar = type ? static_cast<double>(detail::scalar_size(*type)) : 1.0;
+    return bytes * (layout_.compressor.empty() ? 1.0 : 1032.0) / scalar;
+  }
+
+  /// The `count` values of `ref`; nothing of that size is allocated before the data proved to
+  /// hold it.
   std::vector<float> decode(const ArrayRef& ref, const std::string& what, std::size_t count) const {
     const auto type = detail::vtk_type(ref.type_name);
     if (!type) throw error(what + " has unsupported type '" + ref.type_name + "'");
-    std::vector<float> out(count);
+    std::vector<float> out;
     if (ref.format == "ascii") {
       std::size_t pos = 0;
       const std::string_view text = ref.inline_text;
+      out.reserve(std::min(count, (text.size() + 1) / 2));  // a character and a separator each
       std::size_t i = 0;
       for (;;) {
         while (pos < text.size() && std::isspace(static_cast<unsigned char>(text[pos]))) ++pos;
@@ -296,7 +322,7 @@ class VtiParser {
         double v = 0.0;
         if (!detail::parse_number(text.substr(start, pos - start), v))
           throw error(what + " has the bad value '" + std::string(text.substr(start, pos - start)) + "'");
-        if (i < count) out[i] = static_cast<float>(v);
+        if (i < count) out.push_back(static_cast<float>(v));
         ++i;
       }
       check_count(what, i, count);
@@ -336,6 +362,7 @@ class VtiParser {
                   std::to_string(scalar));
     }
     check_count(what, bytes.size() / scalar, count);
+    out.resize(count);
     detail::scalars_to_floats(*type, reinterpret_cast<const unsigned char*>(bytes.data()), count,
                               layout_.little_endian, out.data());
     return out;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -88,7 +89,6 @@ class LegacyParser {
           throw error(word + " has " + std::to_string(n) + " values but DIMENSIONS say " +
                       (have_dims ? std::to_string(g.size[a]) : std::string("nothing (missing)")));
         }
-        coordinates[a].resize(static_cast<std::size_t>(n));
         read_values(type, static_cast<std::size_t>(n), &coordinates[a], word);
       } else if (key == "field") {
         skip_field();
@@ -128,7 +128,7 @@ class LegacyParser {
       const std::string key = lower(word);
       if (key == "cell_data") {
         in_point_data = false;
-        tuples = static_cast<std::size_t>(integer("CELL_DATA"));
+        tuples = nonnegative("CELL_DATA", integer("CELL_DATA"));
         continue;
       }
       if (key == "point_data") {
@@ -156,7 +156,7 @@ class LegacyParser {
         std::int64_t n = 0;
         if (detail::parse_number(next, n)) {
           token();
-          components = static_cast<std::size_t>(n);
+          components = nonnegative("SCALARS " + name + " components", n);
           next = peek_token();
         }
         if (lower(next) == "lookup_table") {
@@ -165,7 +165,8 @@ class LegacyParser {
         }
       } else if (key == "texture_coordinates") {
         name = token();
-        components = static_cast<std::size_t>(integer("TEXTURE_COORDINATES"));
+        components = nonnegative("TEXTURE_COORDINATES " + name + " components",
+                                 integer("TEXTURE_COORDINATES"));
         type = token();
       } else if (key == "tensors" || key == "tensors6") {
         name = token();
@@ -174,7 +175,8 @@ class LegacyParser {
       } else if (key == "lookup_table") {
         name = token();
         const std::int64_t n = integer("LOOKUP_TABLE");
-        skip_values(binary_ ? "unsigned_char" : "float", static_cast<std::size_t>(n) * 4, word);
+        skip_values(binary_ ? "unsigned_char" : "float", product(nonnegative(word, n), 4, word),
+                    word);
         continue;
       } else if (key == "field") {
         if (read_field(tuples, in_point_data, grid, seen)) found = true;
@@ -182,7 +184,7 @@ class LegacyParser {
         continue;
       } else if (key == "color_scalars") {
         name = token();
-        components = static_cast<std::size_t>(integer("COLOR_SCALARS"));
+        components = nonnegative("COLOR_SCALARS " + name + " components", integer("COLOR_SCALARS"));
         type = binary_ ? "unsigned_char" : "float";
       } else {
         throw error("unexpected '" + word + "' among the data arrays");
@@ -195,12 +197,11 @@ class LegacyParser {
                       " components: not vector data");
         }
         grid.components = static_cast<int>(components);
-        grid.values.resize(points * components);
         read_values(type, points * components, &grid.values, word + " " + name);
         found = true;
         break;
       }
-      skip_values(type, tuples * components, word + " " + name);
+      skip_values(type, product(tuples, components, word + " " + name), word + " " + name);
     }
     if (!found) {
       std::string list;
@@ -273,23 +274,53 @@ class LegacyParser {
     if (pos_ < content_.size()) ++pos_;
   }
 
+  /// A count read from the file: negative is an error.
+  std::size_t nonnegative(const std::string& what, std::int64_t n) const {
+    if (n < 0) throw error("bad " + what + " " + std::to_string(n));
+    return static_cast<std::size_t>(n);
+  }
+
+  /// The value count of `a` x `b` (tuples and components), refused where it wraps around.
+  std::size_t product(std::size_t a, std::size_t b, const std::string& what) const {
+    std::size_t n = 0;
+    if (__builtin_mul_overflow(a, b, &n)) {
+      throw error(what + " declares " + std::to_string(a) + " x " + std::to_string(b) +
+                  " values, more than any file holds");
+    }
+    return n;
+  }
+
+  /// Reads `count` values into `out` (resized to them), or skips them when `out` is null. The
+  /// count is checked against the bytes left in the file before anything is allocated.
   void read_values(const std::string& type_name, std::size_t count, std::vector<float>* out,
                    const std::string& what) {
     const auto type = legacy_type(type_name);
     if (!type) throw error(what + " has unsupported type '" + type_name + "'");
     if (binary_) {
       start_binary_data();
-      const std::size_t bytes = count * detail::scalar_size(*type);
-      if (pos_ + bytes > content_.size()) {
-        throw error("truncated: " + what + " needs " + std::to_string(bytes) + " bytes, the file holds " +
-                    std::to_string(content_.size() - pos_));
+      const std::size_t scalar = detail::scalar_size(*type);
+      const std::size_t rest = content_.size() - pos_;
+      if (count > rest / scalar) {
+        throw error("truncated: " + what + " needs " +
+                    (count > std::numeric_limits<std::size_t>::max() / scalar
+                         ? std::to_string(count) + " values of " + std::to_string(scalar)
+                         : std::to_string(count * scalar)) +
+                    " bytes, the file holds " + std::to_string(rest));
       }
+      const std::size_t bytes = count * scalar;
       if (out != nullptr) {
+        out->resize(count);
         detail::scalars_to_floats(*type, reinterpret_cast<const unsigned char*>(content_.data() + pos_),
                                   count, false, out->data());
       }
       pos_ += bytes;
       return;
+    }
+    // Ascii values grow `out` as they are read: every value takes a character and a separator,
+    // so the file's length bounds the reservation.
+    if (out != nullptr) {
+      out->clear();
+      out->reserve(std::min(count, (content_.size() - pos_ + 1) / 2));
     }
     for (std::size_t i = 0; i < count; ++i) {
       const std::string t = token();
@@ -299,7 +330,7 @@ class LegacyParser {
                     std::to_string(count) + " values");
       }
       if (!detail::parse_number(t, v)) throw error(what + " has the bad value '" + t + "'");
-      if (out != nullptr) (*out)[i] = static_cast<float>(v);
+      if (out != nullptr) out->push_back(static_cast<float>(v));
     }
   }
 
@@ -322,10 +353,12 @@ class LegacyParser {
     const std::int64_t arrays = integer("FIELD");
     for (std::int64_t a = 0; a < arrays; ++a) {
       const std::string name = token();
-      const std::int64_t components = integer("FIELD array " + name);
-      const std::int64_t tuples = integer("FIELD array " + name);
+      const std::size_t components =
+          nonnegative("FIELD array " + name + " components", integer("FIELD array " + name));
+      const std::size_t tuples =
+          nonnegative("FIELD array " + name + " tuples", integer("FIELD array " + name));
       const std::string type = token();
-      skip_values(type, static_cast<std::size_t>(components * tuples), "FIELD array " + name);
+      skip_values(type, product(components, tuples, "FIELD array " + name), "FIELD array " + name);
     }
   }
 
@@ -336,28 +369,29 @@ class LegacyParser {
     const std::int64_t arrays = integer("FIELD");
     for (std::int64_t a = 0; a < arrays; ++a) {
       const std::string name = token();
-      const std::int64_t components = integer("FIELD array " + name);
-      const std::int64_t tuples = integer("FIELD array " + name);
+      const std::size_t components =
+          nonnegative("FIELD array " + name + " components", integer("FIELD array " + name));
+      const std::size_t tuples =
+          nonnegative("FIELD array " + name + " tuples", integer("FIELD array " + name));
       const std::string type = token();
       if (lower(name) == "metadata") {
         skip_metadata();
         continue;
       }
       seen.push_back("FIELD array " + name + " (" + std::to_string(components) + " components)");
-      const std::size_t count = static_cast<std::size_t>(components * tuples);
+      const std::size_t values = product(components, tuples, "FIELD array " + name);
       if (point_data && !wanted_.empty() && name == wanted_) {
         if (components != 2 && components != 3)
           throw error("point data '" + name + "' has " + std::to_string(components) +
                       " components: not vector data");
-        if (static_cast<std::size_t>(tuples) != tuples_expected)
+        if (tuples != tuples_expected)
           throw error("FIELD array " + name + " has " + std::to_string(tuples) + " tuples for " +
                       std::to_string(tuples_expected) + " points");
         grid.components = static_cast<int>(components);
-        grid.values.resize(count);
-        read_values(type, count, &grid.values, "FIELD array " + name);
+        read_values(type, values, &grid.values, "FIELD array " + name);
         return true;
       }
-      skip_values(type, count, "FIELD array " + name);
+      skip_values(type, values, "FIELD array " + name);
     }
     return false;
   }

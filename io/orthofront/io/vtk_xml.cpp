@@ -83,17 +83,28 @@ std::string decode_vtk_block(std::string_view bytes, const VtkLayout& layout,
                       ")");
   }
   std::size_t offset = (3 + static_cast<std::size_t>(blocks)) * h;
+  // Block sizes near 2^64 must not wrap around to a total that fits (and then send a block's start
+  // past the end of the data).
   std::uint64_t total_compressed = 0;
+  bool wrapped = false;
   for (std::uint64_t b = 0; b < blocks; ++b) {
-    total_compressed += load_header_value(data + (3 + b) * h, layout);
+    wrapped = __builtin_add_overflow(total_compressed, load_header_value(data + (3 + b) * h, layout),
+                                     &total_compressed) ||
+              wrapped;
   }
-  if (total_compressed > bytes.size() - offset) {
-    throw FormatError(context + " declares " + std::to_string(total_compressed) +
+  if (wrapped || total_compressed > bytes.size() - offset) {
+    throw FormatError(context + " declares " +
+                      (wrapped ? std::string("more than 2^64") : std::to_string(total_compressed)) +
                       " compressed bytes but holds " + std::to_string(bytes.size() - offset) +
                       " (truncated)");
   }
-  const std::uint64_t total =
-      blocks == 0 ? 0 : (blocks - 1) * block_size + (last_size == 0 ? block_size : last_size);
+  std::uint64_t total = 0;
+  if (blocks > 0 &&
+      (__builtin_mul_overflow(blocks - 1, block_size, &total) ||
+       __builtin_add_overflow(total, last_size == 0 ? block_size : last_size, &total))) {
+    throw FormatError(context + " declares " + std::to_string(blocks) + " blocks of " +
+                      std::to_string(block_size) + " bytes, more than 2^64 (damaged header?)");
+  }
   // Deflate expands at most 1032:1: a header claiming more would have us allocate for nothing.
   constexpr double kMaxRatio = 1032.0;
   if (static_cast<double>(total) > static_cast<double>(total_compressed) * kMaxRatio + 64.0)

@@ -110,6 +110,13 @@ std::string deflate_all(std::string_view bytes, int level, int window_bits) {
 
 std::string zlib_inflate(std::string_view compressed, std::size_t expected,
                          const std::string& context) {
+  // Deflate expands at most 1032:1 (plus a few bytes of framing): a larger expected size comes
+  // from a damaged or hostile header, and reserving it would allocate for data that is not there.
+  if (static_cast<double>(expected) > static_cast<double>(compressed.size()) * 1032.0 + 64.0) {
+    throw FormatError(context + ": " + std::to_string(compressed.size()) +
+                      " compressed bytes cannot hold the expected " + std::to_string(expected) +
+                      " bytes (deflate expands at most 1032:1)");
+  }
   std::string out = inflate_all(compressed, 15, expected, expected, false, context);
   if (out.size() != expected) {
     throw FormatError(context + ": compressed data holds " + std::to_string(out.size()) +

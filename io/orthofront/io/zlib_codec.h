@@ -8,7 +8,8 @@ namespace orthofront::io::detail {
 
 /// Inflates one zlib stream that must give exactly `expected` bytes. Throws FormatError whose
 /// message starts with `context` (the file and the array) when the stream is damaged, ends early
-/// or is longer than expected.
+/// or is longer than expected, and before allocating anything when `expected` exceeds what
+/// `compressed` can inflate to (1032:1).
 std::string zlib_inflate(std::string_view compressed, std::size_t expected,
                          const std::string& context);
 
