@@ -37,10 +37,11 @@ namespace orthofront::io {
 namespace {
 
 // Exit codes of the child.
+// Codes no library's exit() is likely to use (a sanitizer that finds an error exits with 1).
 constexpr int kRead = 0;
-constexpr int kError = 1;       // one of the project's errors; its message follows on the pipe
-constexpr int kOutOfMemory = 3;
-constexpr int kOtherError = 4;  // any other exception; its what() follows
+constexpr int kError = 71;       // one of the project's errors; its message follows on the pipe
+constexpr int kOutOfMemory = 73;
+constexpr int kOtherError = 74;  // any other exception; its what() follows
 
 /// The address space this process maps now (VmSize), from /proc/self/statm.
 std::size_t mapped_bytes() {
@@ -80,7 +81,11 @@ void write_all(int fd, const std::string& text) {
     ::dup2(null_fd, STDOUT_FILENO);
     ::dup2(null_fd, STDERR_FILENO);
   }
-  // The parent kills the child at the time limit; Ctrl-C is the parent's to handle.
+  // CPU seconds (SIGXCPU at the limit, SIGKILL a second later); the parent adds a wall-clock limit.
+  const auto cpu = static_cast<rlim_t>(std::ceil(limits.seconds));
+  const rlimit cpu_cap{cpu, cpu + 1};
+  ::setrlimit(RLIMIT_CPU, &cpu_cap);
+  // Ctrl-C is the parent's to handle.
   std::signal(SIGINT, SIG_IGN);
   std::signal(SIGTERM, SIG_DFL);
   // A crash ends the child by its signal, which the parent reports; handlers inherited from the
@@ -145,7 +150,7 @@ void read_in_child(const std::string& file, const std::string& format,
   bool timed_out = false;
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                            std::chrono::duration<double>(limits.seconds));
+                            std::chrono::duration<double>(10 * limits.seconds));
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
@@ -173,8 +178,13 @@ void read_in_child(const std::string& file, const std::string& format,
   const std::string what = file + ": corrupt or unreadable " + format + " file: ";
   if (timed_out) {
     throw FormatError(what + "reading it did not finish within " +
+                      std::to_string(static_cast<long>(std::lround(10 * limits.seconds))) +
+                      " s (the reader is blocked, or the file system is very slow)");
+  }
+  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL)) {
+    throw FormatError(what + "reading it did not finish within " +
                       std::to_string(static_cast<long>(std::lround(limits.seconds))) +
-                      " s (a damaged file can make the reader loop)");
+                      " s of CPU time (a damaged file can make the reader loop)");
   }
   if (WIFSIGNALED(status)) {
     const int sig = WTERMSIG(status);
@@ -183,7 +193,7 @@ void read_in_child(const std::string& file, const std::string& format,
   }
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : kOtherError;
   if (code == kRead) return;
-  if (code == kError) throw FormatError(message);
+  if (code == kError && !message.empty()) throw FormatError(message);
   if (code == kOutOfMemory) {
     throw FormatError(what + "reading it needs more than " + mib(limits.memory_bytes) +
                       " of memory (sizes in the file that its length cannot hold)");

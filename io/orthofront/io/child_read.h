@@ -12,17 +12,20 @@ namespace orthofront::io {
 
 struct ChildReadLimits {
   std::size_t memory_bytes = 0;  ///< address space the child may add (0: no limit)
-  double seconds = 60;           ///< wall-clock time before the child is killed
+  /// CPU time the child may use (RLIMIT_CPU: a reader looping on a damaged file burns CPU, and
+  /// a busy machine does not count against it); the child is also killed after ten times this in
+  /// wall-clock time (a reader blocked for good).
+  double seconds = 60;
 };
 
-/// The time limit for a first read of a file of `bytes`: 10 s plus 1 s per 20 MB, or the
-/// environment variable ORTHOFRONT_READ_TIMEOUT (seconds) where it is set (slow file systems).
+/// The CPU-time limit for a first read of a file of `bytes`: 10 s plus 1 s per 20 MB, or the
+/// environment variable ORTHOFRONT_READ_TIMEOUT (seconds) where it is set.
 double child_read_seconds(std::size_t bytes);
 
 /// Runs `read` in a forked child under `limits`. Returns when the child returned from `read`.
 /// Throws FormatError naming `file` and `format` otherwise: the child's own error message when it
 /// threw one of the project's errors; "needs more than N MiB" when it ran out of its memory limit;
-/// "did not finish within N s" when it was killed at the time limit; the signal when it crashed.
+/// "did not finish within N s" when it was killed at a time limit; the signal when it crashed.
 /// Without a sanitizer build, the memory limit is RLIMIT_AS over the current address space (a
 /// sanitizer reserves terabytes of it, so there only the time limit applies).
 void read_in_child(const std::string& file, const std::string& format,

@@ -13,6 +13,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "orthofront/error.h"
 #include "orthofront/field/huge_pages.h"
@@ -894,13 +895,13 @@ namespace {
 /// libhdf5 trusts a file's metadata: fuzzing found heap overflows in H5Aexists and in H5Dread
 /// (H5VM_memcpyvv) on damaged files. Each file is opened first in a child process under limits
 /// (io/child_read.h), once per file version and group: the child reads the description, walks
-/// every dataset's storage (check_storage) and reads the first and last steps the way this
-/// process will. Later steps' chunk contents are decoded by the project's own bounded decoders.
+/// every dataset's storage (check_storage) and makes HDF5's reads of the first and last steps the
+/// way this process will. Later steps' chunk contents are decoded by the project's own bounded decoders.
 void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
                    const Hdf5ReadOptions& options) {
   // Each file version is vetted once; a refusal is remembered too (a hang costs its time limit).
   static std::mutex mutex;
-  static std::map<std::string, std::string> vetted;  // key -> "" (fine) or the refusal
+  static std::map<std::string, std::optional<std::string>> vetted;  // key -> the refusal, if any
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
   const auto stamp = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
@@ -911,14 +912,14 @@ void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
     const std::lock_guard<std::mutex> lock(mutex);
     const auto known = vetted.find(key);
     if (known != vetted.end()) {
-      if (known->second.empty()) return;
-      throw FormatError(known->second);
+      if (!known->second) return;
+      throw FormatError(*known->second);
     }
   }
   ChildReadLimits limits;
   limits.memory_bytes = (std::size_t{1} << 30) + 4 * static_cast<std::size_t>(ec ? 0 : bytes);
   limits.seconds = child_read_seconds(ec ? 0 : bytes);
-  std::string refusal;
+  std::optional<std::string> refusal;
   try {
     read_in_child(path.string(), "HDF5",
                   [&] {
@@ -926,11 +927,13 @@ void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
                     Hdf5ReadOptions o = options;
                     o.steady_as_single_step = true;
                     const auto series = open_hdf5_series(path, group, o);
-                    std::vector<float> values(series->step_floats());
+                    // HDF5's reads only: decoding raw chunks is the project's own bounded code,
+                    // and runs on oneTBB, which a forked child must not use (its workers stay in
+                    // the parent).
                     const auto& missing = series->description().missing_steps;
                     for (const std::size_t step : {std::size_t{0}, series->step_count() - 1}) {
                       if (std::find(missing.begin(), missing.end(), step) == missing.end())
-                        series->read(step, values);
+                        (void)series->read_raw(step);
                     }
                   },
                   limits);
@@ -941,7 +944,7 @@ void vet_hdf5_file(const std::filesystem::path& path, const std::string& group,
     const std::lock_guard<std::mutex> lock(mutex);
     vetted.emplace(key, refusal);
   }
-  if (!refusal.empty()) throw FormatError(refusal);
+  if (refusal) throw FormatError(*refusal);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <list>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -221,7 +222,7 @@ void read_vdb_file_every_way(const std::filesystem::path& path) {
 void vet_vdb_file(const std::filesystem::path& path, const std::string& where) {
   // Each file version is vetted once; a refusal is remembered too (a hang costs its time limit).
   static std::mutex mutex;
-  static std::map<std::string, std::string> vetted;  // key -> "" (fine) or the refusal
+  static std::map<std::string, std::optional<std::string>> vetted;  // key -> the refusal, if any
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
   const auto stamp = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
@@ -231,11 +232,11 @@ void vet_vdb_file(const std::filesystem::path& path, const std::string& where) {
     const std::lock_guard<std::mutex> lock(mutex);
     const auto known = vetted.find(key);
     if (known != vetted.end()) {
-      if (known->second.empty()) return;
-      throw FormatError(known->second);
+      if (!known->second) return;
+      throw FormatError(*known->second);
     }
   }
-  std::string refusal;
+  std::optional<std::string> refusal;
   try {
     read_in_child(where, "OpenVDB",
                   [&] {
@@ -253,7 +254,7 @@ void vet_vdb_file(const std::filesystem::path& path, const std::string& where) {
     const std::lock_guard<std::mutex> lock(mutex);
     vetted.emplace(key, refusal);
   }
-  if (!refusal.empty()) throw FormatError(refusal);
+  if (refusal) throw FormatError(*refusal);
 }
 
 }  // namespace
