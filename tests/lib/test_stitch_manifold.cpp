@@ -1,6 +1,8 @@
 // Regressions for non-manifold stream surfaces found by tools/soak.sh: faces stitched across a
 // merge between two vertices that kept their old mesh vertices (abc), and a closed front merged
 // down to two vertices (focus-sink). Each surface must be a manifold with no face written twice.
+// Also the zero-area faces it found on abc: a fan of collinear triangles from a kept vertex, and a
+// new mesh vertex made on top of an existing one of its face.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cstdint>
@@ -102,4 +104,72 @@ TEST_CASE("focus-sink: a closed front is not merged down to two vertices", "[eng
   const SurfaceResult r = build_stream_surface<3>(*field, seed, o);
   check_manifold(r);
   CHECK(r.report.closed_seed);
+}
+
+namespace {
+
+/// No zero-area face (quality's definition), and still a manifold without T-junctions.
+void check_no_degenerate(const SurfaceResult& r) {
+  REQUIRE(r.mesh.face_count() > 1000);
+  const QualityReport q = measure_quality(r.mesh);
+  CHECK(q.degenerate_faces == 0);
+  CHECK(r.report.quality.degenerate_faces == 0);
+  CHECK(q.non_manifold_edges == 0);
+  CHECK(q.inconsistent_edges == 0);
+  CHECK(q.t_junctions == 0);
+  const Incidence inc = count_incidence(r.mesh);
+  CHECK(inc.over_shared_edges == 0);
+  CHECK(inc.repeated_faces == 0);
+}
+
+}  // namespace
+
+TEST_CASE("abc: no collinear fan from a kept vertex across vertices inserted in line with it",
+          "[engine][stitch]") {
+  // Soak job (seed 2, job 16): `stream --field abc --seed
+  // line:1.70774,6.31526,9.72642:6.23884,2.72689,10.108 --seed-count 24 --edge 0.8607
+  // --steps 342 --memory 64MiB`. On step 332 a front lying along one stream line had a first
+  // vertex that kept its mesh vertex (α clamped to 0) and a long first segment, split by the
+  // cubic fallback into vertices on one line with it; zipper fanned from the kept vertex across
+  // them: a triangle with edges 2.83, 1.88 and 0.94 (ℓ = 0.86) and zero area.
+  const auto field = make_analytic_field("abc");
+  StreamSurfaceOptions o;
+  o.edge = 0.8607;
+  o.max_steps = 342;
+  const auto seed = make_seed(SeedCurve::line(Vec3(1.70774, 6.31526, 9.72642),
+                                              Vec3(6.23884, 2.72689, 10.108)),
+                              24);
+  check_no_degenerate(build_stream_surface<3>(*field, seed, o));
+}
+
+TEST_CASE("abc with linear insertion: no collinear fans at either end of a chain",
+          "[engine][stitch]") {
+  // Soak job (seed 4, job 51) with --insertion linear: 34 zero-area triangles before, fans from
+  // a kept vertex at the start or at the end of a split segment.
+  const auto field = make_analytic_field("abc");
+  StreamSurfaceOptions o;
+  o.edge = 0.4724;
+  o.max_steps = 144;
+  o.insertion = Insertion::linear;
+  const auto seed = make_seed(SeedCurve::line(Vec3(-3.90083, -1.08281, -0.74432),
+                                              Vec3(3.63385, -1.5148, 6.38269)),
+                              32);
+  check_no_degenerate(build_stream_surface<3>(*field, seed, o));
+}
+
+TEST_CASE("abc: no new mesh vertex on top of a mesh vertex of its own faces", "[engine][stitch]") {
+  // Soak job (seed 5, job 7): `stream --field abc --seed
+  // circle:-0.294639,-1.11774,2.57763:0.803721,-0.774879,0.64411:2.1236:open --seed-count 14
+  // --edge 0.7794 --steps 260`. A stalled front folded onto one stream line cycled with a period
+  // of 7 steps: a vertex renewed by row smoothing came back within 5e-7 and less of the mesh
+  // vertex its waiting neighbour kept from 7 steps before, and the face across them had two
+  // coincident corners (11 degenerate faces, 2 T-junctions).
+  const auto field = make_analytic_field("abc");
+  StreamSurfaceOptions o;
+  o.edge = 0.7794;
+  o.max_steps = 260;
+  const auto seed = make_seed(SeedCurve::circle(Vec3(-0.294639, -1.11774, 2.57763),
+                                                Vec3(0.803721, -0.774879, 0.64411), 2.1236, true),
+                              14);
+  check_no_degenerate(build_stream_surface<3>(*field, seed, o));
 }

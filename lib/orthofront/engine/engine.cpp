@@ -939,6 +939,8 @@ class Engine {
       fresh[i] = every_row ? has_moved(f.v[i]) : distance >= min_move;
     }
     if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) smooth_rows(f, fresh);
+    for (std::size_t i = 0; i < n; ++i)
+      if (fresh[i] && f.v[i].origin >= 0 && lands_on_mesh_vertex(f, old, fresh, i)) fresh[i] = 0;
     renew_across_merges(f, old, fresh);
     for (std::size_t i = 0; i < n; ++i) {
       if (f.v[i].origin < 0) continue;
@@ -949,6 +951,39 @@ class Engine {
         ++report_.skipped_vertex_steps;
       }
     }
+  }
+
+  /// Whether moved vertex i of the front, if it got a new mesh vertex, would lie on (within
+  /// 1e-8 ℓ of) a mesh vertex of the faces stitched to it: its own old one, those of its origin's
+  /// neighbours on the previous front, or those its neighbours on the front will have. A stalled
+  /// front folded onto one stream line (abc) settles into a cycle in which a vertex returns to
+  /// where a neighbour's kept mesh vertex was made steps earlier; a copy there gives a face two
+  /// coincident corners (zero area). And a vertex that moved less than that from its own (a front
+  /// near a stagnation point, e.g. the timeline baseline on `stalling`) made a new row of copies
+  /// every step. Such a vertex keeps its old mesh vertex instead, as a waiting vertex does
+  /// (renew_across_merges may still renew it where that is needed for a manifold).
+  bool lands_on_mesh_vertex(const Front<N>& f, const Front<N>& old, const std::vector<char>& fresh,
+                            std::size_t i) const {
+    const double tolerance = 1e-8 * opt_.edge;
+    const auto near = [&](const Vec3& p) {
+      return (p - f.v[i].x.template head<3>()).norm() <= tolerance;
+    };
+    const auto near_mesh = [&](std::int32_t m) {
+      return m >= 0 && near(mesh_.positions[static_cast<std::size_t>(m)]);
+    };
+    const std::size_t n = f.v.size(), n_old = old.v.size();
+    for (const bool next : {false, true}) {
+      if (!f.closed && (next ? i + 1 >= n : i == 0)) continue;
+      const std::size_t k = next ? (i + 1) % n : (i + n - 1) % n;
+      // A neighbour that gets a new mesh vertex gets it at its position; the others keep theirs.
+      if (k != i && (fresh[k] ? near(f.v[k].x.template head<3>()) : near_mesh(f.v[k].mesh)))
+        return true;
+    }
+    const auto o = static_cast<std::size_t>(f.v[i].origin);
+    if (near_mesh(old.v[o].mesh)) return true;
+    if ((old.closed || o > 0) && near_mesh(old.v[(o + n_old - 1) % n_old].mesh)) return true;
+    if ((old.closed || o + 1 < n_old) && near_mesh(old.v[(o + 1) % n_old].mesh)) return true;
+    return false;
   }
 
   /// Two vertices of the front that both keep their old mesh vertices, with nothing inserted
@@ -996,10 +1031,50 @@ class Engine {
       mesh_.add_triangle(u[0], u[1], u[2]);
   }
 
+  /// Whether the face add_face would write for these corners has (near) zero area: below
+  /// 1e-9 ℓ², far above rounding and far below any face worth keeping (quality counts a face
+  /// degenerate below 1e-12 of the mean squared edge). Corners that collapse to fewer than three
+  /// write no face, which is not degenerate.
+  bool flat_face(std::array<std::int32_t, 4> ids, int count) const {
+    std::array<Vec3, 4> p;
+    int m = 0;
+    for (int k = 0; k < count; ++k) {
+      const std::int32_t id = ids[static_cast<std::size_t>(k)];
+      bool seen = false;
+      for (int l = 0; l < k; ++l) seen = seen || ids[static_cast<std::size_t>(l)] == id;
+      if (!seen) p[static_cast<std::size_t>(m++)] = mesh_.positions[static_cast<std::size_t>(id)];
+    }
+    if (m < 3) return false;
+    const Vec3 area = m == 4 ? Vec3((p[2] - p[0]).cross(p[3] - p[1]))
+                             : Vec3((p[1] - p[0]).cross(p[2] - p[0]));
+    return 0.5 * area.norm() < 1e-9 * opt_.edge * opt_.edge;
+  }
+
   double distance(std::int32_t a, std::int32_t b) const {
     return (mesh_.positions[static_cast<std::size_t>(a)] -
             mesh_.positions[static_cast<std::size_t>(b)])
         .norm();
+  }
+
+  /// Whether zipper's choice at (i, j) between a triangle (on A's segment when `on_a`, else on
+  /// B's) and the quad that advances both would write a flat face while the other would not.
+  /// Vertices inserted on a straight segment from a vertex that kept its mesh vertex (α clamped
+  /// to 0) lie on one line with it (linear insertion, or the cubic fallback at an open front's
+  /// end): a fan from that kept vertex across them is a row of collinear triangles. Where the quad
+  /// leaves one side without segments, the fan that must follow counts as part of it.
+  bool flat_choice(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b,
+                   std::size_t i, std::size_t j, bool triangle, bool on_a) const {
+    const std::size_t ma = a.size() - 1, mb = b.size() - 1;
+    const bool triangle_flat =
+        on_a ? flat_face({a[i], a[i + 1], b[j], -1}, 3) : flat_face({a[i], b[j + 1], b[j], -1}, 3);
+    bool quad_flat = flat_face({a[i], a[i + 1], b[j + 1], b[j]}, 4);
+    if (on_a && mb - j == 1)
+      for (std::size_t k = i + 1; k < ma && !quad_flat; ++k)
+        quad_flat = flat_face({a[k], a[k + 1], b[mb], -1}, 3);
+    if (!on_a && ma - i == 1)
+      for (std::size_t k = j + 1; k < mb && !quad_flat; ++k)
+        quad_flat = flat_face({a[ma], b[k + 1], b[k], -1}, 3);
+    return triangle ? triangle_flat && !quad_flat : quad_flat && !triangle_flat;
   }
 
   /// Faces between an old chain A and a new chain B with common ends in correspondence:
@@ -1021,6 +1096,9 @@ class Engine {
         const bool b_old = (j == 0 && b[0] == a[0]) || (j == mb && b[mb] == a[ma]);
         const bool next_old = j + 1 == mb && b[mb] == a[ma];
         bool triangle = rb == 0 || distance(a[i + 1], b[j]) <= distance(a[i + 1], b[j + 1]);
+        // The other choice where this one would be flat (flat_choice); the rules for old ends
+        // of B, which keep the surface manifold, still come first.
+        if (rb > 0 && flat_choice(a, b, i, j, triangle, true)) triangle = !triangle;
         if (b_old && b[j] != a[i] && b[j] != a[i + 1] && rb > 0 && !next_old) triangle = false;
         if (next_old && !b_old) triangle = true;
         if (triangle) {
@@ -1031,7 +1109,9 @@ class Engine {
           ++i, ++j;
         }
       } else {
-        if (ra == 0 || distance(a[i], b[j + 1]) <= distance(a[i + 1], b[j + 1])) {
+        bool triangle = ra == 0 || distance(a[i], b[j + 1]) <= distance(a[i + 1], b[j + 1]);
+        if (ra > 0 && flat_choice(a, b, i, j, triangle, false)) triangle = !triangle;
+        if (triangle) {
           add_face({a[i], b[j + 1], b[j], -1}, 3);
           ++j;
         } else {
