@@ -116,6 +116,11 @@ std::string mib(std::size_t bytes) { return std::to_string((bytes + (1 << 20) - 
 
 }  // namespace
 
+bool files_trusted() {
+  const char* text = std::getenv("ORTHOFRONT_TRUST_FILES");
+  return text != nullptr && std::string(text) == "1";
+}
+
 double child_read_seconds(std::size_t bytes) {
   if (const char* text = std::getenv("ORTHOFRONT_READ_TIMEOUT")) {
     char* end = nullptr;

@@ -18,6 +18,10 @@ struct ChildReadLimits {
   double seconds = 60;
 };
 
+/// True when the environment variable ORTHOFRONT_TRUST_FILES is set to 1: files are read here
+/// directly, without the child (for data from a known source, when every second counts).
+bool files_trusted();
+
 /// The CPU-time limit for a first read of a file of `bytes`: 10 s plus 1 s per 20 MB, or the
 /// environment variable ORTHOFRONT_READ_TIMEOUT (seconds) where it is set.
 double child_read_seconds(std::size_t bytes);

@@ -9,6 +9,7 @@
 
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/error.h"
+#include "orthofront/field/field_spec.h"
 #include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/solve/alpha_solver.h"
 
@@ -244,9 +245,9 @@ class Engine {
     for (std::size_t i = 1; i < seed_.parameters.size(); ++i)
       length += (seed_.point(seed_.parameters[i]) - seed_.point(seed_.parameters[i - 1])).norm();
     if (length / opt_.edge > static_cast<double>(opt_.max_vertices))
-      throw InvalidArgument("edge length " + std::to_string(opt_.edge) + " would put about " +
-                            std::to_string(length / opt_.edge) + " vertices on the seed curve (length " +
-                            std::to_string(length) + "), more than the vertex budget of " +
+      throw InvalidArgument("edge length " + format_parameter(opt_.edge) + " would put about " +
+                            format_parameter(length / opt_.edge) + " vertices on the seed curve (length " +
+                            format_parameter(length) + "), more than the vertex budget of " +
                             std::to_string(opt_.max_vertices) +
                             " (--max-vertices); raise --edge");
   }
