@@ -375,7 +375,13 @@ TEST_CASE("bad input: corrupt HDF5 and OpenVDB files that crash or hang or flood
       CHECK(r.status == 2);
       CHECK_THAT(r.output, Contains("orthofront: error:"));
       CHECK_THAT(r.output, Contains(file.string()));
-      CHECK_THAT(lower(r.output), Contains(words));
+      std::string expected = words;
+#ifdef __SANITIZE_ADDRESS__
+      // In a sanitizer build the child's sanitizer stops it at the first bad access, before any
+      // crash, loop or flood: it exits 1 and the message says the reader failed.
+      if (expected == "crashed" || expected == "did not finish") expected = "reader";
+#endif
+      CHECK_THAT(lower(r.output), Contains(expected));
       CHECK(out.entries().empty());
     }
   }
