@@ -1,8 +1,9 @@
 // Regressions for non-manifold stream surfaces found by tools/soak.sh: faces stitched across a
 // merge between two vertices that kept their old mesh vertices (abc), and a closed front merged
 // down to two vertices (focus-sink). Each surface must be a manifold with no face written twice.
-// Also the zero-area faces it found on abc: a fan of collinear triangles from a kept vertex, and a
-// new mesh vertex made on top of an existing one of its face.
+// Also the zero-area faces it found on abc: a fan of collinear triangles from a kept vertex, a
+// new mesh vertex made on top of an existing one of its face, and a front run along one stream
+// line where the seed parameter could no longer tell its vertices' stream lines apart.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cstdint>
@@ -172,4 +173,34 @@ TEST_CASE("abc: no new mesh vertex on top of a mesh vertex of its own faces", "[
                                                 Vec3(0.803721, -0.774879, 0.64411), 2.1236, true),
                               14);
   check_no_degenerate(build_stream_surface<3>(*field, seed, o));
+}
+
+TEST_CASE("abc with negative alpha kept: no front along one stream line where the seed "
+          "parameter runs out",
+          "[engine][stitch]") {
+  // Soak job (seed 11, job 162): `stream --field abc --seed
+  // line:2.73419,7.32986,5.6956:-2.01563,3.59467,1.83745 --seed-count 35 --edge 0.8906
+  // --steps 357 --negative-alpha keep`. Near a separating stream line the seed interval between
+  // neighbouring front vertices halved every step until, on step 24, vertices were inserted with
+  // the seed parameter of an end. From then on the front ran along that one stream line, growing
+  // by three vertices a step, and settled into a cycle that each step inserted new mesh vertices
+  // exactly on the previous step's: 584 zero-area faces and 941 T-junctions. Such a segment is
+  // now cut instead of split.
+  const auto field = make_analytic_field("abc");
+  StreamSurfaceOptions o;
+  o.edge = 0.8906;
+  o.max_steps = 357;
+  o.negative_alpha = NegativeAlpha::keep;
+  const auto seed = make_seed(SeedCurve::line(Vec3(2.73419, 7.32986, 5.6956),
+                                              Vec3(-2.01563, 3.59467, 1.83745)),
+                              35);
+  const SurfaceResult r = build_stream_surface<3>(*field, seed, o);
+  check_no_degenerate(r);
+  // No stream line carries a mesh vertex on a large share of the rows (before: 3981 of 4268
+  // vertices had one seed parameter).
+  std::map<double, std::size_t> per_line;
+  for (const double s : r.mesh.s) ++per_line[s];
+  std::size_t most = 0;
+  for (const auto& [s, count] : per_line) most = std::max(most, count);
+  CHECK(most <= static_cast<std::size_t>(r.report.steps) + 1);
 }

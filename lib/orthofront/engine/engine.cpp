@@ -286,8 +286,8 @@ class Engine {
     std::vector<char> cut(f.v.size(), 0);
     for (auto& part : split(std::move(f), keep, cut)) {
       for (auto& fv : part.v) fv.mesh = emit(fv, 0.0, part.id, 0);
-      adapt_and_link(part, nullptr, 0);
-      if (part.v.size() >= 2) out.push_back(std::move(part));
+      for (auto& piece : adapt_and_link(std::move(part), nullptr, 0))
+        if (piece.v.size() >= 2) out.push_back(std::move(piece));
     }
     if (opt_.method == Method::timeline) {
       report_.timeline_step = opt_.timeline_step;
@@ -496,12 +496,13 @@ class Engine {
     // Vertices that left the domain end their stream lines at the last valid point: keep that
     // point in the mesh, but not in the front.
     for (auto& part : split(std::move(nf), keep, cut)) {
-      adapt_and_link(part, &f, step);
-      if (part.v.size() < 2 || too_short(part)) {
-        ++report_.fronts_dropped_short;
-        continue;
+      for (auto& piece : adapt_and_link(std::move(part), &f, step)) {
+        if (piece.v.size() < 2 || too_short(piece)) {
+          ++report_.fronts_dropped_short;
+          continue;
+        }
+        next.push_back(std::move(piece));
       }
-      next.push_back(std::move(part));
     }
   }
 
@@ -710,18 +711,28 @@ class Engine {
   }
 
   /// Merge short segments, split long ones, decide which vertices get new mesh vertices, and
-  /// stitch faces between the previous front `old` (nullptr for the seed) and `f`.
-  void adapt_and_link(Front<N>& f, const Front<N>* old, int step) {
+  /// stitch faces between the previous front `old` (nullptr for the seed) and `f`. Returns the
+  /// parts of `f`: more than one where split_long cut it at segments no stream line can fill.
+  std::vector<Front<N>> adapt_and_link(Front<N>&& f, const Front<N>* old, int step) {
+    std::vector<Front<N>> parts;
     {
       StageTimer timer(report_.times.adapt);
       merge_short(f);
-      split_long(f, step);
+      std::vector<char> cut;
+      if (split_long(f, step, cut)) {
+        parts = split(std::move(f), std::vector<char>(cut.size(), 1), cut);
+      } else {
+        parts.push_back(std::move(f));
+      }
     }
     StageTimer timer(report_.times.stitch);
     if (old) {
-      emit_moved(f, *old, step);
-      stitch(*old, f);
+      for (auto& part : parts) {
+        emit_moved(part, *old, step);
+        stitch(*old, part);
+      }
     }
+    return parts;
   }
 
   void merge_short(Front<N>& f) {
@@ -778,11 +789,31 @@ class Engine {
     enum class Outcome : unsigned char { seed, streamline, fallback, interpolated } outcome{};
   };
 
-  void split_long(Front<N>& f, int step) {
+  /// Splits segments longer than split_factor·ℓ with vertices on the stream lines of seed
+  /// parameters between those of their ends. Where the seed parameter cannot tell those stream
+  /// lines apart any more (some of them would start from the seed point of an end or of another
+  /// insertion on the segment), the segment is cut instead: cut[k] != 0 after vertex k of the
+  /// returned front (split's convention); returns whether any segment was cut.
+  ///
+  /// Near a separating stream line, neighbouring stream lines diverge exponentially and
+  /// insertions halve the seed interval between front vertices every step or so, until it is
+  /// below the resolution of a double (abc: about 23 steps). Vertices inserted after that share
+  /// the seed parameter and so the stream line of an end: the front runs along that one stream
+  /// line, and every vertex inserted there stays on it, moving only along it. The front then
+  /// grows a fold of zero width that stitch fills with zero-area faces (with α < 0 kept it settles
+  /// into a cycle that emits new mesh vertices exactly on the previous step's), and with a mesh
+  /// vertex every few 1e-6 along the stream line (T-junctions). No surface lies between such
+  /// ends: the surface tears there, as at a rip.
+  bool split_long(Front<N>& f, int step, std::vector<char>& cut) {
     const std::size_t n = f.v.size();
     const double limit = opt_.split_factor * opt_.edge;
     const std::size_t segments = f.closed ? n : n - 1;
     jobs_.clear();
+    std::vector<char> unresolved(n, 0);
+    bool any_cut = false;
+    const auto seed_point = [this](double s) {
+      return seed_.point(seed_.closed ? s - std::floor(s) : s);
+    };
     for (std::size_t i = 0; i < segments; ++i) {
       const std::size_t j = (i + 1) % n;
       const double length = (f.v[j].x - f.v[i].x).norm();
@@ -790,16 +821,32 @@ class Engine {
       const int pieces = static_cast<int>(std::ceil(length / opt_.edge));
       double s_next = f.v[j].s;
       if (f.closed && j == 0) s_next += 1.0;  // wrap the seed parameter on the closing segment
-      for (int k = 1; k < pieces; ++k) {
+      const std::size_t first = jobs_.size();
+      Vec<N> previous = seed_point(f.v[i].s);
+      const Vec<N> last = seed_point(s_next);
+      bool resolved = true;
+      for (int k = 1; k < pieces && resolved; ++k) {
         InsertionJob job;
         job.segment = i;
         job.lambda = static_cast<double>(k) / pieces;
         job.s = f.v[i].s + job.lambda * (s_next - f.v[i].s);
         job.t = f.v[i].t + job.lambda * (f.v[j].t - f.v[i].t);
+        const Vec<N> p = seed_point(job.s);
+        resolved = p != previous && p != last;
+        previous = p;
         jobs_.push_back(job);
       }
+      if (!resolved) {
+        jobs_.resize(first);
+        unresolved[i] = 1;
+        any_cut = true;
+      }
     }
-    if (jobs_.empty()) return;
+    cut.clear();
+    if (jobs_.empty()) {
+      if (any_cut) cut = std::move(unresolved);
+      return any_cut;
+    }
     // Each insertion integrates a stream line from the seed: independent and costly, so they run
     // in parallel; the mesh vertices are then emitted in front order, as a serial run would.
     for_range(
@@ -810,9 +857,11 @@ class Engine {
         1);
     std::vector<FrontVertex<N>> out;
     out.reserve(n + jobs_.size());
+    if (any_cut) cut.reserve(n + jobs_.size());
     std::size_t next_job = 0;
     for (std::size_t i = 0; i < n; ++i) {
       out.push_back(f.v[i]);
+      if (any_cut) cut.push_back(unresolved[i]);
       const std::size_t j = (i + 1) % n;
       for (; next_job < jobs_.size() && jobs_[next_job].segment == i; ++next_job) {
         const InsertionJob& job = jobs_[next_job];
@@ -829,10 +878,12 @@ class Engine {
             mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
         nv.mesh = emit(nv, a, f.id, step);
         out.push_back(nv);
+        if (any_cut) cut.push_back(0);
         ++report_.splits;
       }
     }
     f.v = std::move(out);
+    return any_cut;
   }
 
   double alpha_or_zero(const FrontVertex<N>& fv) const {
