@@ -10,6 +10,7 @@ void add_fields_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_path_command(CLI::App& app);
+void add_streak_command(CLI::App& app);
 void add_bench_path_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_info_command(CLI::App& app);

@@ -18,16 +18,20 @@ struct IntAttribute {
   std::vector<std::int32_t> Mesh::*values;
 };
 
-inline constexpr std::array<RealAttribute, 4> kRealAttributes{{
+inline constexpr std::array<RealAttribute, 7> kRealAttributes{{
     {"time", &Mesh::time},
     {"alpha", &Mesh::alpha},
     {"s", &Mesh::s},
     {"error", &Mesh::error},
+    {"release_time", &Mesh::release_time},
+    {"age", &Mesh::age},
+    {"speed", &Mesh::speed},
 }};
 
-inline constexpr std::array<IntAttribute, 2> kIntAttributes{{
+inline constexpr std::array<IntAttribute, 3> kIntAttributes{{
     {"front_id", &Mesh::front_id},
     {"step", &Mesh::step},
+    {"particle_id", &Mesh::particle_id},
 }};
 
 /// An attribute is stored when it has one value per vertex; an empty array means "not recorded".

@@ -27,6 +27,11 @@ struct Mesh {
   std::vector<double> error;              ///< orthogonality error |cos(front tangent, v)| at the vertex
   std::vector<std::int32_t> front_id;     ///< front the vertex belonged to when created
   std::vector<std::int32_t> step;         ///< front step that created the vertex (0 = seed)
+  // Streak surfaces (empty elsewhere): each vertex is a particle released from the seed curve.
+  std::vector<double> release_time;       ///< time the particle left the seed curve
+  std::vector<double> age;                ///< observation time - release_time
+  std::vector<double> speed;              ///< |v| at the vertex at the observation time
+  std::vector<std::int32_t> particle_id;  ///< stable id of the particle across frames
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t face_count() const { return faces.size(); }

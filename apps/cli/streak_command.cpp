@@ -1,0 +1,315 @@
+// `orthofront streak`: streak surfaces (continuous release from a seed curve), written as a
+// ParaView animation: one .vtp per observation time and a .pvd collection listing them.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "cli/engine_options.h"
+#include "cli/process_memory.h"
+#include "cli/progress_bar.h"
+#include "cli/seed_spec.h"
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/mesh_series.h"
+#include "orthofront/io/report_json.h"
+#include "orthofront/io/vdb_grid.h"
+#include "orthofront/spacetime/path_command_json.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+struct StreakArgs {
+  std::string field, seed, release, frames, out, report, budget, insertion = "exact";
+  int seed_count = 0;
+  double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
+  std::size_t max_vertices = 0;
+  bool quiet = false;
+  MemoryLimits limits;
+};
+
+double parse_time(const std::string& text, const std::string& option) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(value))
+    throw InvalidArgument(option + ": '" + text + "' is not a finite number");
+  return value;
+}
+
+std::vector<std::string> split_on(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t end = text.find(separator, begin);
+    parts.push_back(text.substr(begin, end - begin));
+    if (end == std::string::npos) return parts;
+    begin = end + 1;
+  }
+}
+
+// "T0:T1".
+std::pair<double, double> parse_release(const std::string& text) {
+  const auto parts = split_on(text, ':');
+  if (parts.size() != 2)
+    throw InvalidArgument("--release '" + text + "': expected T0:T1 (the release interval)");
+  return {parse_time(parts[0], "--release"), parse_time(parts[1], "--release")};
+}
+
+// "t1,t2,..." or "start:end:count" (count times from start to end, both included).
+std::vector<double> parse_frames(const std::string& text) {
+  std::vector<double> frames;
+  if (text.find(':') != std::string::npos) {
+    const auto parts = split_on(text, ':');
+    if (parts.size() != 3)
+      throw InvalidArgument("--frames '" + text + "': expected START:END:COUNT or a list t1,t2,...");
+    const double a = parse_time(parts[0], "--frames"), b = parse_time(parts[1], "--frames");
+    const double n = parse_time(parts[2], "--frames");
+    if (!(n >= 1 && n <= 100000 && n == std::floor(n)))
+      throw InvalidArgument("--frames '" + text + "': COUNT must be a whole number from 1 to 100000");
+    if (n == 1) return {b};
+    const int count = static_cast<int>(n);
+    for (int i = 0; i + 1 < count; ++i) frames.push_back(a + (b - a) * i / (n - 1));
+    frames.push_back(b);  // exactly END, whatever the rounding
+    return frames;
+  }
+  for (const std::string& part : split_on(text, ',')) frames.push_back(parse_time(part, "--frames"));
+  return frames;
+}
+
+// One status line on stderr (terminals only): simulated time, frames written, particles.
+class StreakStatus {
+ public:
+  StreakStatus() : enabled_(isatty(STDERR_FILENO) != 0) {}
+  ~StreakStatus() { finish(); }
+  StreakStatus(const StreakStatus&) = delete;
+  StreakStatus& operator=(const StreakStatus&) = delete;
+  bool update(const spacetime::StreakProgress& p) {
+    if (interrupted()) return false;
+    if (!enabled_ || p.elapsed_seconds - last_ < 0.1) return true;
+    last_ = p.elapsed_seconds;
+    std::fprintf(stderr, "\rstreak: t = %.4g of %.4g  %zu of %zu frames written  %zu particles in %zu rows  RSS %s   ",
+                 p.t, p.t_end, p.frames_written, p.frames, p.particles, p.rows,
+                 format_memory(current_rss_bytes()).c_str());
+    drawn_ = true;
+    return true;
+  }
+  void finish() {
+    if (drawn_) std::fprintf(stderr, "\n");
+    drawn_ = false;
+  }
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+  double last_ = -1;
+};
+
+nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
+  const QualityReport& q = f.quality;
+  return {{"index", f.index},
+          {"time", f.time},
+          {"vertices", f.vertices},
+          {"faces", f.faces},
+          {"rows", f.rows},
+          {"stopped_particles", f.dead_particles},
+          {"max_edge", f.max_edge},
+          {"seconds", f.seconds},
+          {"quality", io::to_json(q)}};
+}
+
+nlohmann::json report_json(const spacetime::StreakReport& r) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const auto& f : r.frames) frames.push_back(frame_json(f));
+  return {{"dimension", r.dimension},
+          {"streamed", r.streamed},
+          {"complete", r.complete},
+          {"message", r.message},
+          {"insertion", spacetime::to_string(r.insertion)},
+          {"release", {{"begin", r.release_begin}, {"end", r.release_end}, {"step", r.release_step},
+                       {"rows", r.rows_released}, {"seed_count", r.seed_count}}},
+          {"time_reached", r.time_reached},
+          {"particle_steps", r.particle_steps},
+          {"evaluations", r.evaluations},
+          {"intervals", r.intervals},
+          {"refinement", {{"s_insertions", r.s_insertions},
+                          {"rows_inserted", r.rows_inserted},
+                          {"row_particles", r.row_particles},
+                          {"exact_insertions", r.exact_insertions},
+                          {"interpolated_insertions", r.interpolated_insertions},
+                          {"s_removals", r.s_removals},
+                          {"rows_removed", r.rows_removed}}},
+          {"particles", {{"max", r.max_particles},
+                         {"left_domain", r.left_domain},
+                         {"no_data", r.no_data}}},
+          {"frames", frames},
+          {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
+          {"slow_evaluations", r.slow_evaluations},
+          {"seconds", {{"total", r.total_seconds},
+                       {"advect", r.advect_seconds},
+                       {"refine", r.refine_seconds},
+                       {"frames", r.frame_seconds},
+                       {"wait", r.wait_seconds},
+                       {"io", r.io_seconds},
+                       {"decode", r.decode_seconds}}}};
+}
+
+}  // namespace
+
+void add_streak_command(CLI::App& app) {
+  auto args = std::make_shared<StreakArgs>();
+  CLI::App* c = app.add_subcommand(
+      "streak", "Build a streak surface (dye released continuously from a seed curve) as a "
+                "ParaView animation");
+  c->add_option("--field", args->field,
+                "Unsteady field NAME[:key=value,...] (see `orthofront fields`), an HDF5 time "
+                "series or an OpenVDB file of timed vector grids")
+      ->required();
+  c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows use x, y)")->required();
+  c->add_option("--release", args->release, "Release interval T0:T1")->required();
+  c->add_option("--frames", args->frames,
+                "Observation times: a list t1,t2,... or START:END:COUNT (after T0)")
+      ->required();
+  c->add_option("--edge", args->edge, "Target edge length")->capture_default_str();
+  c->add_option("--split", args->split, "Split edges longer than this many edge lengths")
+      ->capture_default_str();
+  c->add_option("--merge", args->merge,
+                "Remove particles whose edges are both shorter than this many edge lengths")
+      ->capture_default_str();
+  c->add_option("--release-step", args->release_step,
+                "Time between released rows (0: edge / median speed on the seed)")
+      ->capture_default_str();
+  c->add_option("--seed-count", args->seed_count,
+                "Particles per row at release (0: seed length / edge + 1)")
+      ->capture_default_str();
+  c->add_option("--insert", args->insertion,
+                "How inserted particles are placed: exact (released at their own (s, tau) and "
+                "integrated; a streamed series then reads earlier steps again) or interpolate "
+                "(cubic; every step is read once)")
+      ->check(CLI::IsMember({"exact", "interpolate"}))
+      ->capture_default_str();
+  c->add_option("--max-vertices", args->max_vertices,
+                "Stop when the particles exceed this (default: from --memory)");
+  add_memory_flag(*c, args->limits);
+  c->add_option("--cache-budget", args->budget,
+                "Memory for resident and in-flight data of a streamed series (default: a "
+                "quarter of --memory)");
+  c->add_option("--out", args->out, "Output collection DIR/NAME.pvd (frames go to DIR/NAME/)")
+      ->required();
+  c->add_option("--report", args->report, "Write the JSON report here");
+  c->add_flag("--quiet", args->quiet, "No summary on stdout");
+  c->callback([args, c]() {
+    StreamSurfaceOptions caps;
+    if (c->count("--max-vertices") > 0) caps.max_vertices = args->max_vertices;
+    apply_memory_flag(*c, args->limits, caps);
+    io::MeshSeriesWriter writer(args->out);  // checks the extension and the folder
+    if (!args->report.empty()) io::check_writable(args->report);
+    const SeedCurve seed = parse_seed(args->seed);
+    spacetime::StreakOptions o;
+    std::tie(o.release_begin, o.release_end) = parse_release(args->release);
+    o.frames = parse_frames(args->frames);
+    o.edge = args->edge;
+    o.split = args->split;
+    o.merge = args->merge;
+    o.release_step = args->release_step;
+    o.seed_count = args->seed_count;
+    o.insertion = args->insertion == "exact" ? spacetime::Insertion::exact
+                                             : spacetime::Insertion::interpolate;
+    o.max_vertices = caps.max_vertices;
+    o.seed_name = args->seed;
+    o.field_name = args->field;
+    StreakStatus status;
+    o.progress = [&](const spacetime::StreakProgress& p) { return status.update(p); };
+    const auto sink = [&](const spacetime::StreakFrame& frame) {
+      writer.add_frame(frame.mesh, frame.time);
+    };
+
+    spacetime::StreakReport result;
+    std::size_t cache_budget = 0;
+    if (is_unsteady_field_name(args->field)) {
+      const auto flow = make_unsteady_field(args->field);
+      result = spacetime::build_streak_surface(*flow, seed, o, sink);
+    } else {
+      const std::filesystem::path file = args->field;
+      if (!std::filesystem::exists(file))
+        throw InvalidArgument("--field '" + args->field +
+                              "' is neither an unsteady field name (see `orthofront fields`) "
+                              "nor an existing file");
+      std::unique_ptr<io::TimeSeries> series;
+      if (file.extension() == ".vdb")
+        series = io::open_vdb_file_series(file);
+      else if (io::is_hdf5_file(file))
+        series = io::open_hdf5_series(file);
+      else
+        throw InvalidArgument("--field '" + args->field +
+                              "': streak surfaces read time series in the project's HDF5 layout "
+                              "(docs/hdf5-layout.md) or OpenVDB files of timed vector grids; "
+                              "this file is neither");
+      spacetime::CacheOptions co;
+      co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
+                                             : spacetime::parse_bytes(args->budget);
+      cache_budget = co.budget_bytes;
+      spacetime::BrickCache cache(*series, co);
+      result = spacetime::build_streak_surface(cache, seed, o, sink);
+    }
+    status.finish();
+    if (!args->report.empty()) {
+      nlohmann::json report = report_json(result);
+      report["field"] = args->field;
+      report["seed"] = args->seed;
+      report["output"] = args->out;
+      report["frames_written"] = writer.frames();
+      report["limits"] = args->limits.to_json();
+      if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}, {"rss_bytes", current_rss_bytes()}};
+      io::write_atomically(args->report, [&](std::ofstream& out) { out << report.dump(2) << '\n'; });
+    }
+    if (!args->quiet) {
+      std::printf("Streak surface of %s from %s, released over [%g, %g] in %zu rows of %zu "
+                  "particles: %zu of %zu frames, t reached %g, %zu particle-steps, %zu exact and "
+                  "%zu interpolated insertions, %.3f s (advect %.3f, refine %.3f, frames %.3f).\n",
+                  args->field.c_str(), args->seed.c_str(), result.release_begin,
+                  result.release_end, result.rows_released, result.seed_count,
+                  result.frames.size(), o.frames.size(), result.time_reached,
+                  result.particle_steps, result.exact_insertions, result.interpolated_insertions,
+                  result.total_seconds, result.advect_seconds, result.refine_seconds,
+                  result.frame_seconds);
+      if (!result.frames.empty()) {
+        const auto& f = result.frames.back();
+        std::printf("Last frame (t = %g): %zu vertices, %zu faces, %.1f%% quads, %.1f%% of quad "
+                    "angles within 90±10°, edge spread %.3f, max edge %.3g (%.2f edge lengths), "
+                    "%zu folds, %zu T-junctions, %zu degenerate faces, %zu non-manifold edges.\n",
+                    f.time, f.vertices, f.faces, 100 * f.quality.quad_share,
+                    100 * f.quality.quad_angles_within_10, f.quality.edge_spread_median,
+                    f.max_edge, f.max_edge / args->edge, f.quality.folds, f.quality.t_junctions,
+                    f.quality.degenerate_faces, f.quality.non_manifold_edges);
+      }
+      if (result.streamed)
+        std::printf("Cache: %s read (%.3fx needed), at most %zu reads of a unit, waited %.3f s.\n",
+                    spacetime::format_bytes(result.cache.bytes_read).c_str(),
+                    result.cache.read_amplification(), result.cache.max_reads_of_a_unit,
+                    result.wait_seconds);
+      std::printf("Wrote %s (%zu frames in %s)%s%s\n", args->out.c_str(), writer.frames(),
+                  writer.frame_folder().string().c_str(), args->report.empty() ? "" : " and ",
+                  args->report.c_str());
+    }
+    if (!result.complete) {
+      if (interrupted())
+        throw Error("interrupted: the " + std::to_string(writer.frames()) +
+                    " frames written are listed in " + args->out);
+      throw Error(result.message + " (the " + std::to_string(writer.frames()) +
+                  " frames written are listed in " + args->out + ")");
+    }
+  });
+}
+
+}  // namespace orthofront::cli

@@ -1,0 +1,78 @@
+#include "orthofront/io/mesh_series.h"
+
+#include <cmath>
+#include <cstdio>
+#include <system_error>
+
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/mesh_io.h"
+
+namespace orthofront::io {
+
+namespace {
+
+std::string xml_escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+MeshSeriesWriter::MeshSeriesWriter(std::filesystem::path pvd) : pvd_(std::move(pvd)) {
+  if (pvd_.extension() != ".pvd")
+    throw InvalidArgument("output '" + pvd_.string() +
+                          "' must be a ParaView collection (.pvd): the frames go beside it");
+  check_writable(pvd_);
+  name_ = pvd_.stem().string();
+  folder_ = pvd_.parent_path() / name_;
+}
+
+std::filesystem::path MeshSeriesWriter::add_frame(const Mesh& mesh, double time) {
+  if (!entries_.empty() && !(time > entries_.back().time))
+    throw InvalidArgument("frame times must increase: " + std::to_string(time) + " after " +
+                          std::to_string(entries_.back().time));
+  std::error_code ec;
+  std::filesystem::create_directories(folder_, ec);
+  if (ec) throw IoError("cannot create the frame folder " + folder_.string() + ": " + ec.message());
+  char file[64];
+  std::snprintf(file, sizeof file, "%s_%04zu.vtp", "", entries_.size());
+  const std::string relative = name_ + "/" + name_ + file;
+  const std::filesystem::path path = pvd_.parent_path() / relative;
+  write_mesh(mesh, path);
+  entries_.push_back({time, relative});
+  try {
+    write_collection();
+  } catch (...) {
+    entries_.pop_back();  // the .pvd on disk still lists the frames before this one
+    throw;
+  }
+  return path;
+}
+
+void MeshSeriesWriter::write_collection() const {
+  write_atomically(pvd_, [&](std::ofstream& out) {
+    out << "<?xml version=\"1.0\"?>\n"
+           "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+           "  <Collection>\n";
+    char time[64];
+    for (const Entry& e : entries_) {
+      std::snprintf(time, sizeof time, "%.17g", e.time);
+      out << "    <DataSet timestep=\"" << time << "\" group=\"\" part=\"0\" file=\""
+          << xml_escape(e.file) << "\"/>\n";
+    }
+    out << "  </Collection>\n</VTKFile>\n";
+  });
+}
+
+}  // namespace orthofront::io

@@ -1,0 +1,644 @@
+#include "orthofront/spacetime/streak_surface.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+
+#include "orthofront/error.h"
+#include "orthofront/spacetime/streamed_field.h"
+
+namespace orthofront::spacetime {
+
+const char* to_string(Insertion insertion) {
+  return insertion == Insertion::exact ? "exact" : "interpolate";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+struct Particle {
+  double s = 0;
+  Vec3 x = Vec3::Zero();
+  std::int32_t id = 0;
+  ParticleStatus status = ParticleStatus::moving;
+  bool alive() const { return status == ParticleStatus::moving; }
+};
+
+struct Row {
+  double tau = 0;  // release time
+  std::vector<Particle> p;  // by increasing s
+};
+
+// What the driver needs from where the data lives: the field, and (streamed) a hook that makes
+// the data of [t_a, t_b] resident before particles are moved across it.
+struct FlowAccess {
+  const UnsteadyField& flow;
+  // Makes [t_a, t_b] resident; returns a read error (empty: none). May be empty.
+  std::function<std::string(double, double)> prepare;
+  std::function<std::string()> read_error;      // empty string: no error
+  std::vector<double> step_times;               // streamed: the series' times (break points)
+};
+
+class StreakBuilder {
+ public:
+  StreakBuilder(const FlowAccess& access, const SeedCurve& seed, const StreakOptions& options,
+                const StreakFrameSink& sink)
+      : access_(access), flow_(access.flow), seed_(seed), o_(options), sink_(sink),
+        map_(access.flow, options.tolerance) {}
+
+  StreakReport run();
+
+ private:
+  void validate();
+  double seed_speed_median(const std::vector<double>& params) const;
+  void release(double tau);
+  bool advance(double t_to);
+  void adapt();
+  bool refine_once();
+  void coarsen();
+  void emit(int index);
+  double row_distance(const Row& a, const Row& b) const;
+  Vec3 seed_point(double s) const {
+    Vec3 p = seed_.point(s);
+    if (flow_.dimension() == 2) p.z() = 0;
+    return p;
+  }
+  std::size_t particle_count() const {
+    std::size_t n = 0;
+    for (const Row& r : rows_) n += r.p.size();
+    return n;
+  }
+  std::string seed_name() const { return o_.seed_name.empty() ? "the seed curve" : "seed '" + o_.seed_name + "'"; }
+  std::string field_name() const { return o_.field_name.empty() ? flow_.describe() : o_.field_name; }
+
+  const FlowAccess& access_;
+  const UnsteadyField& flow_;
+  const SeedCurve& seed_;
+  StreakOptions o_;
+  const StreakFrameSink& sink_;
+  IntegratedFlowMap map_;
+  StreakReport report_;
+  std::vector<double> seed_params_;
+  std::vector<Row> rows_;  // oldest first
+  std::vector<Vec3> x_;
+  std::vector<double> from_;
+  std::vector<ParticleStatus> status_;
+  double t_ = 0;
+  std::int32_t next_id_ = 0;
+  double min_ds_ = 0, min_dtau_ = 0;
+  Clock::time_point start_;
+};
+
+void StreakBuilder::validate() {
+  const auto bad = [](const std::string& what) { throw InvalidArgument(what); };
+  if (!(std::isfinite(o_.edge) && o_.edge > 0)) bad("edge length must be finite and > 0, got " + number(o_.edge));
+  if (!(o_.split > 1)) bad("split factor must be > 1, got " + number(o_.split));
+  if (!(o_.merge > 0 && o_.merge <= 0.5 * o_.split))
+    bad("merge factor must lie in (0, split/2] (so a merge never makes an edge that splits), got " +
+        number(o_.merge));
+  if (!(std::isfinite(o_.release_begin) && std::isfinite(o_.release_end) &&
+        o_.release_end > o_.release_begin))
+    bad("release interval " + number(o_.release_begin) + ":" + number(o_.release_end) +
+        " must be finite with its end after its begin");
+  if (o_.frames.empty()) bad("no observation times (frames) were given");
+  for (std::size_t i = 0; i < o_.frames.size(); ++i) {
+    const double f = o_.frames[i];
+    if (!std::isfinite(f)) bad("observation time " + std::to_string(i) + " is not finite");
+    if (!(f > o_.release_begin))
+      bad("observation time " + number(f) + " is not after the release begin " +
+          number(o_.release_begin));
+    if (i > 0 && !(f > o_.frames[i - 1]))
+      bad("observation times must increase: " + number(f) + " after " + number(o_.frames[i - 1]));
+  }
+  const TimeRange range = flow_.time_range();
+  const auto outside = [&](double t) { return !range.contains(t); };
+  if (outside(o_.release_begin) || outside(o_.release_end) || outside(o_.frames.back()))
+    bad("the release interval " + number(o_.release_begin) + ":" + number(o_.release_end) +
+        " and the observation times up to " + number(o_.frames.back()) +
+        " must lie in the time range of " + field_name() + ", [" + number(range.begin) + ", " +
+        number(range.end) + "]");
+  if (!(o_.release_step >= 0 && std::isfinite(o_.release_step)))
+    bad("release step must be finite and >= 0, got " + number(o_.release_step));
+  if (o_.seed_count < 0 || o_.seed_count == 1)
+    bad("seed count must be at least 2 (or 0 for automatic), got " + std::to_string(o_.seed_count));
+}
+
+double StreakBuilder::seed_speed_median(const std::vector<double>& params) const {
+  std::vector<double> speeds;
+  for (const double s : params) {
+    Vec3 v;
+    if (flow_.velocity(seed_point(s), o_.release_begin, v) == FieldStatus::inside) {
+      if (flow_.dimension() == 2) v.z() = 0;
+      speeds.push_back(v.norm());
+    }
+  }
+  if (speeds.empty()) return -1;
+  std::nth_element(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2),
+                   speeds.end());
+  return speeds[speeds.size() / 2];
+}
+
+void StreakBuilder::release(double tau) {
+  Row row;
+  row.tau = tau;
+  // A new row takes the s of the newest one, so the strip between them is all quads.
+  const std::vector<double> params = [&] {
+    if (rows_.empty()) return seed_params_;
+    std::vector<double> s;
+    for (const Particle& p : rows_.back().p) s.push_back(p.s);
+    return s;
+  }();
+  for (const double s : params) {
+    Particle p;
+    p.s = s;
+    p.x = seed_point(s);
+    p.id = next_id_++;
+    Vec3 v;
+    const FieldStatus st = flow_.velocity(p.x, tau, v);
+    p.status = st == FieldStatus::inside ? ParticleStatus::moving
+               : st == FieldStatus::outside ? ParticleStatus::left_domain
+                                            : ParticleStatus::no_data;
+    row.p.push_back(p);
+  }
+  rows_.push_back(std::move(row));
+  ++report_.rows_released;
+}
+
+bool StreakBuilder::advance(double t_to) {
+  const auto t0 = Clock::now();
+  if (access_.prepare) {
+    if (const std::string e = access_.prepare(t_, t_to); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+  }
+  std::vector<Particle*> moving;
+  for (Row& r : rows_)
+    for (Particle& p : r.p)
+      if (p.alive()) moving.push_back(&p);
+  // Scratch buffers are members: they are reused every interval.
+  x_.resize(moving.size());
+  from_.assign(moving.size(), t_);
+  status_.resize(moving.size());
+  for (std::size_t i = 0; i < moving.size(); ++i) x_[i] = moving[i]->x;
+  report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
+  for (std::size_t i = 0; i < moving.size(); ++i) {
+    moving[i]->x = x_[i];
+    moving[i]->status = status_[i];
+    if (status_[i] == ParticleStatus::left_domain) ++report_.left_domain;
+    if (status_[i] == ParticleStatus::no_data) ++report_.no_data;
+  }
+  report_.particle_steps += moving.size();
+  ++report_.intervals;
+  t_ = t_to;
+  report_.time_reached = t_;
+  report_.advect_seconds += seconds_since(t0);
+  if (access_.read_error) {
+    if (const std::string e = access_.read_error(); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+  }
+  return true;
+}
+
+// Largest distance between the particles of two rows that share a seed parameter.
+double StreakBuilder::row_distance(const Row& a, const Row& b) const {
+  double d = 0;
+  std::size_t i = 0, k = 0;
+  while (i < a.p.size() && k < b.p.size()) {
+    if (a.p[i].s < b.p[k].s) {
+      ++i;
+    } else if (b.p[k].s < a.p[i].s) {
+      ++k;
+    } else {
+      if (a.p[i].alive() && b.p[k].alive()) d = std::max(d, (a.p[i].x - b.p[k].x).norm());
+      ++i, ++k;
+    }
+  }
+  return d;
+}
+
+namespace {
+
+// Catmull-Rom at the middle of p1 and p2 (uniform parameter).
+Vec3 cubic_middle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
+  return (-p0 + 9.0 * p1 + 9.0 * p2 - p3) / 16.0;
+}
+
+}  // namespace
+
+bool StreakBuilder::refine_once() {
+  const double long_edge = o_.split * o_.edge;
+  struct Insert {
+    std::size_t row;  // s-insert: the row; row-insert: the older of the two rows
+    std::size_t after;  // s-insert: index of the left particle
+    Particle particle;
+  };
+  std::vector<Insert> along;                     // along rows
+  std::vector<std::pair<std::size_t, Row>> across;  // new rows after index first
+  const bool closed = seed_.closed();
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    const std::vector<Particle>& p = rows_[r].p;
+    const std::size_t n = p.size();
+    const std::size_t edges = closed ? n : n - 1;
+    for (std::size_t i = 0; i < edges; ++i) {
+      const Particle& a = p[i];
+      const Particle& b = p[(i + 1) % n];
+      if (!a.alive() || !b.alive()) continue;
+      const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
+      if (sb - a.s <= min_ds_ || (a.x - b.x).norm() <= long_edge) continue;
+      Particle q;
+      q.s = 0.5 * (a.s + sb);
+      if (q.s >= 1.0) q.s -= 1.0;
+      if (o_.insertion == Insertion::interpolate) {
+        const auto at = [&](std::ptrdiff_t j) -> const Particle* {
+          const auto m = static_cast<std::ptrdiff_t>(n);
+          if (closed) j = ((j % m) + m) % m;
+          if (j < 0 || j >= m || !p[static_cast<std::size_t>(j)].alive()) return nullptr;
+          return &p[static_cast<std::size_t>(j)];
+        };
+        const auto ii = static_cast<std::ptrdiff_t>(i);
+        const Particle* p0 = at(ii - 1);
+        const Particle* p3 = at(ii + 2);
+        q.x = (p0 && p3) ? cubic_middle(p0->x, a.x, b.x, p3->x) : 0.5 * (a.x + b.x);
+      }
+      along.push_back({r, i, q});
+    }
+  }
+  for (std::size_t r = 0; r + 1 < rows_.size(); ++r) {
+    const Row& a = rows_[r];
+    const Row& b = rows_[r + 1];
+    if (b.tau - a.tau <= min_dtau_ || row_distance(a, b) <= long_edge) continue;
+    Row row;
+    row.tau = 0.5 * (a.tau + b.tau);
+    std::size_t i = 0, k = 0;
+    while (i < a.p.size() || k < b.p.size()) {
+      const bool take_a = k == b.p.size() || (i < a.p.size() && a.p[i].s <= b.p[k].s);
+      const bool take_b = i == a.p.size() || (k < b.p.size() && b.p[k].s <= a.p[i].s);
+      const bool common = take_a && take_b;
+      Particle q;
+      q.s = take_a ? a.p[i].s : b.p[k].s;
+      if (o_.insertion == Insertion::exact) {
+        row.p.push_back(q);
+      } else if (common) {
+        // Cubic across rows where the rows around carry this s too, linear otherwise.
+        const auto find = [&](std::ptrdiff_t rr) -> const Particle* {
+          if (rr < 0 || rr >= static_cast<std::ptrdiff_t>(rows_.size())) return nullptr;
+          const auto& ps = rows_[static_cast<std::size_t>(rr)].p;
+          const auto it = std::lower_bound(ps.begin(), ps.end(), q.s,
+                                           [](const Particle& x, double s) { return x.s < s; });
+          return it != ps.end() && it->s == q.s && it->alive() ? &*it : nullptr;
+        };
+        const Particle& pa = a.p[i];
+        const Particle& pb = b.p[k];
+        if (pa.alive() && pb.alive()) {
+          const auto rr = static_cast<std::ptrdiff_t>(r);
+          const Particle* p0 = find(rr - 1);
+          const Particle* p3 = find(rr + 2);
+          q.x = (p0 && p3) ? cubic_middle(p0->x, pa.x, pb.x, p3->x) : 0.5 * (pa.x + pb.x);
+        } else {
+          q.status = ParticleStatus::left_domain;
+        }
+        row.p.push_back(q);
+      }
+      if (take_a) ++i;
+      if (take_b) ++k;
+    }
+    across.emplace_back(r, std::move(row));
+  }
+  if (along.empty() && across.empty()) return false;
+
+  // Exact positions: every new particle released at its own (s, τ), moved to t in one batch.
+  std::vector<Particle*> fresh;
+  std::vector<double> from;
+  for (Insert& ins : along) {
+    fresh.push_back(&ins.particle);
+    from.push_back(rows_[ins.row].tau);
+  }
+  for (auto& [r, row] : across)
+    for (Particle& q : row.p) {
+      fresh.push_back(&q);
+      from.push_back(row.tau);
+    }
+  for (Particle* q : fresh) q->id = next_id_++;
+  if (o_.insertion == Insertion::exact) {
+    std::vector<Vec3> x(fresh.size());
+    std::vector<ParticleStatus> status(fresh.size());
+    for (std::size_t i = 0; i < fresh.size(); ++i) x[i] = seed_point(fresh[i]->s);
+    report_.evaluations += map_.advect_all(x, from, t_, status);
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      fresh[i]->x = x[i];
+      fresh[i]->status = status[i];
+    }
+    report_.exact_insertions += fresh.size();
+  } else {
+    report_.interpolated_insertions += fresh.size();
+  }
+  report_.s_insertions += along.size();
+  report_.rows_inserted += across.size();
+  for (const auto& [r, row] : across) report_.row_particles += row.p.size();
+
+  // Insert along rows (from the back, so indices stay valid), then the new rows.
+  std::sort(along.begin(), along.end(), [](const Insert& x, const Insert& y) {
+    return x.row != y.row ? x.row > y.row : x.after > y.after;
+  });
+  for (Insert& ins : along) {
+    std::vector<Particle>& p = rows_[ins.row].p;
+    if (ins.after + 1 == p.size())  // closing edge of a closed row: s wrapped past 1
+      p.push_back(ins.particle);
+    else
+      p.insert(p.begin() + static_cast<std::ptrdiff_t>(ins.after + 1), ins.particle);
+  }
+  for (auto it = across.rbegin(); it != across.rend(); ++it)
+    rows_.insert(rows_.begin() + static_cast<std::ptrdiff_t>(it->first + 1), std::move(it->second));
+  return true;
+}
+
+void StreakBuilder::coarsen() {
+  const double short_edge = o_.merge * o_.edge;
+  const double long_edge = o_.split * o_.edge;
+  // Along rows: a particle whose two edges are short goes (never a row's ends, and a row keeps
+  // three particles), unless its neighbours would then be too far apart.
+  for (Row& row : rows_) {
+    std::vector<Particle>& p = row.p;
+    std::vector<Particle> kept;
+    kept.reserve(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const bool interior = i > 0 && i + 1 < p.size();
+      if (interior && !kept.empty() && p.size() - (i - kept.size()) > 3) {
+        const Particle& a = kept.back();
+        const Particle& m = p[i];
+        const Particle& b = p[i + 1];
+        if (a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
+            (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge) {
+          ++report_.s_removals;
+          continue;
+        }
+      }
+      kept.push_back(p[i]);
+    }
+    p.swap(kept);
+  }
+  // Across rows: a row between two close ones goes (never the oldest or the newest).
+  if (rows_.size() > 2) {
+    std::vector<Row> kept;
+    kept.reserve(rows_.size());
+    kept.push_back(std::move(rows_[0]));
+    for (std::size_t r = 1; r + 1 < rows_.size(); ++r) {
+      const Row& a = kept.back();
+      const Row& m = rows_[r];
+      const Row& b = rows_[r + 1];
+      if (row_distance(a, m) < short_edge && row_distance(m, b) < short_edge &&
+          row_distance(a, b) < long_edge) {
+        ++report_.rows_removed;
+        continue;
+      }
+      kept.push_back(std::move(rows_[r]));
+    }
+    kept.push_back(std::move(rows_.back()));
+    rows_.swap(kept);
+  }
+  // Rows whose particles have all stopped carry nothing any more.
+  std::erase_if(rows_, [](const Row& r) {
+    return std::none_of(r.p.begin(), r.p.end(), [](const Particle& p) { return p.alive(); });
+  });
+}
+
+void StreakBuilder::adapt() {
+  const auto t0 = Clock::now();
+  for (int round = 0; round < o_.max_refinement_rounds; ++round) {
+    if (!refine_once()) break;
+    if (particle_count() > o_.max_vertices) break;
+  }
+  coarsen();
+  report_.max_particles = std::max(report_.max_particles, particle_count());
+  report_.refine_seconds += seconds_since(t0);
+}
+
+void StreakBuilder::emit(int index) {
+  const auto t0 = Clock::now();
+  StreakFrame frame;
+  frame.index = index;
+  frame.time = t_;
+  frame.rows = rows_.size();
+  Mesh& mesh = frame.mesh;
+  std::vector<std::vector<std::int32_t>> vertex(rows_.size());
+  std::size_t dead = 0;
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    vertex[r].assign(rows_[r].p.size(), -1);
+    for (std::size_t i = 0; i < rows_[r].p.size(); ++i) {
+      const Particle& p = rows_[r].p[i];
+      if (!p.alive()) {
+        ++dead;
+        continue;
+      }
+      vertex[r][i] = static_cast<std::int32_t>(mesh.positions.size());
+      mesh.positions.push_back(p.x);
+      mesh.s.push_back(p.s);
+      mesh.release_time.push_back(rows_[r].tau);
+      mesh.age.push_back(t_ - rows_[r].tau);
+      Vec3 v = Vec3::Zero();
+      if (flow_.velocity(p.x, t_, v) != FieldStatus::inside) v.setZero();
+      if (flow_.dimension() == 2) v.z() = 0;
+      mesh.speed.push_back(v.norm());
+      mesh.particle_id.push_back(p.id);
+    }
+  }
+  // Strips between neighbouring rows: walk both rows in s; a shared s closes a quad, otherwise
+  // the row whose next s comes first gives a triangle. Faces with a stopped particle are left out.
+  const bool closed = seed_.closed();
+  for (std::size_t r = 0; r + 1 < rows_.size(); ++r) {
+    const auto& A = rows_[r].p;
+    const auto& B = rows_[r + 1].p;
+    const auto& va = vertex[r];
+    const auto& vb = vertex[r + 1];
+    const std::size_t na = A.size(), nb = B.size();
+    const std::size_t ea = closed ? na : na - 1, eb = closed ? nb : nb - 1;
+    const auto sa = [&](std::size_t i) { return i >= na ? A[i - na].s + 1.0 : A[i].s; };
+    const auto sb = [&](std::size_t k) { return k >= nb ? B[k - nb].s + 1.0 : B[k].s; };
+    std::size_t i = 0, k = 0;
+    while (i < ea || k < eb) {
+      const std::int32_t a0 = va[i % na], b0 = vb[k % nb];
+      const bool step_a = i < ea && (k == eb || sa(i + 1) <= sb(k + 1));
+      const bool step_b = k < eb && (i == ea || sb(k + 1) <= sa(i + 1));
+      if (step_a && step_b) {
+        const std::int32_t a1 = va[(i + 1) % na], b1 = vb[(k + 1) % nb];
+        if (a0 >= 0 && a1 >= 0 && b1 >= 0 && b0 >= 0) mesh.add_quad(a0, a1, b1, b0);
+        ++i, ++k;
+      } else if (step_a) {
+        const std::int32_t a1 = va[(i + 1) % na];
+        if (a0 >= 0 && a1 >= 0 && b0 >= 0) mesh.add_triangle(a0, a1, b0);
+        ++i;
+      } else {
+        const std::int32_t b1 = vb[(k + 1) % nb];
+        if (a0 >= 0 && b1 >= 0 && b0 >= 0) mesh.add_triangle(a0, b1, b0);
+        ++k;
+      }
+    }
+  }
+  frame.quality = measure_quality(mesh);
+  StreakFrameRecord rec;
+  rec.index = index;
+  rec.time = t_;
+  rec.vertices = mesh.vertex_count();
+  rec.faces = mesh.face_count();
+  rec.rows = rows_.size();
+  rec.dead_particles = dead;
+  rec.quality = frame.quality;
+  for (const Face& f : mesh.faces)
+    for (int c = 0; c < f.size; ++c)
+      rec.max_edge = std::max(rec.max_edge, (mesh.positions[static_cast<std::size_t>(f.v[c])] -
+                                             mesh.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
+                                                .norm());
+  if (sink_) sink_(frame);
+  rec.seconds = seconds_since(t0);
+  report_.frame_seconds += rec.seconds;
+  report_.frames.push_back(rec);
+}
+
+StreakReport StreakBuilder::run() {
+  start_ = Clock::now();
+  validate();
+  report_.dimension = flow_.dimension();
+  report_.insertion = o_.insertion;
+  report_.release_begin = o_.release_begin;
+  report_.release_end = o_.release_end;
+  const int count = o_.seed_count > 0
+                        ? o_.seed_count
+                        : static_cast<int>(std::clamp(std::ceil(seed_.length() / o_.edge), 1.0, 1e6)) + 1;
+  seed_params_ = seed_.sample(count);
+  report_.seed_count = seed_params_.size();
+  const double median = seed_speed_median(seed_params_);
+  if (median < 0)
+    throw InvalidArgument(seed_name() + " lies outside the domain of " + field_name() +
+                          " at t = " + number(o_.release_begin) + " (or where it has no data)");
+  const double span = o_.release_end - o_.release_begin;
+  double step = o_.release_step > 0 ? o_.release_step : (median > 0 ? o_.edge / median : span / 100);
+  const double rows = std::clamp(std::round(span / step), 1.0, 1e7);
+  step = span / rows;
+  report_.release_step = step;
+  min_ds_ = 1e-12;
+  min_dtau_ = step * 1e-9;
+
+  // Break points: releases, observations, and (streamed) the series' steps.
+  // Observation times inside the release interval release a row too: the surface then reaches
+  // the seed curve in every frame.
+  std::vector<double> releases;
+  for (double j = 0; j <= rows; ++j) releases.push_back(j == rows ? o_.release_end : o_.release_begin + step * j);
+  for (const double f : o_.frames)
+    if (f < o_.release_end) releases.push_back(f);
+  std::sort(releases.begin(), releases.end());
+  releases.erase(std::unique(releases.begin(), releases.end()), releases.end());
+  const double t_last = o_.frames.back();
+  std::vector<double> breaks = releases;
+  breaks.insert(breaks.end(), o_.frames.begin(), o_.frames.end());
+  for (const double t : access_.step_times)
+    if (t > o_.release_begin && t < t_last) breaks.push_back(t);
+  std::erase_if(breaks, [&](double t) { return t > t_last; });
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+
+  t_ = o_.release_begin;
+  std::size_t next_release = 0, next_frame = 0;
+  const auto stop = [&](const std::string& why) {
+    report_.complete = false;
+    report_.message = why;
+  };
+  for (const double b : breaks) {
+    if (b > t_) {
+      if (!advance(b)) break;
+    }
+    if (next_release < releases.size() && releases[next_release] == b) {
+      release(b);
+      ++next_release;
+    }
+    adapt();
+    if (particle_count() > o_.max_vertices) {
+      stop("stopped at t = " + number(t_) + ": " + std::to_string(particle_count()) +
+           " particles exceed the cap of " + std::to_string(o_.max_vertices));
+      break;
+    }
+    if (next_frame < o_.frames.size() && o_.frames[next_frame] == b) {
+      emit(static_cast<int>(next_frame));
+      ++next_frame;
+    }
+    if (o_.progress) {
+      StreakProgress p;
+      p.t = t_;
+      p.t_end = t_last;
+      p.frames_written = next_frame;
+      p.frames = o_.frames.size();
+      p.particles = particle_count();
+      p.rows = rows_.size();
+      p.elapsed_seconds = seconds_since(start_);
+      if (!o_.progress(p)) {
+        stop("interrupted at t = " + number(t_) + " after " + std::to_string(next_frame) + " of " +
+             std::to_string(o_.frames.size()) + " frames");
+        break;
+      }
+    }
+  }
+  report_.total_seconds = seconds_since(start_);
+  return report_;
+}
+
+}  // namespace
+
+StreakReport build_streak_surface(const UnsteadyField& flow, const SeedCurve& seed,
+                                  const StreakOptions& options, const StreakFrameSink& sink) {
+  const FlowAccess access{flow, {}, {}, {}};
+  return StreakBuilder(access, seed, options, sink).run();
+}
+
+StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
+                                  const StreakOptions& options, const StreakFrameSink& sink) {
+  StreamedField field(cache);
+  FlowAccess access{field, {}, {}, cache.times()};
+  const std::size_t bricks = cache.layout().bricks();
+  access.prepare = [&](double t_a, double t_b) -> std::string {
+    try {
+      field.update_band(t_a, t_b);
+    } catch (const InvalidArgument&) {
+      throw;  // the budget cannot hold two steps
+    } catch (const Error& e) {
+      return e.what();  // a read error: the frames handed over stay valid
+    }
+    // Read the next step while this interval is computed.
+    std::size_t k = 0;
+    double w = 0;
+    if (locate_time(cache.times(), t_b, k, w) && k + 2 < cache.times().size()) {
+      std::vector<BrickKey> next;
+      for (std::size_t b = 0; b < bricks; ++b)
+        next.push_back({static_cast<std::uint32_t>(k + 2), static_cast<std::uint32_t>(b)});
+      cache.prefetch(next);
+    }
+    return {};
+  };
+  access.read_error = [&] { return field.error(); };
+  StreakReport report = StreakBuilder(access, seed, options, sink).run();
+  report.streamed = true;
+  report.cache = cache.statistics();
+  report.slow_evaluations = field.slow_evaluations();
+  report.wait_seconds = report.cache.wait_seconds;
+  report.io_seconds = report.cache.read_seconds;
+  report.decode_seconds = report.cache.decode_seconds;
+  return report;
+}
+
+}  // namespace orthofront::spacetime

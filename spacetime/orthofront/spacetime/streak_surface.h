@@ -1,0 +1,118 @@
+#pragma once
+/// Streak surfaces: at each observation time t, the positions of all particles released from a
+/// seed curve between release_begin and min(t, release_end). Particles are released in rows (one
+/// release time τ each) and all advance together in time, so a streamed series is read one step
+/// interval at a time. The mesh is a quad mesh over (s, τ), refined and coarsened in both
+/// directions as it stretches and crowds; strips between neighbouring rows are triangulated by
+/// walking both rows in s, which keeps it conforming (quads where the rows share s, transition
+/// triangles where they do not). Inserted particles are released at their own (s, τ) and moved
+/// through the flow map to the current time (exact); interpolation is a counted fallback.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "orthofront/field/unsteady.h"
+#include "orthofront/integrate/runge_kutta.h"
+#include "orthofront/mesh/mesh.h"
+#include "orthofront/quality/quality.h"
+#include "orthofront/seed/seed_curve.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/flow_map.h"
+
+namespace orthofront::spacetime {
+
+/// How a particle inserted at (s, τ) gets its position at the current time.
+enum class Insertion {
+  exact,        ///< released at τ from the seed point s and moved by the flow map (streamed
+                ///< series: reads the steps since τ again)
+  interpolate,  ///< cubic in s along its row, or in τ across rows (reads every step once)
+};
+const char* to_string(Insertion insertion);
+
+struct StreakProgress {
+  double t = 0, t_end = 0;          ///< simulated time and the last observation time
+  std::size_t frames_written = 0, frames = 0;
+  std::size_t particles = 0, rows = 0;
+  double elapsed_seconds = 0;
+  bool streamed = false;
+  CacheStatistics cache;            ///< streamed only
+};
+
+struct StreakOptions {
+  double release_begin = 0, release_end = 1;  ///< particles leave the seed during this interval
+  std::vector<double> frames;       ///< observation times, increasing, > release_begin
+  double edge = 0.05;               ///< ℓ: target edge length
+  double split = 1.5;               ///< an edge longer than split·ℓ gets a particle inserted
+  double merge = 0.5;               ///< a particle whose edges are both below merge·ℓ goes
+  double release_step = 0;          ///< time between rows at release; 0: ℓ / median seed speed
+  int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
+  Insertion insertion = Insertion::exact;
+  Tolerance tolerance{1e-10, 1e-10};
+  std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
+  int max_refinement_rounds = 12;   ///< split passes after each time step
+  std::function<bool(const StreakProgress&)> progress;  ///< false stops (frames are kept)
+  std::string seed_name, field_name;  ///< how messages name the seed and field (may be empty)
+};
+
+/// One observation: the mesh (positions, faces; attributes release_time, s, age, speed,
+/// particle_id; z = 0 for 2D flows) and its quality.
+struct StreakFrame {
+  int index = 0;
+  double time = 0;
+  Mesh mesh;
+  QualityReport quality;
+  std::size_t rows = 0;
+};
+
+struct StreakFrameRecord {
+  int index = 0;
+  double time = 0;
+  std::size_t vertices = 0, faces = 0, rows = 0, dead_particles = 0;
+  QualityReport quality;
+  double max_edge = 0;              ///< longest mesh edge
+  double seconds = 0;               ///< building and handing over the frame
+};
+
+struct StreakReport {
+  int dimension = 0;
+  bool streamed = false;
+  bool complete = true;             ///< false: stopped early (cap, cancel, read error)
+  std::string message;              ///< why it stopped early
+  Insertion insertion = Insertion::exact;
+  double release_begin = 0, release_end = 0, release_step = 0;
+  double time_reached = 0;
+  std::size_t seed_count = 0, rows_released = 0;
+  std::size_t particle_steps = 0;   ///< particle advances over one time interval
+  std::size_t evaluations = 0;      ///< field evaluations
+  std::size_t intervals = 0;        ///< time intervals advanced
+  // Refinement.
+  std::size_t s_insertions = 0;     ///< particles inserted along rows
+  std::size_t rows_inserted = 0, row_particles = 0;  ///< rows inserted between rows, their particles
+  std::size_t exact_insertions = 0, interpolated_insertions = 0;
+  std::size_t s_removals = 0, rows_removed = 0;
+  std::size_t left_domain = 0, no_data = 0;  ///< particles that stopped
+  std::size_t max_particles = 0;
+  std::vector<StreakFrameRecord> frames;
+  CacheStatistics cache;            ///< streamed only
+  std::size_t slow_evaluations = 0; ///< streamed: evaluations outside the pinned band
+  double total_seconds = 0, advect_seconds = 0, refine_seconds = 0, frame_seconds = 0;
+  double wait_seconds = 0, io_seconds = 0, decode_seconds = 0;  ///< streamed only
+};
+
+/// Called with each frame as soon as it is built (e.g. to write it). An exception stops the run
+/// and propagates; frames handed over before are the caller's.
+using StreakFrameSink = std::function<void(const StreakFrame&)>;
+
+/// Streak surface of an analytic (or in-memory) unsteady field. Throws InvalidArgument naming
+/// the value for bad times, frames, edge or factors, and for a seed with no particle inside the
+/// domain at release_begin.
+StreakReport build_streak_surface(const UnsteadyField& flow, const SeedCurve& seed,
+                                  const StreakOptions& options, const StreakFrameSink& sink);
+
+/// Streak surface of a time series read through `cache`, one step interval at a time. A read
+/// error mid-run stops it (complete = false, message naming step and file); frames handed over
+/// before stay valid. Throws InvalidArgument when two steps do not fit the budget.
+StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
+                                  const StreakOptions& options, const StreakFrameSink& sink);
+
+}  // namespace orthofront::spacetime
