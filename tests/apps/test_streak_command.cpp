@@ -1,0 +1,120 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "apps/cli_run.h"
+#include "orthofront/io/mesh_io.h"
+#include "temp_dir.h"
+
+namespace fs = std::filesystem;
+using orthofront::Mesh;
+
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("streak command: an analytic field as a .pvd animation with its report",
+          "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path pvd = dir.path() / "gyre.pvd", report = dir.path() / "gyre.json";
+  const auto r = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+                               "--release 0:3 --frames 1:4:4 --edge 0.03 --out " + pvd.string() +
+                               " --report " + report.string());
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK(r.output.find("4 of 4 frames") != std::string::npos);
+  const std::string collection = read_text(pvd);
+  CHECK(count(collection, "<DataSet ") == 4);
+  CHECK(collection.find("file=\"gyre/gyre_0003.vtp\"") != std::string::npos);
+  const Mesh last = orthofront::io::read_mesh(dir.path() / "gyre" / "gyre_0003.vtp");
+  CHECK(last.face_count() > 0);
+  CHECK(last.particle_id.size() == last.vertex_count());
+  CHECK(last.release_time.size() == last.vertex_count());
+  const auto j = nlohmann::json::parse(read_text(report));
+  CHECK(j["complete"] == true);
+  CHECK(j["frames_written"] == 4);
+  REQUIRE(j["frames"].size() == 4);
+  CHECK(j["frames"][3]["vertices"] == last.vertex_count());
+  CHECK(j["frames"][3]["quality"]["t_junctions"] == 0);
+  CHECK(j["refinement"]["interpolated_insertions"] == 0);
+}
+
+TEST_CASE("streak command: bad input exits 2 naming the value and leaves no collection",
+          "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path pvd = dir.path() / "bad.pvd";
+  const std::string common = "streak --seed line:0.3,0.3,0:0.3,0.45,0 --edge 0.03 --out " + pvd.string();
+  struct Case {
+    std::string args, message;
+  };
+  const Case cases[] = {
+      {"--field double-gyre:eps=0.1 --release 0:3 --frames 1:4:0", "COUNT must be a whole number"},
+      {"--field double-gyre --release 0:3 --frames 1,x", "'x' is not a finite number"},
+      {"--field double-gyre --release 3:1 --frames 4", "release interval 3:1"},
+      {"--field double-gyre --release 0:3 --frames 0", "not after the release begin"},
+      {"--field unsteady-abc --release -1:3 --frames 4", "time range"},
+      {"--field nosuch.h5 --release 0:1 --frames 1", "neither an unsteady field name"},
+  };
+  for (const Case& c : cases) {
+    const auto r = cli_test::run(common + " " + c.args);
+    INFO(c.args << "\n" << r.output);
+    CHECK(r.status == 2);
+    CHECK(r.output.find(c.message) != std::string::npos);
+    CHECK(!fs::exists(pvd));
+    CHECK(!fs::exists(dir.path() / "bad"));
+  }
+  const auto r = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+                               "--release 0:1 --frames 1 --out " + (dir.path() / "no" / "a.pvd").string());
+  CHECK(r.status == 2);
+  CHECK(r.output.find("does not exist") != std::string::npos);
+  const auto wrong = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+                                   "--release 0:1 --frames 1 --out " + (dir.path() / "a.vtp").string());
+  CHECK(wrong.status == 2);
+  CHECK(wrong.output.find(".pvd") != std::string::npos);
+}
+
+TEST_CASE("streak command: an HDF5 series streamed under a small budget, each step read once",
+          "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path h5 = dir.path() / "gyre.h5";
+  const auto g = cli_test::run("generate --field double-gyre --resolution 101,51 --steps 41 "
+                               "--t1 4 --brick 16 --out " + h5.string() + " --quiet");
+  REQUIRE(g.status == 0);
+  const fs::path pvd = dir.path() / "s.pvd", report = dir.path() / "s.json";
+  const auto r = cli_test::run("streak --field " + h5.string() +
+                               " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
+                               "--edge 0.03 --insert interpolate --cache-budget 1MiB --out " +
+                               pvd.string() + " --report " + report.string());
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const auto j = nlohmann::json::parse(read_text(report));
+  CHECK(j["streamed"] == true);
+  CHECK(j["frames_written"] == 3);
+  CHECK(j["cache"]["max_reads_of_a_unit"] == 1);
+  CHECK(j["cache"]["peak_bytes"].get<std::size_t>() <= (std::size_t{1} << 20));
+  CHECK(count(read_text(pvd), "<DataSet ") == 3);
+  // Past the series' last time: refused before anything is written.
+  const auto late = cli_test::run("streak --field " + h5.string() +
+                                  " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 5 "
+                                  "--out " + (dir.path() / "late.pvd").string());
+  CHECK(late.status == 2);
+  CHECK(late.output.find("[0, 4]") != std::string::npos);
+  CHECK(!fs::exists(dir.path() / "late.pvd"));
+}

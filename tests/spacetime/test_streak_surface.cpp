@@ -1,0 +1,276 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "io/grid_test_support.h"
+#include "orthofront/error.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/mesh_series.h"
+#include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+using namespace orthofront;
+using namespace orthofront::spacetime;
+using grid_test::TempDir;
+
+namespace {
+
+std::vector<StreakFrame> collect(const UnsteadyField& flow, const SeedCurve& seed,
+                                 const StreakOptions& o, StreakReport* report = nullptr) {
+  std::vector<StreakFrame> frames;
+  const StreakReport r =
+      build_streak_surface(flow, seed, o, [&](const StreakFrame& f) { frames.push_back(f); });
+  if (report) *report = r;
+  return frames;
+}
+
+// Classic RK4 with a fixed small step on v(x, t) directly: an integration independent of the
+// flow map and of its adaptive Dormand-Prince steps.
+Vec3 reference_path(const UnsteadyField& flow, Vec3 x, double t0, double t1) {
+  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t1 - t0) / 2e-3)));
+  const double h = (t1 - t0) / n;
+  double t = t0;
+  const auto v = [&](const Vec3& p, double s) {
+    Vec3 out;
+    REQUIRE(flow.velocity(p, s, out) == FieldStatus::inside);
+    if (flow.dimension() == 2) out.z() = 0;
+    return out;
+  };
+  for (int i = 0; i < n; ++i) {
+    const Vec3 k1 = v(x, t), k2 = v(x + 0.5 * h * k1, t + 0.5 * h);
+    const Vec3 k3 = v(x + 0.5 * h * k2, t + 0.5 * h), k4 = v(x + h * k3, t + h);
+    x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    t += h;
+  }
+  return x;
+}
+
+void require_valid(const StreakFrame& f) {
+  INFO("frame " << f.index << " at t = " << f.time);
+  CHECK(f.quality.non_manifold_edges == 0);
+  CHECK(f.quality.t_junctions == 0);
+  CHECK(f.quality.degenerate_faces == 0);
+  CHECK(f.quality.inconsistent_edges == 0);
+  const Mesh& m = f.mesh;
+  REQUIRE(m.release_time.size() == m.vertex_count());
+  REQUIRE(m.age.size() == m.vertex_count());
+  REQUIRE(m.speed.size() == m.vertex_count());
+  REQUIRE(m.particle_id.size() == m.vertex_count());
+  REQUIRE(m.s.size() == m.vertex_count());
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    CHECK(m.age[i] == Approx(f.time - m.release_time[i]).margin(1e-12));
+    CHECK(m.age[i] >= 0);
+  }
+}
+
+StreakOptions gyre_options() {
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 3;
+  o.frames = {1.5, 3, 4.5};
+  o.edge = 0.03;
+  o.release_step = 0.5;  // rows start ~3 edge lengths apart: rows are inserted between them
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("streak surface: every vertex lies on the path line of its own release (double gyre)",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  for (const Insertion insertion : {Insertion::exact, Insertion::interpolate}) {
+    StreakOptions o = gyre_options();
+    o.insertion = insertion;
+    StreakReport report;
+    const auto frames = collect(*flow, seed, o, &report);
+    REQUIRE(frames.size() == 3);
+    REQUIRE(report.complete);
+    // The surface stretched: particles were inserted, along rows and across them.
+    CHECK(report.s_insertions > 0);
+    CHECK(report.rows_inserted > 0);
+    double worst = 0;
+    std::size_t checked = 0;
+    for (const StreakFrame& f : frames) {
+      require_valid(f);
+      CHECK(f.mesh.face_count() > 0);
+      for (std::size_t i = 0; i < f.mesh.vertex_count(); i += 3) {
+        const Vec3 ref = reference_path(*flow, seed.point(f.mesh.s[i]), f.mesh.release_time[i], f.time);
+        worst = std::max(worst, (f.mesh.positions[i] - ref).norm() / std::max(1.0, ref.norm()));
+        ++checked;
+      }
+    }
+    INFO(to_string(insertion) << ": " << checked << " vertices, worst relative residual " << worst);
+    if (insertion == Insertion::exact) {
+      CHECK(report.interpolated_insertions == 0);
+      CHECK(worst <= 1e-6);
+    } else {
+      // Interpolated particles are only close to their path lines (a counted fallback).
+      CHECK(report.exact_insertions == 0);
+      CHECK(report.interpolated_insertions > 0);
+      CHECK(worst > 1e-6);
+      CHECK(worst < 0.5 * o.edge);
+    }
+  }
+}
+
+TEST_CASE("streak surface: positions match the moving spiral's closed-form path lines",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("moving-spiral");
+  const SeedCurve seed = SeedCurve::line(Vec3(1.0, -0.5, 0.5), Vec3(1.0, 0.5, 0.5));
+  StreakOptions o;
+  o.release_begin = 0.5;
+  o.release_end = 4;
+  o.frames = {2, 4, 6};
+  o.edge = 0.1;
+  StreakReport report;
+  const auto frames = collect(*flow, seed, o, &report);
+  REQUIRE(frames.size() == 3);
+  double worst = 0;
+  for (const StreakFrame& f : frames) {
+    require_valid(f);
+    CHECK(f.quality.folds == 0);
+    for (std::size_t i = 0; i < f.mesh.vertex_count(); ++i) {
+      Vec3 exact;
+      REQUIRE(flow->exact_flow_map(seed.point(f.mesh.s[i]), f.mesh.release_time[i], f.time, exact));
+      worst = std::max(worst, (f.mesh.positions[i] - exact).norm() / std::max(1.0, exact.norm()));
+    }
+  }
+  CHECK(worst <= 1e-6);
+  // Every edge is refined to at most split·ℓ along rows; strip diagonals stay below 2·split·ℓ.
+  CHECK(frames.back().quality.quad_share > 0.8);
+}
+
+TEST_CASE("streak surface: a closed seed curve gives closed rows, valid at every frame",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("unsteady-abc");
+  const SeedCurve seed = SeedCurve::circle(Vec3(3, 3, 3), Vec3(0, 0, 1), 0.3);
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 1;
+  o.frames = {0.5, 1, 1.5};
+  o.edge = 0.1;
+  const auto frames = collect(*flow, seed, o);
+  REQUIRE(frames.size() == 3);
+  for (const StreakFrame& f : frames) {
+    require_valid(f);
+    // A band of a closed curve: boundary edges only along the oldest and the newest rows.
+    CHECK(f.quality.boundary_edges > 0);
+    CHECK(f.quality.boundary_edges < f.mesh.vertex_count());
+  }
+}
+
+TEST_CASE("streak surface: streamed runs give the frames of a resident series, bit for bit",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const GridGeometry grid = uniform_grid(flow->domain(), 2, 81);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  for (const Insertion insertion : {Insertion::interpolate, Insertion::exact}) {
+    StreakOptions o = gyre_options();
+    o.insertion = insertion;
+    std::vector<std::vector<StreakFrame>> runs;
+    std::vector<StreakReport> reports;
+    for (const std::size_t budget : {std::size_t{1} << 30, std::size_t{2} << 20}) {
+      CacheOptions co;
+      co.budget_bytes = budget;
+      co.whole_steps = true;
+      BrickCache cache(series, co);
+      std::vector<StreakFrame> frames;
+      reports.push_back(build_streak_surface(cache, seed, o, [&](const StreakFrame& f) { frames.push_back(f); }));
+      runs.push_back(std::move(frames));
+      REQUIRE(reports.back().complete);
+      REQUIRE(reports.back().streamed);
+    }
+    INFO(to_string(insertion));
+    REQUIRE(runs[0].size() == runs[1].size());
+    for (std::size_t f = 0; f < runs[0].size(); ++f) {
+      const Mesh& a = runs[0][f].mesh;
+      const Mesh& b = runs[1][f].mesh;
+      REQUIRE(a.vertex_count() == b.vertex_count());
+      CHECK(a.faces == b.faces);
+      CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) == 0);
+      CHECK(a.particle_id == b.particle_id);
+      require_valid(runs[1][f]);
+    }
+    // The small budget holds half the series (51 steps of 77 KiB); interpolated insertion reads
+    // each step once.
+    CHECK(reports[1].cache.peak_bytes <= (std::size_t{2} << 20));
+    if (insertion == Insertion::interpolate) CHECK(reports[1].cache.max_reads_of_a_unit == 1);
+  }
+}
+
+TEST_CASE("streak surface: bad times, frames and factors are refused naming the value",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  const auto refused = [&](StreakOptions o, const std::string& text) {
+    INFO(text);
+    CHECK_THROWS_WITH(collect(*flow, seed, o), Catch::Contains(text));
+  };
+  StreakOptions o = gyre_options();
+  o.frames = {};
+  refused(o, "no observation times");
+  o = gyre_options();
+  o.frames = {2, 1};
+  refused(o, "must increase");
+  o = gyre_options();
+  o.frames = {0};
+  refused(o, "not after the release begin");
+  o = gyre_options();
+  o.release_begin = 2;
+  o.release_end = 1;
+  refused(o, "release interval 2:1");
+  o = gyre_options();
+  o.edge = 0;
+  refused(o, "edge length");
+  o = gyre_options();
+  o.merge = 1;
+  refused(o, "merge factor");
+  // Outside the data's time range.
+  const GridGeometry grid = uniform_grid(flow->domain(), 2, 21);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 2, 4));
+  BrickCache cache(series, CacheOptions{});
+  o = gyre_options();
+  CHECK_THROWS_WITH(build_streak_surface(cache, seed, o, {}), Catch::Contains("[0, 2]") && Catch::Contains("4.5"));
+  // A seed outside the domain.
+  o = gyre_options();
+  CHECK_THROWS_WITH(collect(*flow, SeedCurve::line(Vec3(5, 5, 0), Vec3(6, 5, 0)), o),
+                    Catch::Contains("outside the domain"));
+}
+
+TEST_CASE("mesh series: the .pvd lists exactly the frames written", "[io][streak]") {
+  TempDir dir;
+  const auto pvd = dir.path() / "anim.pvd";
+  Mesh m;
+  m.add_vertex(Vec3(0, 0, 0), 0, 0, 0, 0, 0, 0);
+  m.add_vertex(Vec3(1, 0, 0), 0, 0, 1, 0, 0, 0);
+  m.add_vertex(Vec3(0, 1, 0), 0, 0, 0.5, 0, 0, 0);
+  m.add_triangle(0, 1, 2);
+  m.release_time = {0, 0.5, 1};
+  m.age = {1, 0.5, 0};
+  m.speed = {1, 2, 3};
+  m.particle_id = {7, 8, 9};
+  io::MeshSeriesWriter writer(pvd);
+  CHECK(!std::filesystem::exists(pvd));  // nothing before the first frame
+  writer.add_frame(m, 1.0);
+  writer.add_frame(m, 2.5);
+  CHECK_THROWS_WITH(writer.add_frame(m, 2.0), Catch::Contains("must increase"));
+  std::stringstream text;
+  text << std::ifstream(pvd).rdbuf();
+  CHECK(text.str().find("timestep=\"1\"") != std::string::npos);
+  CHECK(text.str().find("timestep=\"2.5\" group=\"\" part=\"0\" file=\"anim/anim_0001.vtp\"") != std::string::npos);
+  CHECK(text.str().find("anim_0002") == std::string::npos);
+  const Mesh back = io::read_mesh(dir.path() / "anim" / "anim_0001.vtp");
+  CHECK(back.release_time == m.release_time);
+  CHECK(back.age == m.age);
+  CHECK(back.speed == m.speed);
+  CHECK(back.particle_id == m.particle_id);
+  CHECK(back.faces == m.faces);
+  CHECK_THROWS_WITH(io::MeshSeriesWriter(dir.path() / "anim.vtp"), Catch::Contains(".pvd"));
+  CHECK_THROWS(io::MeshSeriesWriter(dir.path() / "missing" / "a.pvd"));
+}
