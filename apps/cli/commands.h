@@ -12,6 +12,7 @@ void add_bench_command(CLI::App& app);
 void add_path_command(CLI::App& app);
 void add_streak_command(CLI::App& app);
 void add_bench_path_command(CLI::App& app);
+void add_bench_streak_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_info_command(CLI::App& app);
 void add_convert_command(CLI::App& app);

@@ -68,6 +68,8 @@ class StreakBuilder {
   bool advance(double t_to);
   void adapt();
   bool refine_once();
+  bool release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
+                          std::vector<ParticleStatus>& status);
   void coarsen();
   void emit(int index);
   double row_distance(const Row& a, const Row& b) const;
@@ -243,6 +245,61 @@ Vec3 cubic_middle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3
 
 }  // namespace
 
+// Moves particles released at from[i] (x[i] on the seed) to the current time. A streamed series
+// is swept forward one step interval at a time from the earliest release, all particles together,
+// so a batch reads each step once (per batch) instead of once per particle; then the current
+// interval is made resident again.
+bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
+                                       std::vector<ParticleStatus>& status) {
+  if (!access_.prepare) {
+    report_.evaluations += map_.advect_all(x, from, t_, status);
+    return true;
+  }
+  std::vector<std::size_t> order(x.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return from[a] < from[b]; });
+  std::fill(status.begin(), status.end(), ParticleStatus::moving);
+  double c = order.empty() ? t_ : from[order.front()];
+  std::vector<double> stops;
+  for (const double b : access_.step_times)
+    if (b > c && b < t_) stops.push_back(b);
+  stops.push_back(t_);
+  std::size_t started = 0;  // particles of `order` already moving
+  std::vector<Vec3> bx;
+  std::vector<double> bfrom;
+  std::vector<ParticleStatus> bst;
+  std::vector<std::size_t> which;
+  for (const double b : stops) {
+    if (const std::string e = access_.prepare(c, b); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+    while (started < order.size() && from[order[started]] < b) ++started;
+    bx.clear(), bfrom.clear(), bst.clear(), which.clear();
+    for (std::size_t k = 0; k < started; ++k) {
+      const std::size_t i = order[k];
+      if (status[i] != ParticleStatus::moving) continue;
+      which.push_back(i);
+      bx.push_back(x[i]);
+      bfrom.push_back(std::max(from[i], c));
+    }
+    bst.resize(bx.size());
+    report_.evaluations += map_.advect_all(bx, bfrom, b, bst);
+    for (std::size_t k = 0; k < which.size(); ++k) {
+      x[which[k]] = bx[k];
+      status[which[k]] = bst[k];
+    }
+    c = b;
+  }
+  if (const std::string e = access_.prepare(t_, t_); !e.empty()) {
+    report_.complete = false;
+    report_.message = "stopped at t = " + number(t_) + ": " + e;
+    return false;
+  }
+  return true;
+}
+
 bool StreakBuilder::refine_once() {
   const double long_edge = o_.split * o_.edge;
   struct Insert {
@@ -341,7 +398,7 @@ bool StreakBuilder::refine_once() {
     std::vector<Vec3> x(fresh.size());
     std::vector<ParticleStatus> status(fresh.size());
     for (std::size_t i = 0; i < fresh.size(); ++i) x[i] = seed_point(fresh[i]->s);
-    report_.evaluations += map_.advect_all(x, from, t_, status);
+    if (!release_and_advect(x, from, status)) return false;
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       fresh[i]->x = x[i];
       fresh[i]->status = status[i];
@@ -421,13 +478,13 @@ void StreakBuilder::coarsen() {
 }
 
 void StreakBuilder::adapt() {
+  if (!o_.adaptive) return;
   const auto t0 = Clock::now();
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
     if (!refine_once()) break;
     if (particle_count() > o_.max_vertices) break;
   }
   coarsen();
-  report_.max_particles = std::max(report_.max_particles, particle_count());
   report_.refine_seconds += seconds_since(t0);
 }
 
@@ -569,6 +626,8 @@ StreakReport StreakBuilder::run() {
       ++next_release;
     }
     adapt();
+    if (!report_.complete) break;  // a read error while inserting
+    report_.max_particles = std::max(report_.max_particles, particle_count());
     if (particle_count() > o_.max_vertices) {
       stop("stopped at t = " + number(t_) + ": " + std::to_string(particle_count()) +
            " particles exceed the cap of " + std::to_string(o_.max_vertices));

@@ -50,6 +50,8 @@ struct StreakOptions {
   Tolerance tolerance{1e-10, 1e-10};
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
+  /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.
+  bool adaptive = true;
   std::function<bool(const StreakProgress&)> progress;  ///< false stops (frames are kept)
   std::string seed_name, field_name;  ///< how messages name the seed and field (may be empty)
 };

@@ -1,0 +1,203 @@
+// `orthofront bench-streak`: streak surfaces of a streamed time series much larger than the
+// cache budget, adaptive (exact and interpolated insertion) against a fixed-resolution baseline
+// with the same final vertex count, in one run. Prints a table and JSON.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "cli/commands.h"
+#include "orthofront/error.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+struct BenchStreakArgs {
+  std::string field = "double-gyre", seed = "0.3,0.3:0.3,0.45";
+  int resolution = 256, steps = 101;
+  double t1 = 10, release_end = 5, edge = 0.02;
+  int frames = 10;
+  double budget_share = 16;  // data size / cache budget
+  std::string keep;          // keep the series here (default: a temporary file, removed)
+  bool json_only = false;
+};
+
+struct Row {
+  std::string name;
+  spacetime::StreakReport report;
+  double edge = 0;
+};
+
+nlohmann::json row_json(const Row& r, std::size_t data_bytes) {
+  const auto& rep = r.report;
+  const auto& f = rep.frames.back();
+  return {{"name", r.name},
+          {"seconds", rep.total_seconds},
+          {"advect_seconds", rep.advect_seconds},
+          {"refine_seconds", rep.refine_seconds},
+          {"frame_seconds", rep.frame_seconds},
+          {"wait_seconds", rep.wait_seconds},
+          {"io_seconds", rep.io_seconds},
+          {"decode_seconds", rep.decode_seconds},
+          {"particle_steps", rep.particle_steps},
+          {"particle_steps_per_second", rep.particle_steps / rep.total_seconds},
+          {"exact_insertions", rep.exact_insertions},
+          {"interpolated_insertions", rep.interpolated_insertions},
+          {"last_frame", {{"time", f.time}, {"vertices", f.vertices}, {"faces", f.faces},
+                          {"quads", f.quality.quad_share},
+                          {"quad_angles_within_10", f.quality.quad_angles_within_10},
+                          {"triangle_min_angle_median", f.quality.triangle_min_angle_median},
+                          {"max_edge_over_edge", f.max_edge / r.edge},
+                          {"folds", f.quality.folds}, {"t_junctions", f.quality.t_junctions},
+                          {"degenerate_faces", f.quality.degenerate_faces}}},
+          {"bytes_read", rep.cache.bytes_read},
+          {"data_bytes", data_bytes},
+          {"max_reads_of_a_unit", rep.cache.max_reads_of_a_unit},
+          {"peak_cache_bytes", rep.cache.peak_bytes}};
+}
+
+}  // namespace
+
+void add_bench_streak_command(CLI::App& app) {
+  auto a = std::make_shared<BenchStreakArgs>();
+  CLI::App* c = app.add_subcommand(
+      "bench-streak", "Benchmark streak surfaces on a streamed series (adaptive vs fixed resolution)");
+  c->add_option("--field", a->field, "Unsteady 2D analytic field sampled into the series")->capture_default_str();
+  c->add_option("--seed", a->seed, "Seed segment x0,y0:x1,y1")->capture_default_str();
+  c->add_option("--resolution", a->resolution, "Grid points along x (y: half)")->capture_default_str();
+  c->add_option("--steps", a->steps, "Time steps of the series")->capture_default_str();
+  c->add_option("--t1", a->t1, "Last time of the series (and the last frame)")->capture_default_str();
+  c->add_option("--release-end", a->release_end, "Release from 0 to this time")->capture_default_str();
+  c->add_option("--edge", a->edge, "Target edge length")->capture_default_str();
+  c->add_option("--frames", a->frames, "Observation times, evenly up to --t1")->capture_default_str();
+  c->add_option("--data-over-budget", a->budget_share, "Data size / cache budget")->capture_default_str();
+  c->add_option("--keep", a->keep, "Write the series here and keep it");
+  c->add_flag("--json", a->json_only, "Print only the JSON");
+  c->callback([a]() {
+    const auto flow = make_unsteady_field(a->field);
+    if (flow->dimension() != 2) throw InvalidArgument("bench-streak: --field must be a 2D flow");
+    double x0, y0, x1, y1;
+    if (std::sscanf(a->seed.c_str(), "%lf,%lf:%lf,%lf", &x0, &y0, &x1, &y1) != 4)
+      throw InvalidArgument("--seed '" + a->seed + "': expected x0,y0:x1,y1");
+    if (a->resolution < 8 || a->steps < 4 || a->frames < 1)
+      throw InvalidArgument("bench-streak: --resolution >= 8, --steps >= 4 and --frames >= 1");
+    const GridGeometry grid = spacetime::uniform_grid(flow->domain(), 2, a->resolution);
+    GridGeometry g = grid;
+    g.size[1] = a->resolution / 2 + 1;
+    g.spacing[1] = (flow->domain().hi[1] - flow->domain().lo[1]) / static_cast<double>(g.size[1] - 1);
+    const auto times = spacetime::uniform_times(0, a->t1, static_cast<std::size_t>(a->steps - 1));
+    const spacetime::SampledTimeSeries sampled(*flow, g, times);
+    std::filesystem::path file = a->keep;
+    const bool temporary = file.empty();
+    if (temporary)
+      file = std::filesystem::temp_directory_path() /
+             ("orthofront-bench-streak-" + std::to_string(std::random_device{}()) + ".h5");
+    struct Remove {
+      std::filesystem::path p;
+      bool on;
+      ~Remove() {
+        std::error_code ec;
+        if (on) std::filesystem::remove(p, ec);
+      }
+    } remove{file, temporary};
+    const auto w0 = std::chrono::steady_clock::now();
+    {
+      io::Hdf5WriteOptions w;
+      w.codec = io::Hdf5Codec::lz4;
+      w.zero_is_no_data = false;
+      w.xdmf = false;
+      io::Hdf5SeriesWriter writer(file, g, 3, times, w);
+      std::vector<float> values(sampled.step_floats());
+      for (std::size_t k = 0; k < sampled.step_count(); ++k) {
+        sampled.sample(k, values.data());
+        writer.write_step(values);
+      }
+      writer.commit();
+    }
+    const double write_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    const auto series = io::open_hdf5_series(file);
+    const std::size_t data_bytes = sampled.step_floats() * sizeof(float) * sampled.step_count();
+    const auto budget = static_cast<std::size_t>(static_cast<double>(data_bytes) / a->budget_share);
+
+    spacetime::StreakOptions o;
+    o.release_begin = 0;
+    o.release_end = a->release_end;
+    for (int i = 1; i <= a->frames; ++i) o.frames.push_back(a->t1 * i / a->frames);
+    o.edge = a->edge;
+    const SeedCurve seed = SeedCurve::line(Vec3(x0, y0, 0), Vec3(x1, y1, 0));
+    const auto run = [&](const spacetime::StreakOptions& opts) {
+      spacetime::CacheOptions co;
+      co.budget_bytes = budget;
+      spacetime::BrickCache cache(*series, co);
+      return spacetime::build_streak_surface(cache, seed, opts, {});
+    };
+    std::vector<Row> rows;
+    o.insertion = spacetime::Insertion::interpolate;
+    rows.push_back({"adaptive, interpolated insertion", run(o), o.edge});
+    o.insertion = spacetime::Insertion::exact;
+    rows.push_back({"adaptive, exact insertion", run(o), o.edge});
+    // Baseline: no insertion or removal, rows and particles per row scaled so that its last
+    // frame has the adaptive run's vertex count.
+    const auto& adaptive = rows.back().report;
+    const double target = static_cast<double>(adaptive.frames.back().vertices);
+    const double base = static_cast<double>(adaptive.seed_count * adaptive.rows_released);
+    const double k = std::sqrt(std::max(1.0, target / base));
+    spacetime::StreakOptions fixed = o;
+    fixed.adaptive = false;
+    fixed.seed_count = static_cast<int>(std::round(static_cast<double>(adaptive.seed_count) * k));
+    fixed.release_step = adaptive.release_step / k;
+    rows.push_back({"fixed resolution (baseline)", run(fixed), o.edge});
+    for (const Row& r : rows)
+      if (!r.report.complete) throw Error("bench-streak: '" + r.name + "' stopped: " + r.report.message);
+
+    nlohmann::json out = {{"field", a->field},
+                          {"grid", {g.size[0], g.size[1]}},
+                          {"steps", a->steps},
+                          {"data_bytes", data_bytes},
+                          {"cache_budget_bytes", budget},
+                          {"series_write_seconds", write_seconds},
+                          {"edge", a->edge},
+                          {"rows", nlohmann::json::array()}};
+    for (const Row& r : rows) out["rows"].push_back(row_json(r, data_bytes));
+    if (!a->json_only) {
+      std::printf("bench-streak: %s on %lld x %lld, %d steps, %.1f MiB of data through a %.1f MiB "
+                  "cache (1/%g), edge %g, release [0, %g], %d frames to t = %g\n",
+                  a->field.c_str(), static_cast<long long>(g.size[0]),
+                  static_cast<long long>(g.size[1]), a->steps, data_bytes / 1048576.0,
+                  budget / 1048576.0, a->budget_share, a->edge, a->release_end, a->frames, a->t1);
+      std::printf("%-34s %8s %10s %9s %8s %8s %8s %7s %7s %8s %8s %6s %8s\n", "run", "time s",
+                  "p-steps", "us/p-step", "refine%", "vertices", "quads%", "maxE/l", "triMin",
+                  "read/data", "maxreads", "wait s", "io s");
+      for (const Row& r : rows) {
+        const auto& rep = r.report;
+        const auto& f = rep.frames.back();
+        std::printf("%-34s %8.3f %10zu %9.3f %8.1f %8zu %8.1f %7.2f %7.1f %8.3f %8zu %6.2f %8.3f\n",
+                    r.name.c_str(), rep.total_seconds, rep.particle_steps,
+                    1e6 * rep.total_seconds / static_cast<double>(rep.particle_steps),
+                    100 * rep.refine_seconds / rep.total_seconds, f.vertices,
+                    100 * f.quality.quad_share, f.max_edge / a->edge,
+                    f.quality.triangle_min_angle_median,
+                    static_cast<double>(rep.cache.bytes_read) / static_cast<double>(data_bytes),
+                    rep.cache.max_reads_of_a_unit, rep.wait_seconds, rep.io_seconds);
+      }
+      std::printf("Columns: p-steps = particle advances over one interval; refine%% = share of time "
+                  "inserting and removing; maxE/l = longest edge of the last frame in edge lengths; "
+                  "triMin = median minimum triangle angle (deg); read/data = bytes read / series "
+                  "size (raw, compressed).\n");
+    }
+    std::cout << out.dump(1) << "\n";
+  });
+}
+
+}  // namespace orthofront::cli
