@@ -8,6 +8,8 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <algorithm>
+#include <limits>
 
 #include "cli/commands.h"
 #include "orthofront/error.h"
@@ -16,6 +18,7 @@
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/spacetime/brick_cache.h"
 #include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/spacetime_streak.h"
 #include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
@@ -31,6 +34,9 @@ struct BenchStreakArgs {
   std::string keep;          // keep the series here (default: a temporary file, removed)
   bool json_only = false;
 };
+
+// The release point of the route comparison: the middle of the seed segment.
+Vec3 x0_point(double x0, double y0, double x1, double y1) { return Vec3(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0); }
 
 struct Row {
   std::string name;
@@ -161,7 +167,59 @@ void add_bench_streak_command(CLI::App& app) {
     for (const Row& r : rows)
       if (!r.report.complete) throw Error("bench-streak: '" + r.name + "' stopped: " + r.report.message);
 
+    // The two routes on one point seed of the analytic field: the direct release (a seed segment
+    // of length 1e-9, refined across rows) and the space-time stream surface through the
+    // flow-orthogonal engine; agreement = farthest slice point from the direct streak line.
+    const Vec3 point = x0_point(x0, y0, x1, y1);
+    spacetime::SpacetimeStreakOptions so;
+    so.release_begin = 0;
+    so.release_end = a->release_end;
+    so.t_end = a->t1;
+    so.engine.edge = a->edge;
+    so.engine.max_steps = 1'000'000;
+    const spacetime::SpacetimeStreakResult st = spacetime::build_spacetime_streak_surface(*flow, point, so);
+    spacetime::StreakOptions po;
+    po.release_begin = 0;
+    po.release_end = a->release_end;
+    po.edge = a->edge;
+    po.seed_count = 2;
+    for (int i = 1; i <= a->frames; ++i) po.frames.push_back(0.999 * a->t1 * i / a->frames);
+    std::vector<double> route_distance;
+    const spacetime::StreakReport pr = spacetime::build_streak_surface(
+        *flow, SeedCurve::line(point, point + Vec3(1e-9, 0, 0)), po, [&](const spacetime::StreakFrame& f) {
+          std::vector<std::pair<double, Vec3>> by_release;
+          for (std::size_t i = 0; i < f.mesh.vertex_count(); ++i)
+            if (f.mesh.s[i] == 0) by_release.push_back({f.mesh.release_time[i], f.mesh.positions[i]});
+          std::sort(by_release.begin(), by_release.end(),
+                    [](const auto& p, const auto& q) { return p.first < q.first; });
+          double far = 0;
+          for (const Vec3& p : spacetime::slice_at_time(st.mesh, f.time)) {
+            double best = std::numeric_limits<double>::infinity();
+            for (std::size_t i = 0; i + 1 < by_release.size(); ++i) {
+              const Vec3 q0 = by_release[i].second, d = by_release[i + 1].second - q0;
+              const Vec3 q(p.x(), p.y(), 0);
+              const double w = d.squaredNorm() > 0 ? std::clamp((q - q0).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+              best = std::min(best, (q0 + w * d - q).norm());
+            }
+            far = std::max(far, best);
+          }
+          route_distance.push_back(far);
+        });
+    const double farthest = route_distance.empty() ? 0 : *std::max_element(route_distance.begin(), route_distance.end());
+    const QualityReport& sq = st.report.quality;
+
     nlohmann::json out = {{"field", a->field},
+                          {"routes", {{"seed_point", {point.x(), point.y()}},
+                                      {"direct_seconds", pr.total_seconds},
+                                      {"direct_particles_last_frame", pr.frames.empty() ? 0 : pr.frames.back().vertices},
+                                      {"spacetime_seconds", st.report.times.total},
+                                      {"spacetime_vertices", st.mesh.vertex_count()},
+                                      {"spacetime_time_scale", st.time_scale},
+                                      {"spacetime_quads", sq.quad_share},
+                                      {"spacetime_quad_angles_within_10", sq.quad_angles_within_10},
+                                      {"spacetime_edge_spread_median", sq.edge_spread_median},
+                                      {"spacetime_folds", sq.folds},
+                                      {"farthest_slice_point_from_direct", farthest}}},
                           {"grid", {g.size[0], g.size[1]}},
                           {"steps", a->steps},
                           {"data_bytes", data_bytes},
@@ -191,6 +249,17 @@ void add_bench_streak_command(CLI::App& app) {
                     static_cast<double>(rep.cache.bytes_read) / static_cast<double>(data_bytes),
                     rep.cache.max_reads_of_a_unit, rep.wait_seconds, rep.io_seconds);
       }
+      std::printf("\nRoutes, point seed (%g, %g), release [0, %g], to t = %g:\n"
+                  "  direct (rows of particles):        %.3f s, %zu particles on the last streak line\n"
+                  "  space-time (flow-orthogonal, c = %.3g): %.3f s, %zu vertices, %.1f%% quads, "
+                  "%.1f%% of quad angles within 90±10° (in (x, y, c t)), edge spread %.3f, %zu folds\n"
+                  "  agreement: slices of the space-time surface lie within %.3g (%.4f edge lengths) "
+                  "of the direct streak lines at %d times\n",
+                  point.x(), point.y(), a->release_end, a->t1, pr.total_seconds,
+                  pr.frames.empty() ? std::size_t{0} : pr.frames.back().vertices, st.time_scale,
+                  st.report.times.total, st.mesh.vertex_count(), 100 * sq.quad_share,
+                  100 * sq.quad_angles_within_10, sq.edge_spread_median, sq.folds, farthest,
+                  farthest / a->edge, a->frames);
       std::printf("Columns: p-steps = particle advances over one interval; refine%% = share of time "
                   "inserting and removing; maxE/l = longest edge of the last frame in edge lengths; "
                   "triMin = median minimum triangle angle (deg); read/data = bytes read / series "
