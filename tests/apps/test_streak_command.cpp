@@ -1,6 +1,12 @@
 #include <catch2/catch.hpp>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
+#include <vector>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -117,4 +123,49 @@ TEST_CASE("streak command: an HDF5 series streamed under a small budget, each st
   CHECK(late.status == 2);
   CHECK(late.output.find("[0, 4]") != std::string::npos);
   CHECK(!fs::exists(dir.path() / "late.pvd"));
+}
+
+TEST_CASE("streak command: SIGINT keeps the frames written, and the .pvd lists exactly those",
+          "[apps][streak][signals]") {
+  test_support::TempDir dir;
+  const fs::path pvd = dir.path() / "long.pvd", report = dir.path() / "long.json";
+  const fs::path log = dir.path() / "log.txt";
+  // A long run: a seed across the gyres' boundary stretches exponentially; 200 frames.
+  const std::vector<std::string> args{
+      "streak", "--field", "double-gyre", "--seed", "line:0.9,0.2,0:0.9,0.8,0", "--release",
+      "0:10", "--frames", "0.05:10:200", "--edge", "0.01", "--out", pvd.string(), "--report",
+      report.string()};
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(log.c_str(), "w", stdout);
+    std::freopen(log.c_str(), "a", stderr);
+    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(ORTHOFRONT_BINARY, argv.data());
+    ::_exit(127);
+  }
+  ::usleep(2'000'000);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  INFO(read_text(log));
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(read_text(log).find("interrupted") != std::string::npos);
+  std::size_t on_disk = 0;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "long")) {
+    CHECK(entry.path().extension() == ".vtp");  // no temporary left
+    ++on_disk;
+  }
+  const std::string collection = read_text(pvd);
+  CHECK(on_disk > 0);
+  CHECK(on_disk < 200);
+  CHECK(count(collection, "<DataSet ") == on_disk);
+  const auto j = nlohmann::json::parse(read_text(report));
+  CHECK(j["complete"] == false);
+  CHECK(j["frames_written"] == on_disk);
+  char last[64];
+  std::snprintf(last, sizeof last, "long_%04zu.vtp", on_disk - 1);
+  CHECK(orthofront::io::read_mesh(dir.path() / "long" / last).face_count() > 0);
 }

@@ -8,6 +8,7 @@
 #include "io/grid_test_support.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
+#include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
 #include "orthofront/spacetime/sampled_series.h"
@@ -273,4 +274,43 @@ TEST_CASE("mesh series: the .pvd lists exactly the frames written", "[io][streak
   CHECK(back.faces == m.faces);
   CHECK_THROWS_WITH(io::MeshSeriesWriter(dir.path() / "anim.vtp"), Catch::Contains(".pvd"));
   CHECK_THROWS(io::MeshSeriesWriter(dir.path() / "missing" / "a.pvd"));
+}
+
+namespace {
+
+// A sampled series whose step `bad` cannot be read.
+class FailingSeries final : public SampledTimeSeries {
+ public:
+  FailingSeries(const UnsteadyField& flow, GridGeometry grid, std::vector<double> times,
+                std::size_t bad)
+      : SampledTimeSeries(flow, std::move(grid), std::move(times)), bad_(bad) {}
+  io::RawStep read_raw(std::size_t step) const override {
+    if (step == bad_) throw io::IoError("series.h5: step " + std::to_string(step) + " is unreadable");
+    return SampledTimeSeries::read_raw(step);
+  }
+
+ private:
+  std::size_t bad_;
+};
+
+}  // namespace
+
+TEST_CASE("streak surface: a read error mid-run stops it, naming the step, after the frames "
+          "before it", "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const FailingSeries series(*flow, uniform_grid(flow->domain(), 2, 41), uniform_times(0, 5, 50), 35);
+  CacheOptions co;
+  co.budget_bytes = std::size_t{4} << 20;
+  BrickCache cache(series, co);
+  StreakOptions o = gyre_options();  // frames at 1.5, 3 and 4.5; step 35 is t = 3.5
+  o.insertion = Insertion::interpolate;
+  std::vector<double> handed;
+  const StreakReport r = build_streak_surface(
+      cache, SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0)), o,
+      [&](const StreakFrame& f) { handed.push_back(f.time); });
+  CHECK_FALSE(r.complete);
+  CHECK(r.message.find("step 35") != std::string::npos);
+  CHECK(handed == std::vector<double>{1.5, 3});
+  CHECK(r.frames.size() == 2);
+  CHECK(r.time_reached < 3.5);
 }
