@@ -18,7 +18,9 @@
 #include "orthofront/io/report_json.h"
 #include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_command_json.h"
+#include "orthofront/spacetime/spacetime_streak.h"
 #include "orthofront/spacetime/streak_surface.h"
+#include "orthofront/io/mesh_io.h"
 
 namespace orthofront::cli {
 
@@ -26,6 +28,7 @@ namespace {
 
 struct StreakArgs {
   std::string field, seed, release, frames, out, report, budget, insertion = "exact";
+  std::string route = "direct", point;
   int seed_count = 0;
   double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
   std::size_t max_vertices = 0;
@@ -163,6 +166,56 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
                        {"decode", r.decode_seconds}}}};
 }
 
+// The flow-orthogonal route: one space-time surface from a point, written as one mesh.
+void run_spacetime_route(const StreakArgs& args) {
+  const std::filesystem::path out = args.out;
+  if (!io::is_mesh_extension(out))
+    throw InvalidArgument("--route spacetime writes one mesh: --out '" + args.out +
+                          "' needs the extension .vtp, .ply or .obj");
+  io::check_writable(out);
+  if (!args.report.empty()) io::check_writable(args.report);
+  double x = 0, y = 0;
+  char end = 0;
+  if (std::sscanf(args.point.c_str(), "%lf,%lf%c", &x, &y, &end) != 2)
+    throw InvalidArgument("--route spacetime needs --point x,y (the release point), got '" +
+                          args.point + "'");
+  if (!is_unsteady_field_name(args.field))
+    throw InvalidArgument("--route spacetime takes an unsteady analytic 2D field, not '" +
+                          args.field + "'");
+  const auto flow = make_unsteady_field(args.field);
+  spacetime::SpacetimeStreakOptions o;
+  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
+  o.t_end = parse_frames(args.frames).back();
+  o.engine.edge = args.edge;
+  o.engine.max_steps = 10'000'000;
+  if (args.max_vertices > 0) o.engine.max_vertices = args.max_vertices;
+  const spacetime::SpacetimeStreakResult r =
+      spacetime::build_spacetime_streak_surface(*flow, Vec3(x, y, 0), o);
+  const io::OutputLock lock(out);
+  io::AtomicFileSet outputs;
+  io::write_mesh(r.mesh, out, outputs);
+  if (!args.report.empty()) {
+    nlohmann::json report = io::to_json(r.report);
+    report["route"] = "spacetime";
+    report["field"] = args.field;
+    report["point"] = {x, y};
+    report["time_scale"] = r.time_scale;
+    report["quality_space"] = "(x, y, c t)";
+    io::write_json(report, args.report, outputs);
+  }
+  outputs.commit();
+  if (!args.quiet)
+    std::printf("Space-time streak surface of %s from (%g, %g), released over [%g, %g], to t = "
+                "%g: %zu vertices, %zu faces, c = %g; quality in (x, y, c t): %.1f%% quads, "
+                "%.1f%% of quad angles within 90±10°, edge spread %.3f, %zu folds. Time %.3f s.\n"
+                "Wrote %s (positions (x, y, t); its slice at time t is the streak line at t)\n",
+                args.field.c_str(), x, y, o.release_begin, o.release_end, o.t_end,
+                r.mesh.vertex_count(), r.mesh.face_count(), r.time_scale,
+                100 * r.report.quality.quad_share, 100 * r.report.quality.quad_angles_within_10,
+                r.report.quality.edge_spread_median, r.report.quality.folds,
+                r.report.times.total, args.out.c_str());
+}
+
 }  // namespace
 
 void add_streak_command(CLI::App& app) {
@@ -174,11 +227,18 @@ void add_streak_command(CLI::App& app) {
                 "Unsteady field NAME[:key=value,...] (see `orthofront fields`), an HDF5 time "
                 "series or an OpenVDB file of timed vector grids")
       ->required();
-  c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows use x, y)")->required();
+  c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows use x, y)");
   c->add_option("--release", args->release, "Release interval T0:T1")->required();
   c->add_option("--frames", args->frames,
-                "Observation times: a list t1,t2,... or START:END:COUNT (after T0)")
-      ->required();
+                "Observation times: a list t1,t2,... or START:END:COUNT (after T0); with "
+                "--route spacetime, the last one ends the surface");
+  c->add_option("--route", args->route,
+                "direct: release rows of particles and write one frame per observation time "
+                "(.pvd); spacetime: 2D analytic flows, the streak lines of --point at all times "
+                "as one surface in (x, y, t) built by the flow-orthogonal engine (.vtp, .ply, .obj)")
+      ->check(CLI::IsMember({"direct", "spacetime"}))
+      ->capture_default_str();
+  c->add_option("--point", args->point, "--route spacetime: the release point x,y");
   c->add_option("--edge", args->edge, "Target edge length")->capture_default_str();
   c->add_option("--split", args->split, "Split edges longer than this many edge lengths")
       ->capture_default_str();
@@ -208,6 +268,12 @@ void add_streak_command(CLI::App& app) {
   c->add_option("--report", args->report, "Write the JSON report here");
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
   c->callback([args, c]() {
+    if (args->frames.empty()) throw InvalidArgument("--frames is required (the observation times)");
+    if (args->route == "spacetime") {
+      run_spacetime_route(*args);
+      return;
+    }
+    if (args->seed.empty()) throw InvalidArgument("--seed is required (the curve the dye leaves)");
     StreamSurfaceOptions caps;
     if (c->count("--max-vertices") > 0) caps.max_vertices = args->max_vertices;
     apply_memory_flag(*c, args->limits, caps);

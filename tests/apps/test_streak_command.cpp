@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
@@ -168,4 +169,29 @@ TEST_CASE("streak command: SIGINT keeps the frames written, and the .pvd lists e
   char last[64];
   std::snprintf(last, sizeof last, "long_%04zu.vtp", on_disk - 1);
   CHECK(orthofront::io::read_mesh(dir.path() / "long" / last).face_count() > 0);
+}
+
+TEST_CASE("streak command: the space-time route writes one surface in (x, y, t)", "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path out = dir.path() / "st.vtp";
+  const auto r = cli_test::run("streak --route spacetime --field double-gyre --point 0.3,0.375 "
+                               "--release 0:3 --frames 5 --edge 0.02 --out " + out.string());
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const Mesh mesh = orthofront::io::read_mesh(out);
+  REQUIRE(mesh.face_count() > 100);
+  double t_min = 1e9, t_max = -1e9;
+  for (const auto& p : mesh.positions) t_min = std::min(t_min, p.z()), t_max = std::max(t_max, p.z());
+  CHECK(t_min >= 0);
+  CHECK(t_min < 0.01);
+  CHECK(t_max <= 5 + 1e-9);
+  CHECK(t_max > 4.9);
+  const auto pvd = cli_test::run("streak --route spacetime --field double-gyre --point 0.3,0.375 "
+                                 "--release 0:3 --frames 5 --out " + (dir.path() / "a.pvd").string());
+  CHECK(pvd.status == 2);
+  CHECK(pvd.output.find(".vtp, .ply or .obj") != std::string::npos);
+  const auto three_d = cli_test::run("streak --route spacetime --field unsteady-abc --point 1,1 "
+                                     "--release 0:3 --frames 5 --out " + out.string());
+  CHECK(three_d.status == 2);
+  CHECK(three_d.output.find("needs a 2D flow") != std::string::npos);
 }
