@@ -1,11 +1,15 @@
 #include "cli/field_source.h"
 
+#include <filesystem>
+
 #include "cli/data_files.h"
 #include "cli/grid_data_files.h"
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/grid_field.h"
 #include "orthofront/field/huge_pages.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/vdb_grid.h"
 
 namespace orthofront::cli {
 
@@ -40,6 +44,20 @@ std::unique_ptr<Field3> open_field(const std::string& spec) {
     throw InvalidArgument("field '" + spec + "' looks like a file but has no known extension (" +
                           data_file_extensions() + "); analytic fields: `orthofront fields`");
   return make_analytic_field(spec);
+}
+
+std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const std::string& what) {
+  const std::filesystem::path file = spec;
+  if (!std::filesystem::exists(file))
+    throw InvalidArgument("--field '" + spec +
+                          "' is neither an unsteady field name (see `orthofront fields`) nor an "
+                          "existing file");
+  if (file.extension() == ".vdb")
+    return io::open_vdb_file_series(file);  // grids with "time" metadata, read leaf-wise
+  if (io::is_hdf5_file(file)) return io::open_hdf5_series(file);
+  throw InvalidArgument("--field '" + spec + "': " + what +
+                        " read time series in the project's HDF5 layout (docs/hdf5-layout.md) or "
+                        "OpenVDB files of timed vector grids; this file is neither");
 }
 
 }  // namespace orthofront::cli

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "orthofront/field/field.h"
+#include "orthofront/io/time_series.h"
 
 namespace orthofront::cli {
 
@@ -13,5 +14,10 @@ namespace orthofront::cli {
 /// FormatError naming the file for unreadable data; InvalidArgument for a time series (a steady
 /// field is needed).
 std::unique_ptr<Field3> open_field(const std::string& spec);
+
+/// Opens the time series `spec` names for `path` and `streak` (`what`: "path surfaces", ...): an
+/// HDF5 file in the project's layout or an OpenVDB file of timed vector grids. Throws
+/// InvalidArgument naming the --field value for a missing file or another format.
+std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const std::string& what);
 
 }  // namespace orthofront::cli

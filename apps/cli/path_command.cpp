@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/field_source.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
@@ -163,21 +164,7 @@ void add_path_command(CLI::App& app) {
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
     } else {
-      const std::filesystem::path file = args->field;
-      if (!std::filesystem::exists(file))
-        throw InvalidArgument("--field '" + args->field +
-                              "' is neither an unsteady field name (see `orthofront fields`) "
-                              "nor an existing file");
-      std::unique_ptr<io::TimeSeries> series;
-      if (file.extension() == ".vdb")
-        series = io::open_vdb_file_series(file);  // grids with "time" metadata, read leaf-wise
-      else if (io::is_hdf5_file(file))
-        series = io::open_hdf5_series(file);
-      else
-        throw InvalidArgument("--field '" + args->field +
-                              "': path surfaces read time series in the project's HDF5 layout "
-                              "(docs/hdf5-layout.md) or OpenVDB files of timed vector grids; "
-                              "this file is neither");
+      const std::unique_ptr<io::TimeSeries> series = open_time_series(args->field, "path surfaces");
       spacetime::CacheOptions co;
       // An explicit --cache-budget wins over the share of --memory.
       co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)

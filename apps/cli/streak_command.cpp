@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/field_source.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
@@ -305,21 +306,7 @@ void add_streak_command(CLI::App& app) {
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_streak_surface(*flow, seed, o, sink);
     } else {
-      const std::filesystem::path file = args->field;
-      if (!std::filesystem::exists(file))
-        throw InvalidArgument("--field '" + args->field +
-                              "' is neither an unsteady field name (see `orthofront fields`) "
-                              "nor an existing file");
-      std::unique_ptr<io::TimeSeries> series;
-      if (file.extension() == ".vdb")
-        series = io::open_vdb_file_series(file);
-      else if (io::is_hdf5_file(file))
-        series = io::open_hdf5_series(file);
-      else
-        throw InvalidArgument("--field '" + args->field +
-                              "': streak surfaces read time series in the project's HDF5 layout "
-                              "(docs/hdf5-layout.md) or OpenVDB files of timed vector grids; "
-                              "this file is neither");
+      const std::unique_ptr<io::TimeSeries> series = open_time_series(args->field, "streak surfaces");
       spacetime::CacheOptions co;
       co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
                                              : spacetime::parse_bytes(args->budget);

@@ -1,10 +1,12 @@
 #pragma once
 // Runs the built `orthofront` binary from a command-line test and captures what it printed.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace cli_test {
 
@@ -24,6 +26,22 @@ inline Run run(const std::string& arguments) {
   const int status = ::pclose(pipe);
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+/// Starts the binary with `args` in the background, its stdout and stderr in `log`; returns its
+/// pid (for tests that signal it).
+inline pid_t start(const std::vector<std::string>& args, const std::string& log) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(log.c_str(), "w", stdout);
+    std::freopen(log.c_str(), "a", stderr);
+    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(ORTHOFRONT_BINARY, argv.data());
+    ::_exit(127);
+  }
+  return pid;
 }
 
 }  // namespace cli_test

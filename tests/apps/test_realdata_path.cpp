@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "apps/realdata_support.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/quality/quality.h"
 
@@ -19,24 +20,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int run(const std::string& command_line, const fs::path& log) {
-  const std::string command = command_line + " > '" + log.string() + "' 2>&1 < /dev/null";
-  return WEXITSTATUS(std::system(command.c_str()));
-}
-
-std::string text_of(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orthofront-realdata-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using realdata_test::fresh_dir;
+using realdata_test::run;
+using realdata_test::text_of;
 
 /// Runs `path` on `h5` and checks what holds for any path surface through real data: a complete
 /// run, every brick read exactly once, a manifold mesh without T-junctions or degenerate

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "apps/realdata_support.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/quality/quality.h"
 
@@ -17,24 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int run(const std::string& command_line, const fs::path& log) {
-  const std::string command = command_line + " > '" + log.string() + "' 2>&1 < /dev/null";
-  return WEXITSTATUS(std::system(command.c_str()));
-}
-
-std::string text_of(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("orthofront-realdata-streak-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using realdata_test::fresh_dir;
+using realdata_test::run;
+using realdata_test::text_of;
 
 // Runs `streak` with interpolated insertion and checks: a complete run, every frame on disk and
 // listed, each step read once, and every frame a valid mesh (manifold, no T-junctions, no
@@ -83,7 +69,7 @@ TEST_CASE("a streak surface through the 10 tornado steps", "[apps][streak][reald
     WARN("skipped: " << data.string() << " not found");
     return;
   }
-  const fs::path dir = fresh_dir("tornado");
+  const fs::path dir = fresh_dir("streak-tornado");
   const fs::path h5 = dir / "tornado.h5";
   std::string inputs;
   for (int i = 1; i <= 10; ++i) inputs += " '" + (data / (std::to_string(i) + ".vec")).string() + "'";
@@ -102,7 +88,7 @@ TEST_CASE("a streak surface through the 6 POP steps, land as no data", "[apps][s
     WARN("skipped: " << data.string() << " not found");
     return;
   }
-  const fs::path dir = fresh_dir("pop");
+  const fs::path dir = fresh_dir("streak-pop");
   const fs::path h5 = dir / "pop.h5";
   // The files carry no time: 30 days between steps (a monthly series) is an assumption.
   REQUIRE(run(std::string("'") + ORTHOFRONT_POP_CONVERT + "' " + (data / "*.nc").string() +

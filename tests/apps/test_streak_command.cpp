@@ -136,16 +136,7 @@ TEST_CASE("streak command: SIGINT keeps the frames written, and the .pvd lists e
       "streak", "--field", "double-gyre", "--seed", "line:0.9,0.2,0:0.9,0.8,0", "--release",
       "0:10", "--frames", "0.05:10:200", "--edge", "0.01", "--out", pvd.string(), "--report",
       report.string()};
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(ORTHOFRONT_BINARY, argv.data());
-    ::_exit(127);
-  }
+  const pid_t pid = cli_test::start(args, log.string());
   ::usleep(2'000'000);
   ::kill(pid, SIGINT);
   int status = 0;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "orthofront/io/hdf5_layout.h"
+#include "apps/cli_run.h"
 #include "orthofront/io/mesh_io.h"
 
 namespace fs = std::filesystem;
@@ -173,22 +174,6 @@ TEST_CASE("two runs writing the same mesh and report leave a matching pair", "[c
   }
 }
 
-namespace {
-// Starts `orthofront ARGS...` with its output in `log`; returns the child's pid.
-pid_t start(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(ORTHOFRONT_BINARY, argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-}  // namespace
 
 TEST_CASE("SIGTERM and SIGINT write the surface built so far, marked incomplete",
           "[cli][stream][signals]") {
@@ -200,7 +185,7 @@ TEST_CASE("SIGTERM and SIGINT write the surface built so far, marked incomplete"
                                       "--out", (dir / "s.vtp").string(), "--report",
                                       (dir / "s.json").string()};
   for (int signal : {SIGTERM, SIGINT}) {
-    const pid_t pid = start(args, dir / "log.txt");
+    const pid_t pid = cli_test::start(args, (dir / "log.txt").string());
     ::usleep(1'500'000);
     ::kill(pid, signal);
     int status = 0;

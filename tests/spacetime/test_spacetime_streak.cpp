@@ -4,34 +4,17 @@
 #include <cmath>
 
 #include "orthofront/field/unsteady.h"
+#include "spacetime/reference_path.h"
 #include "orthofront/quality/quality.h"
 #include "orthofront/spacetime/spacetime_streak.h"
 #include "orthofront/spacetime/streak_surface.h"
 
 using namespace orthofront;
 using namespace orthofront::spacetime;
+using streak_test::reference_path;
 
 namespace {
 
-// Fixed-step RK4 on v(x, t): independent of the engine's and the flow map's integrators.
-Vec3 reference_path(const UnsteadyField& flow, Vec3 x, double t0, double t1) {
-  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t1 - t0) / 2e-3)));
-  const double h = (t1 - t0) / n;
-  double t = t0;
-  const auto v = [&](const Vec3& p, double s) {
-    Vec3 out = Vec3::Zero();
-    flow.velocity(p, s, out);
-    out.z() = 0;
-    return out;
-  };
-  for (int i = 0; i < n; ++i) {
-    const Vec3 k1 = v(x, t), k2 = v(x + 0.5 * h * k1, t + 0.5 * h);
-    const Vec3 k3 = v(x + 0.5 * h * k2, t + 0.5 * h), k4 = v(x + h * k3, t + h);
-    x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    t += h;
-  }
-  return x;
-}
 
 double distance_to_polyline(const Vec3& p, const std::vector<Vec3>& line) {
   double best = std::numeric_limits<double>::infinity();

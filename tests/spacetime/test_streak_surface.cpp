@@ -8,6 +8,7 @@
 #include "io/grid_test_support.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
+#include "spacetime/reference_path.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
@@ -16,6 +17,7 @@
 
 using namespace orthofront;
 using namespace orthofront::spacetime;
+using streak_test::reference_path;
 using grid_test::TempDir;
 
 namespace {
@@ -29,26 +31,6 @@ std::vector<StreakFrame> collect(const UnsteadyField& flow, const SeedCurve& see
   return frames;
 }
 
-// Classic RK4 with a fixed small step on v(x, t) directly: an integration independent of the
-// flow map and of its adaptive Dormand-Prince steps.
-Vec3 reference_path(const UnsteadyField& flow, Vec3 x, double t0, double t1) {
-  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t1 - t0) / 2e-3)));
-  const double h = (t1 - t0) / n;
-  double t = t0;
-  const auto v = [&](const Vec3& p, double s) {
-    Vec3 out;
-    REQUIRE(flow.velocity(p, s, out) == FieldStatus::inside);
-    if (flow.dimension() == 2) out.z() = 0;
-    return out;
-  };
-  for (int i = 0; i < n; ++i) {
-    const Vec3 k1 = v(x, t), k2 = v(x + 0.5 * h * k1, t + 0.5 * h);
-    const Vec3 k3 = v(x + 0.5 * h * k2, t + 0.5 * h), k4 = v(x + h * k3, t + h);
-    x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    t += h;
-  }
-  return x;
-}
 
 void require_valid(const StreakFrame& f) {
   INFO("frame " << f.index << " at t = " << f.time);
