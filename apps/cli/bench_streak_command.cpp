@@ -149,9 +149,9 @@ void add_bench_streak_command(CLI::App& app) {
       return spacetime::build_streak_surface(cache, seed, opts, {});
     };
     std::vector<Row> rows;
-    o.insertion = spacetime::Insertion::interpolate;
+    o.insertion = spacetime::ParticleInsertion::interpolate;
     rows.push_back({"adaptive, interpolated insertion", run(o), o.edge});
-    o.insertion = spacetime::Insertion::exact;
+    o.insertion = spacetime::ParticleInsertion::exact;
     rows.push_back({"adaptive, exact insertion", run(o), o.edge});
     // Baseline: no insertion or removal, rows and particles per row scaled so that its last
     // frame has the adaptive run's vertex count.

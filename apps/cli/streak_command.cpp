@@ -289,8 +289,8 @@ void add_streak_command(CLI::App& app) {
     o.merge = args->merge;
     o.release_step = args->release_step;
     o.seed_count = args->seed_count;
-    o.insertion = args->insertion == "exact" ? spacetime::Insertion::exact
-                                             : spacetime::Insertion::interpolate;
+    o.insertion = args->insertion == "exact" ? spacetime::ParticleInsertion::exact
+                                             : spacetime::ParticleInsertion::interpolate;
     o.max_vertices = caps.max_vertices;
     o.seed_name = args->seed;
     o.field_name = args->field;

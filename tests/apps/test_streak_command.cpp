@@ -117,6 +117,17 @@ TEST_CASE("streak command: an HDF5 series streamed under a small budget, each st
   CHECK(j["cache"]["max_reads_of_a_unit"] == 1);
   CHECK(j["cache"]["peak_bytes"].get<std::size_t>() <= (std::size_t{1} << 20));
   CHECK(count(read_text(pvd), "<DataSet ") == 3);
+  // The same series as an OpenVDB file (timed grids, read leaf-wise) gives the same frames.
+  const fs::path vdb = dir.path() / "gyre.vdb";
+  REQUIRE(cli_test::run("convert " + h5.string() + " --out " + vdb.string() + " --quiet").status == 0);
+  const fs::path vpvd = dir.path() / "v.pvd";
+  const auto v = cli_test::run("streak --field " + vdb.string() +
+                               " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
+                               "--edge 0.03 --insert interpolate --cache-budget 1MiB --out " +
+                               vpvd.string());
+  INFO(v.output);
+  REQUIRE(v.status == 0);
+  CHECK(read_text(dir.path() / "v" / "v_0002.vtp") == read_text(dir.path() / "s" / "s_0002.vtp"));
   // Past the series' last time: refused before anything is written.
   const auto late = cli_test::run("streak --field " + h5.string() +
                                   " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 5 "

@@ -1,12 +1,15 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "io/grid_test_support.h"
 #include "orthofront/error.h"
+#include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/unsteady.h"
 #include "spacetime/reference_path.h"
 #include "orthofront/io/error.h"
@@ -66,7 +69,7 @@ TEST_CASE("streak surface: every vertex lies on the path line of its own release
           "[spacetime][streak]") {
   const auto flow = make_unsteady_field("double-gyre");
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
-  for (const Insertion insertion : {Insertion::exact, Insertion::interpolate}) {
+  for (const ParticleInsertion insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
     StreakOptions o = gyre_options();
     o.insertion = insertion;
     StreakReport report;
@@ -88,7 +91,7 @@ TEST_CASE("streak surface: every vertex lies on the path line of its own release
       }
     }
     INFO(to_string(insertion) << ": " << checked << " vertices, worst relative residual " << worst);
-    if (insertion == Insertion::exact) {
+    if (insertion == ParticleInsertion::exact) {
       CHECK(report.interpolated_insertions == 0);
       CHECK(worst <= 1e-6);
     } else {
@@ -153,7 +156,7 @@ TEST_CASE("streak surface: streamed runs give the frames of a resident series, b
   const GridGeometry grid = uniform_grid(flow->domain(), 2, 81);
   const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
-  for (const Insertion insertion : {Insertion::interpolate, Insertion::exact}) {
+  for (const ParticleInsertion insertion : {ParticleInsertion::interpolate, ParticleInsertion::exact}) {
     StreakOptions o = gyre_options();
     o.insertion = insertion;
     std::vector<std::vector<StreakFrame>> runs;
@@ -183,7 +186,7 @@ TEST_CASE("streak surface: streamed runs give the frames of a resident series, b
     // The small budget holds half the series (51 steps of 77 KiB); interpolated insertion reads
     // each step once.
     CHECK(reports[1].cache.peak_bytes <= (std::size_t{2} << 20));
-    if (insertion == Insertion::interpolate) CHECK(reports[1].cache.max_reads_of_a_unit == 1);
+    if (insertion == ParticleInsertion::interpolate) CHECK(reports[1].cache.max_reads_of_a_unit == 1);
   }
 }
 
@@ -285,7 +288,7 @@ TEST_CASE("streak surface: a read error mid-run stops it, naming the step, after
   co.budget_bytes = std::size_t{4} << 20;
   BrickCache cache(series, co);
   StreakOptions o = gyre_options();  // frames at 1.5, 3 and 4.5; step 35 is t = 3.5
-  o.insertion = Insertion::interpolate;
+  o.insertion = ParticleInsertion::interpolate;
   std::vector<double> handed;
   const StreakReport r = build_streak_surface(
       cache, SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0)), o,
@@ -295,4 +298,93 @@ TEST_CASE("streak surface: a read error mid-run stops it, naming the step, after
   CHECK(handed == std::vector<double>{1.5, 3});
   CHECK(r.frames.size() == 2);
   CHECK(r.time_reached < 3.5);
+}
+
+namespace {
+
+// A time-dependent field frozen at one time, as a steady field for the stream-surface engine.
+class Frozen final : public Field<3> {
+ public:
+  Frozen(const UnsteadyField& flow, double t) : flow_(flow), t_(t) {}
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override { return flow_.velocity(x, t_, v); }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override {
+    Vec3 dvdt;
+    return flow_.velocity_jacobian(x, t_, v, J, dvdt);
+  }
+  Box<3> domain() const override { return flow_.domain(); }
+  std::string describe() const override { return flow_.describe(); }
+
+ private:
+  const UnsteadyField& flow_;
+  double t_;
+};
+
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Closest point on triangle (Ericson, Real-Time Collision Detection, 5.1.5).
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.norm();
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  const double denom = 1 / (va + vb + vc);
+  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
+}
+
+}  // namespace
+
+TEST_CASE("streak surface: in a steady flow it is the stream surface up to t - t_start",
+          "[spacetime][streak]") {
+  // The moving spiral with a still centre and no pulsation is steady.
+  const auto flow = make_unsteady_field("moving-spiral:beta=0,nu=0");
+  const SeedCurve seed = SeedCurve::line(Vec3(1.0, -0.5, 0.5), Vec3(1.0, 0.5, 0.5));
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 3;
+  o.frames = {3};
+  o.edge = 0.05;
+  const auto frames = collect(*flow, seed, o);
+  REQUIRE(frames.size() == 1);
+  const Mesh& streak = frames[0].mesh;
+
+  const Frozen steady(*flow, 0);
+  StreamSurfaceOptions so;
+  so.edge = 0.05;
+  so.max_steps = 400;
+  const SurfaceResult stream = build_stream_surface<3>(steady, make_seed(seed, 21), so);
+  // From the stream surface to the streak surface: every stream-surface vertex of integration
+  // time below the oldest particle's age lies on the streak surface. (The other way is not
+  // asserted: the engine's front leaves a hole around s = 0.4 at times 2.5 to 3 on this flow, so
+  // streak vertices there are 0.025 from the stream surface although they are exact.)
+  std::vector<std::array<Vec3, 3>> triangles;
+  for (const Face& f : streak.faces) {
+    const auto p = [&](int k) { return streak.positions[static_cast<std::size_t>(f.v[k])]; };
+    triangles.push_back({p(0), p(1), p(2)});
+    if (f.size == 4) triangles.push_back({p(0), p(2), p(3)});
+  }
+  double farthest = 0;
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < stream.mesh.vertex_count(); ++i) {
+    if (stream.mesh.time[i] > 2.9) continue;
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : triangles)
+      best = std::min(best, point_triangle_distance(stream.mesh.positions[i], t[0], t[1], t[2]));
+    farthest = std::max(farthest, best);
+    ++compared;
+  }
+  INFO(compared << " stream-surface vertices (integration time <= 2.9) against a streak surface of "
+                << streak.vertex_count() << " vertices; farthest " << farthest);
+  REQUIRE(compared > 100);
+  // Chord error of the streak mesh at edge 0.05 on this spiral (measured 6.6e-4), with margin.
+  CHECK(farthest < 0.03 * o.edge);
 }

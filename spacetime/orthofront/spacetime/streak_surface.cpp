@@ -12,8 +12,8 @@
 
 namespace orthofront::spacetime {
 
-const char* to_string(Insertion insertion) {
-  return insertion == Insertion::exact ? "exact" : "interpolate";
+const char* to_string(ParticleInsertion insertion) {
+  return insertion == ParticleInsertion::exact ? "exact" : "interpolate";
 }
 
 namespace {
@@ -323,7 +323,7 @@ bool StreakBuilder::refine_once() {
       Particle q;
       q.s = 0.5 * (a.s + sb);
       if (q.s >= 1.0) q.s -= 1.0;
-      if (o_.insertion == Insertion::interpolate) {
+      if (o_.insertion == ParticleInsertion::interpolate) {
         const auto at = [&](std::ptrdiff_t j) -> const Particle* {
           const auto m = static_cast<std::ptrdiff_t>(n);
           if (closed) j = ((j % m) + m) % m;
@@ -351,7 +351,7 @@ bool StreakBuilder::refine_once() {
       const bool common = take_a && take_b;
       Particle q;
       q.s = take_a ? a.p[i].s : b.p[k].s;
-      if (o_.insertion == Insertion::exact) {
+      if (o_.insertion == ParticleInsertion::exact) {
         row.p.push_back(q);
       } else if (common) {
         // Cubic across rows where the rows around carry this s too, linear otherwise.
@@ -394,7 +394,7 @@ bool StreakBuilder::refine_once() {
       from.push_back(row.tau);
     }
   for (Particle* q : fresh) q->id = next_id_++;
-  if (o_.insertion == Insertion::exact) {
+  if (o_.insertion == ParticleInsertion::exact) {
     std::vector<Vec3> x(fresh.size());
     std::vector<ParticleStatus> status(fresh.size());
     for (std::size_t i = 0; i < fresh.size(); ++i) x[i] = seed_point(fresh[i]->s);

@@ -22,12 +22,12 @@
 namespace orthofront::spacetime {
 
 /// How a particle inserted at (s, τ) gets its position at the current time.
-enum class Insertion {
+enum class ParticleInsertion {
   exact,        ///< released at τ from the seed point s and moved by the flow map (streamed
                 ///< series: reads the steps since τ again)
   interpolate,  ///< cubic in s along its row, or in τ across rows (reads every step once)
 };
-const char* to_string(Insertion insertion);
+const char* to_string(ParticleInsertion insertion);
 
 struct StreakProgress {
   double t = 0, t_end = 0;          ///< simulated time and the last observation time
@@ -46,7 +46,7 @@ struct StreakOptions {
   double merge = 0.5;               ///< a particle whose edges are both below merge·ℓ goes
   double release_step = 0;          ///< time between rows at release; 0: ℓ / median seed speed
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
-  Insertion insertion = Insertion::exact;
+  ParticleInsertion insertion = ParticleInsertion::exact;
   Tolerance tolerance{1e-10, 1e-10};
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
@@ -80,7 +80,7 @@ struct StreakReport {
   bool streamed = false;
   bool complete = true;             ///< false: stopped early (cap, cancel, read error)
   std::string message;              ///< why it stopped early
-  Insertion insertion = Insertion::exact;
+  ParticleInsertion insertion = ParticleInsertion::exact;
   double release_begin = 0, release_end = 0, release_step = 0;
   double time_reached = 0;
   std::size_t seed_count = 0, rows_released = 0;
