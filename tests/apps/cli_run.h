@@ -28,13 +28,15 @@ inline Run run(const std::string& arguments) {
   return r;
 }
 
-/// Starts the binary with `args` in the background, its stdout and stderr in `log`; returns its
+/// Starts the binary with `args` in the background, its stdout and stderr in `log` and no stdin;
+/// returns its
 /// pid (for tests that signal it).
 inline pid_t start(const std::vector<std::string>& args, const std::string& log) {
   const pid_t pid = ::fork();
   if (pid == 0) {
     std::freopen(log.c_str(), "w", stdout);
     std::freopen(log.c_str(), "a", stderr);
+    std::freopen("/dev/null", "r", stdin);
     std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);

@@ -707,22 +707,6 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
 
 namespace {
 
-/// Starts `orthofront ARGS...` with its output in `log`; returns its pid.
-pid_t start(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    std::freopen(log.c_str(), "w", stdout);
-    std::freopen(log.c_str(), "a", stderr);
-    std::freopen("/dev/null", "r", stdin);
-    std::vector<char*> argv{const_cast<char*>(ORTHOFRONT_BINARY)};
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(ORTHOFRONT_BINARY, argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
-
 /// The Lorenz band to 10^6 steps: runs far longer than any test waits.
 std::vector<std::string> long_stream(const TempDir& dir, const std::vector<std::string>& extra = {}) {
   std::vector<std::string> args{"stream", "--field", "lorenz:reverse=1", "--seed",
@@ -742,7 +726,7 @@ TEST_CASE("bad input: SIGKILL leaves no finished-looking file, and a rerun remov
   TempDir logs("bad-input-log");
   {
     INFO("killed while building: nothing is written");
-    const pid_t pid = start(long_stream(dir), logs / "log.txt");
+    const pid_t pid = cli_test::start(long_stream(dir), (logs / "log.txt").string());
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     ::kill(pid, SIGKILL);
     int status = 0;
@@ -753,7 +737,7 @@ TEST_CASE("bad input: SIGKILL leaves no finished-looking file, and a rerun remov
   {
     INFO("killed while writing the mesh: only its temporary is left");
     // A time budget stops the run by itself after 0.5 s; the mesh (tens of MB) is then written.
-    const pid_t pid = start(long_stream(dir, {"--time-budget", "0.5"}), logs / "log.txt");
+    const pid_t pid = cli_test::start(long_stream(dir, {"--time-budget", "0.5"}), (logs / "log.txt").string());
     std::string temporary;
     int status = 0;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
@@ -788,10 +772,10 @@ TEST_CASE("bad input: SIGINT stops `path` with the surface so far, marked incomp
           "[apps][bad-input][signals]") {
   TempDir dir("bad-input-sigint-path");
   TempDir logs("bad-input-log");
-  const pid_t pid = start({"path", "--field", "double-gyre", "--seed", "line:0.1,0.5,0:0.6,0.5,0",
+  const pid_t pid = cli_test::start({"path", "--field", "double-gyre", "--seed", "line:0.1,0.5,0:0.6,0.5,0",
                            "--t1", "1000000", "--edge", "0.01", "--max-vertices", "100000000",
                            "--out", (dir / "p.vtp").string(), "--report", (dir / "p.json").string()},
-                          logs / "log.txt");
+                          (logs / "log.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
   ::kill(pid, SIGINT);
   int status = 0;

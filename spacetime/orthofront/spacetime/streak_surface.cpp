@@ -4,8 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
-#include <optional>
 
 #include "orthofront/error.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -321,8 +319,7 @@ bool StreakBuilder::refine_once() {
       const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
       if (sb - a.s <= min_ds_ || (a.x - b.x).norm() <= long_edge) continue;
       Particle q;
-      q.s = 0.5 * (a.s + sb);
-      if (q.s >= 1.0) q.s -= 1.0;
+      q.s = 0.5 * (a.s + sb);  // < 1: a closed row starts at s = 0, which is never removed
       if (o_.insertion == ParticleInsertion::interpolate) {
         const auto at = [&](std::ptrdiff_t j) -> const Particle* {
           const auto m = static_cast<std::ptrdiff_t>(n);
