@@ -29,7 +29,7 @@ namespace {
 
 struct StreakArgs {
   std::string field, seed, release, frames, out, report, budget, insertion = "exact";
-  std::string route = "direct", point;
+  std::string route = "direct", point, device;
   int seed_count = 0;
   double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
   std::size_t max_vertices = 0;
@@ -158,6 +158,14 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
           {"frames", frames},
           {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
           {"slow_evaluations", r.slow_evaluations},
+          {"device", r.device.empty() ? nlohmann::json() : nlohmann::json({
+              {"backend", r.device},
+              {"slabs", r.bulk.slabs},
+              {"particle_steps", r.bulk.particle_steps},
+              {"compute_seconds", r.bulk.compute_seconds},
+              {"upload_seconds", r.bulk.upload_seconds},
+              {"bytes_uploaded", r.bulk.bytes_uploaded},
+              {"overlap_seconds", r.bulk.overlap_seconds}})},
           {"seconds", {{"total", r.total_seconds},
                        {"advect", r.advect_seconds},
                        {"refine", r.refine_seconds},
@@ -264,6 +272,11 @@ void add_streak_command(CLI::App& app) {
   c->add_option("--cache-budget", args->budget,
                 "Memory for resident and in-flight data of a streamed series (default: a "
                 "quarter of --memory)");
+  c->add_option("--device", args->device,
+                "Gridded series: move particles by bulk advection (whole steps, slab by slab) on "
+                "cpu, cuda or auto (cuda when built with it and a device is present); default: "
+                "the streamed field's integrated flow map")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   c->add_option("--out", args->out, "Output collection DIR/NAME.pvd (frames go to DIR/NAME/)")
       ->required();
   c->add_option("--report", args->report, "Write the JSON report here");
@@ -302,7 +315,11 @@ void add_streak_command(CLI::App& app) {
 
     spacetime::StreakReport result;
     std::size_t cache_budget = 0;
+    if (!args->device.empty()) o.device = advect::parse_device(args->device);
     if (is_unsteady_field_name(args->field)) {
+      if (o.device)
+        throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
+                              "' is an analytic field (sample it with `generate` first)");
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_streak_surface(*flow, seed, o, sink);
     } else {

@@ -198,6 +198,20 @@ Run stream_into(const fs::path& field, const fs::path& out) {
              q(out / "s.json"));
 }
 
+/// The words a truncated OpenVDB file's refusal has. OpenVDB's Blosc reader sizes a buffer from a
+/// length the truncated stream never set (stack garbage): in a sanitizer build the child then
+/// stops at allocation-size-too-big (exit 1, "the reader failed") when that garbage is huge, in a
+/// release build the reader throws. Both are refusals; which one depends on the stack.
+std::string truncated_vdb_words(const std::string& output, const std::string& words) {
+#ifdef __SANITIZE_ADDRESS__
+  if (lower(output).find("the reader failed (exit status 1)") != std::string::npos)
+    return "the reader failed";
+#else
+  (void)output;
+#endif
+  return words;
+}
+
 /// Checks the refusal of a case: exit status 2, the message names `file` and has `words`, and
 /// `out` stays empty.
 void check_refused(const Run& r, const std::string& file, const std::string& words,
@@ -247,8 +261,11 @@ TEST_CASE("bad input: missing, empty and truncated grid files of every format",
       const fs::path cut = dir / ("cut" + ext);
       f.write(cut, grid, {});
       truncate_to(data_file_of(cut), 0.6);
-      check_refused(stream_into(cut, out.path()), data_file_of(cut).filename().string(),
-                    f.truncated_words, out);
+      const Run r = stream_into(cut, out.path());
+      check_refused(r, data_file_of(cut).filename().string(),
+                    ext == ".vdb" ? truncated_vdb_words(r.output, f.truncated_words)
+                                  : std::string(f.truncated_words),
+                    out);
     }
   }
   // A detached NRRD header whose data file is gone.
@@ -300,7 +317,9 @@ TEST_CASE("bad input: missing, empty and truncated time series for `path`", "[ap
       truncate_to(cut, 0.6);
       const Run r = path_into(cut);
       check_refused(r, std::string("cut") + ext,
-                    ext == std::string(".h5") ? "truncated: the file has" : "not a readable openvdb file",
+                    ext == std::string(".h5")
+                        ? std::string("truncated: the file has")
+                        : truncated_vdb_words(r.output, "not a readable openvdb file"),
                     out);
     }
   }

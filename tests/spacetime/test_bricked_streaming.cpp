@@ -12,6 +12,8 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/vdb_grid.h"
+#include "orthofront/advect/dispatch.h"
+#include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -486,4 +488,50 @@ TEST_CASE("an OpenVDB series is read brick by brick, with the values of whole-st
   CHECK(r.path.cache.peak_bytes <= small.budget_bytes);
   REQUIRE(r.mesh.vertex_count() == w.mesh.vertex_count());
   CHECK(r.mesh.positions == w.mesh.positions);
+}
+
+TEST_CASE("bricked series: whole steps gathered from bricks give a slab StreamedField's values, "
+          "bit for bit",
+          "[spacetime][bricks][advect]") {
+  TempDir dir("bricks-gather");
+  for (int dimension : {2, 3})
+    for (bool rectilinear : {false, true}) {
+      INFO(dimension << "D, " << (rectilinear ? "rectilinear" : "uniform"));
+      const GridGeometry g = test_grid(dimension, rectilinear);
+      const auto file = write_series(dir, g, dimension, 3, 4, false);
+      const auto series = io::open_hdf5_series(file);
+      CacheOptions bricked;
+      bricked.budget_bytes = 64 << 20;
+      BrickCache cache(*series, bricked);
+      StreamedField field(cache);
+      field.update_band(series->time(0), series->time(2));
+      CachedSteps steps(cache);
+      const advect::GridTables tables(g, dimension, false);
+      std::mt19937_64 rng(5);
+      std::uniform_real_distribution<double> u(0, 1);
+      const Box<3> box = g.bounds();
+      for (std::size_t k = 0; k < 2; ++k) {
+        advect::SlabView slab;
+        slab.grid = tables.view();
+        slab.step0 = steps.acquire(k);
+        slab.step1 = steps.acquire(k + 1);
+        slab.t0 = series->time(k);
+        slab.t1 = series->time(k + 1);
+        for (int i = 0; i < 500; ++i) {
+          Vec3 x = box.lo + (box.hi - box.lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+          if (dimension == 2) x.z() = 0;
+          const double t = slab.t0 + (slab.t1 - slab.t0) * u(rng);
+          Vec3 want;
+          REQUIRE(field.velocity(x, t, want) == FieldStatus::inside);
+          double got[3] = {0, 0, 0};
+          advect::SampleStatus status = advect::SampleStatus::outside;
+          advect::dispatch_grid(slab.grid, [&]<int Axes, int Components, bool Rectilinear>() {
+            status = advect::sample_slab<Axes, Components, Rectilinear>(slab, x.data(), t, got);
+          });
+          REQUIRE(status == advect::SampleStatus::inside);
+          for (int d = 0; d < 3; ++d) REQUIRE(got[d] == want[d]);
+        }
+        steps.release(k);
+      }
+    }
 }

@@ -8,16 +8,6 @@
 
 namespace orthofront::spacetime {
 
-const char* to_string(ParticleStatus status) {
-  switch (status) {
-    case ParticleStatus::moving: return "moving";
-    case ParticleStatus::left_domain: return "left the domain";
-    case ParticleStatus::no_data: return "no data";
-    case ParticleStatus::time_bounds: return "outside the time range";
-  }
-  return "unknown";
-}
-
 std::size_t FlowMap::advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
                                 std::span<ParticleStatus> status) const {
   std::atomic<std::size_t> evaluations{0};

@@ -5,20 +5,16 @@
 #include <span>
 #include <string>
 
+#include "orthofront/advect/particle_status.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/integrate/runge_kutta.h"
 
 namespace orthofront::spacetime {
 
-/// Why a particle stopped, kept apart from leaving the domain in space: a particle asked to go
-/// past the field's time range stops with time_bounds.
-enum class ParticleStatus : unsigned char {
-  moving = 0,       ///< reached the requested time
-  left_domain = 1,  ///< left the spatial domain (x is the last point inside)
-  no_data = 2,      ///< entered a cell without flow (solid, fill value, NaN) or stalled
-  time_bounds = 3,  ///< the requested time lies outside the field's time range
-};
-const char* to_string(ParticleStatus status);
+/// Why a particle stopped (a particle asked to go past the field's time range stops with
+/// time_bounds): one definition with the bulk advection backends.
+using advect::ParticleStatus;
+using advect::to_string;
 
 struct Advected {
   Vec3 x = Vec3::Zero();

@@ -1,11 +1,15 @@
 #include "orthofront/spacetime/streak_surface.h"
 
+#include "orthofront/spacetime/bulk_flow_map.h"
+
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 
 #include "orthofront/error.h"
+#include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/streamed_field.h"
 
 namespace orthofront::spacetime {
@@ -48,6 +52,7 @@ struct FlowAccess {
   std::function<std::string(double, double)> prepare;
   std::function<std::string()> read_error;      // empty string: no error
   std::vector<double> step_times;               // streamed: the series' times (break points)
+  const FlowMap* map = nullptr;                 // bulk advection; null: integrate `flow`
 };
 
 class StreakBuilder {
@@ -55,7 +60,8 @@ class StreakBuilder {
   StreakBuilder(const FlowAccess& access, const SeedCurve& seed, const StreakOptions& options,
                 const StreakFrameSink& sink)
       : access_(access), flow_(access.flow), seed_(seed), o_(options), sink_(sink),
-        map_(access.flow, options.tolerance) {}
+        integrated_(access.flow, options.tolerance),
+        map_(access.map ? *access.map : integrated_) {}
 
   StreakReport run();
 
@@ -89,7 +95,8 @@ class StreakBuilder {
   const SeedCurve& seed_;
   StreakOptions o_;
   const StreakFrameSink& sink_;
-  IntegratedFlowMap map_;
+  IntegratedFlowMap integrated_;
+  const FlowMap& map_;
   StreakReport report_;
   std::vector<double> seed_params_;
   std::vector<Row> rows_;  // oldest first
@@ -687,7 +694,22 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     return {};
   };
   access.read_error = [&] { return field.error(); };
+  std::unique_ptr<CachedSteps> steps;
+  std::unique_ptr<BulkFlowMap> bulk;
+  if (options.device) {
+    steps = std::make_unique<CachedSteps>(cache);
+    advect::MethodOptions method;
+    method.method = advect::Method::dopri5;
+    method.absolute = options.tolerance.absolute;
+    method.relative = options.tolerance.relative;
+    bulk = std::make_unique<BulkFlowMap>(*steps, advect::make_advector(*options.device), method);
+    access.map = bulk.get();
+  }
   StreakReport report = StreakBuilder(access, seed, options, sink).run();
+  if (bulk) {
+    report.device = bulk->backend_name();
+    report.bulk = bulk->statistics();
+  }
   report.streamed = true;
   report.cache = cache.statistics();
   report.slow_evaluations = field.slow_evaluations();

@@ -8,9 +8,11 @@
 /// triangles where they do not). Inserted particles are released at their own (s, τ) and moved
 /// through the flow map to the current time (exact); interpolation is a counted fallback.
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "orthofront/advect/batch_advector.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/mesh/mesh.h"
@@ -48,6 +50,10 @@ struct StreakOptions {
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
   ParticleInsertion insertion = ParticleInsertion::exact;
   Tolerance tolerance{1e-10, 1e-10};
+  /// Gridded series only: move particles by bulk advection (advect::BatchAdvector, DOPRI5 at
+  /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
+  /// map of the streamed field.
+  std::optional<advect::Device> device;
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.
@@ -99,6 +105,8 @@ struct StreakReport {
   std::size_t slow_evaluations = 0; ///< streamed: evaluations outside the pinned band
   double total_seconds = 0, advect_seconds = 0, refine_seconds = 0, frame_seconds = 0;
   double wait_seconds = 0, io_seconds = 0, decode_seconds = 0;  ///< streamed only
+  std::string device;               ///< bulk advection backend ("" when not used)
+  advect::AdvectionStatistics bulk; ///< what it did
 };
 
 /// Called with each frame as soon as it is built (e.g. to write it). An exception stops the run

@@ -1,0 +1,134 @@
+#pragma once
+/// Bulk advection of many particles through a gridded time series, slab by slab: the one seam
+/// through which streak surfaces, flow maps and benchmarks move particles on a device. A backend
+/// (CPU with oneTBB, CUDA when built) implements BatchAdvector; make_advector() picks it.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "orthofront/advect/particle_step.h"
+#include "orthofront/field/grid.h"
+
+namespace orthofront::advect {
+
+/// Particles as a structure of arrays (coalesced loads on a device). A particle moves from its own
+/// time t[i] to the common end time of a call.
+struct ParticleBatch {
+  std::array<std::vector<double>, 3> x;
+  std::vector<double> t;
+  std::vector<double> h;  ///< DOPRI5 step size carried between slabs and calls (0: none yet)
+  std::vector<std::uint32_t> evaluations;
+  std::vector<ParticleStatus> status;
+
+  std::size_t size() const { return t.size(); }
+  void resize(std::size_t n);
+  ParticleState state(std::size_t i) const;
+  void store(std::size_t i, const ParticleState& p);
+};
+
+/// The samples of a series of time steps on one grid. acquire/release are called from one
+/// thread, in time order, at most three steps held at once.
+class StepSource {
+ public:
+  virtual ~StepSource() = default;
+  virtual const GridGeometry& geometry() const = 0;
+  virtual int components() const = 0;
+  /// A zero vector marks land or solid (the series' convention, as StreamedField reads it).
+  virtual bool zero_is_no_data() const = 0;
+  virtual const std::vector<double>& times() const = 0;
+  /// The point_count() × components() floats of step k, x fastest; valid until release(k).
+  /// Throws what the reader throws.
+  virtual const float* acquire(std::size_t step) = 0;
+  virtual void release(std::size_t step) = 0;
+};
+
+/// Steps held in memory (tests, benchmarks, analytic fields sampled on a grid).
+class ResidentSteps final : public StepSource {
+ public:
+  ResidentSteps(GridGeometry geometry, int components, std::vector<double> times,
+                std::vector<std::vector<float>> steps, bool zero_is_no_data = false);
+  const GridGeometry& geometry() const override { return geometry_; }
+  int components() const override { return components_; }
+  bool zero_is_no_data() const override { return zero_is_no_data_; }
+  const std::vector<double>& times() const override { return times_; }
+  const float* acquire(std::size_t step) override { return steps_.at(step).data(); }
+  void release(std::size_t) override {}
+
+ private:
+  GridGeometry geometry_;
+  int components_;
+  std::vector<double> times_;
+  std::vector<std::vector<float>> steps_;
+  bool zero_is_no_data_;
+};
+
+/// What a call did and where its time went.
+struct AdvectionStatistics {
+  std::size_t particles = 0;
+  std::size_t slabs = 0;            ///< slabs run (pairs of consecutive steps)
+  std::size_t particle_steps = 0;   ///< accepted integration steps, all particles
+  std::size_t evaluations = 0;      ///< field samples
+  std::size_t steps_loaded = 0;     ///< acquire() calls
+  std::size_t bytes_uploaded = 0;   ///< host-to-device bytes (0 on the CPU)
+  double total_seconds = 0;
+  double compute_seconds = 0;       ///< kernels (device events) or the parallel loops
+  double upload_seconds = 0;        ///< host-to-device copies (device events)
+  double host_seconds = 0;          ///< acquire() and staging copies on the host
+  double overlap_seconds = 0;       ///< copies running while a kernel ran (device events)
+};
+
+/// The grid as kernels see it, with the axis tables it points to.
+class GridTables {
+ public:
+  GridTables(const GridGeometry& geometry, int components, bool zero_is_no_data);
+  /// The view with pointers into this object's tables (host memory).
+  const GridView& view() const { return view_; }
+  const std::array<std::vector<double>, 3>& coordinates() const { return coordinates_; }
+  const std::array<std::vector<double>, 3>& inverse_widths() const { return inverse_widths_; }
+
+ private:
+  GridView view_;
+  std::array<std::vector<double>, 3> coordinates_, inverse_widths_;
+};
+
+/// The slabs a call runs, in order, and the times particles stop at in each.
+struct SlabPlan {
+  bool forward = true;
+  std::vector<std::size_t> slabs;  ///< k: the slab [times[k], times[k + 1]]
+};
+
+/// Marks particles whose time or t_end lies outside the series (time_bounds) and plans the slabs
+/// from the earliest particle time to t_end. Throws InvalidArgument for fewer than two steps.
+SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, double t_end);
+
+class BatchAdvector {
+ public:
+  virtual ~BatchAdvector() = default;
+  /// "cpu" or "cuda", with the device's name for CUDA.
+  virtual std::string name() const = 0;
+  /// Advances every moving particle from t[i] to t_end (forward or backward), slab by slab through
+  /// `source`. Particles already at t_end stay as they are. Each particle's result does not
+  /// depend on the others, the batch size or the number of threads.
+  virtual AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
+                                     const MethodOptions& options) = 0;
+};
+
+enum class Device : unsigned char { cpu, cuda, auto_select };
+const char* to_string(Device device);
+/// "cpu", "cuda" or "auto"; throws InvalidArgument naming the value otherwise.
+Device parse_device(const std::string& text);
+
+/// True when this build has the CUDA backend and a CUDA device is present; otherwise `why` says
+/// which is missing.
+bool cuda_available(std::string* why = nullptr);
+
+/// The seam: the CPU backend, or the CUDA backend (cuda; auto when cuda_available()). Throws
+/// InvalidArgument when cuda is asked for and cannot be had, saying why.
+std::unique_ptr<BatchAdvector> make_advector(Device device);
+std::unique_ptr<BatchAdvector> make_cpu_advector();
+
+}  // namespace orthofront::advect

@@ -1,0 +1,20 @@
+#pragma once
+/// The CUDA backend of BatchAdvector (built only with ORTHOFRONT_HAVE_CUDA). This header has no
+/// CUDA types: the host side sees a BatchAdvector like any other.
+#include <memory>
+#include <string>
+
+#include "orthofront/advect/batch_advector.h"
+
+namespace orthofront::advect {
+
+/// True when a CUDA device can be used; otherwise `why` has the runtime's reason.
+bool cuda_device_present(std::string* why);
+
+/// Particles live on the device for the whole call; each step is copied once into pinned memory
+/// and uploaded on its own stream while the kernels of the slab before it run (three device step
+/// buffers, two pinned staging buffers). Arithmetic in double on float samples, FMA contraction
+/// off so a sample and an RK4 step give the CPU's bits.
+std::unique_ptr<BatchAdvector> make_cuda_advector();
+
+}  // namespace orthofront::advect

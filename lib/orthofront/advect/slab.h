@@ -1,0 +1,164 @@
+#pragma once
+/// A slab: two consecutive time steps of a gridded series, the unit bulk advection works on.
+/// Views are trivially copyable (plain pointers and numbers) so one definition serves the CPU
+/// and a CUDA kernel; the owner keeps the memory they point to. sample_slab() gives the values of
+/// StreamedField (field/multilinear.h's arithmetic, linear in time), bit for bit on the CPU.
+#include <cstdint>
+#include <type_traits>
+
+#include "orthofront/advect/host_device.h"
+
+namespace orthofront::advect {
+
+/// One axis of a uniform or rectilinear grid.
+struct AxisView {
+  const double* coordinates = nullptr;    ///< rectilinear: `cells + 1` increasing values
+  const double* inverse_width = nullptr;  ///< rectilinear: 1 / (c[i+1] - c[i]), `cells` values
+  double origin = 0;                      ///< uniform
+  double inverse_spacing = 1;             ///< uniform
+  std::int64_t cells = 1;                 ///< sample points - 1
+  double lo = 0, hi = 1;                  ///< first and last sample
+};
+
+/// The geometry of the grid and how its samples are stored (x fastest, components interleaved).
+struct GridView {
+  int axes = 3;        ///< 2 or 3
+  int components = 3;  ///< 2 or 3
+  bool rectilinear = false;
+  bool zero_is_no_data = false;  ///< a zero vector marks land or solid (as in StreamedField)
+  AxisView axis[3];
+  std::int64_t stride[3] = {3, 0, 0};  ///< floats between neighbouring points per axis
+};
+
+/// Two steps of samples at times t0 < t1.
+struct SlabView {
+  GridView grid;
+  const float* step0 = nullptr;
+  const float* step1 = nullptr;
+  double t0 = 0, t1 = 1;
+};
+
+static_assert(std::is_trivially_copyable_v<SlabView>, "kernels receive SlabView by value");
+
+/// Result of one sample.
+enum class SampleStatus : unsigned char { inside = 0, outside = 1, no_data = 2 };
+
+namespace detail {
+
+ORTHOFRONT_HD inline bool is_finite(float f) {
+  // Not std::isfinite: it is not a device function everywhere. NaN fails both comparisons.
+  return f == f && f - f == 0.0f;
+}
+
+/// Cell of x along one axis (x already checked against [lo, hi]); the arithmetic of
+/// multilinear::locate_uniform / locate_rectilinear.
+template <bool Rectilinear>
+ORTHOFRONT_HD inline void locate(const AxisView& a, double x, std::int64_t& i, double& t,
+                                 double& w) {
+  if constexpr (Rectilinear) {
+    // upper_bound over the cells + 1 coordinates, minus one, clamped to [0, cells - 1].
+    std::int64_t first = 0, count = a.cells + 1;
+    while (count > 0) {
+      const std::int64_t step = count / 2;
+      if (!(x < a.coordinates[first + step])) {
+        first += step + 1;
+        count -= step + 1;
+      } else {
+        count = step;
+      }
+    }
+    i = first - 1;
+    i = i < 0 ? 0 : (i > a.cells - 1 ? a.cells - 1 : i);
+    w = a.inverse_width[i];
+    t = (x - a.coordinates[i]) * w;
+  } else {
+    const double u = (x - a.origin) * a.inverse_spacing;
+    i = static_cast<std::int64_t>(u);
+    i = i > a.cells - 1 ? a.cells - 1 : i;
+    i = i < 0 ? 0 : i;
+    t = u - static_cast<double>(i);
+    w = a.inverse_spacing;
+  }
+}
+
+template <int Components>
+ORTHOFRONT_HD inline bool point_has_no_data(const float* p, bool zero_is_no_data) {
+  bool finite = true, zero = true;
+  for (int c = 0; c < Components; ++c) {
+    finite = finite && is_finite(p[c]);
+    zero = zero && p[c] == 0.0f;
+  }
+  return !finite || (zero_is_no_data && zero);
+}
+
+/// Multilinear value of one step at a located cell (multilinear::interpolate's operations in its
+/// order); false when a corner has no data.
+template <int Axes, int Components>
+ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t* stride,
+                                           double tx, double ty, double tz, bool zero_is_no_data,
+                                           double* v) {
+  const float* p000 = base;
+  const float* p100 = base + stride[0];
+  const float* p010 = base + stride[1];
+  const float* p110 = base + stride[0] + stride[1];
+  const float* p001 = Axes == 3 ? base + stride[2] : base;
+  const float* p101 = Axes == 3 ? p001 + stride[0] : base;
+  const float* p011 = Axes == 3 ? p001 + stride[1] : base;
+  const float* p111 = Axes == 3 ? p001 + stride[0] + stride[1] : base;
+  if (point_has_no_data<Components>(p000, zero_is_no_data) ||
+      point_has_no_data<Components>(p100, zero_is_no_data) ||
+      point_has_no_data<Components>(p010, zero_is_no_data) ||
+      point_has_no_data<Components>(p110, zero_is_no_data))
+    return false;
+  if (Axes == 3 && (point_has_no_data<Components>(p001, zero_is_no_data) ||
+                    point_has_no_data<Components>(p101, zero_is_no_data) ||
+                    point_has_no_data<Components>(p011, zero_is_no_data) ||
+                    point_has_no_data<Components>(p111, zero_is_no_data)))
+    return false;
+  for (int c = 0; c < Components; ++c) {
+    const double c000 = p000[c], c100 = p100[c], c010 = p010[c], c110 = p110[c];
+    const double d00 = c100 - c000, d10 = c110 - c010;
+    const double a00 = c000 + tx * d00, a10 = c010 + tx * d10;
+    if constexpr (Axes == 2) {
+      v[c] = a00 + ty * (a10 - a00);
+    } else {
+      const double c001 = p001[c], c101 = p101[c], c011 = p011[c], c111 = p111[c];
+      const double d01 = c101 - c001, d11 = c111 - c011;
+      const double a01 = c001 + tx * d01, a11 = c011 + tx * d11;
+      const double b0 = a00 + ty * (a10 - a00), b1 = a01 + ty * (a11 - a01);
+      v[c] = b0 + tz * (b1 - b0);
+    }
+  }
+  if constexpr (Components == 2) v[2] = 0.0;
+  return true;
+}
+
+}  // namespace detail
+
+/// v(x, t) for t in [s.t0, s.t1]: multilinear in space, linear in time. `outside` when x leaves
+/// the grid's box (or is NaN), `no_data` when a corner of the cell has none at either step.
+template <int Axes, int Components, bool Rectilinear>
+ORTHOFRONT_HD inline SampleStatus sample_slab(const SlabView& s, const double* x, double t,
+                                              double* v) {
+  const GridView& g = s.grid;
+  std::int64_t offset = 0;
+  double u[3] = {0, 0, 0};
+  for (int a = 0; a < Axes; ++a) {
+    if (!(x[a] >= g.axis[a].lo && x[a] <= g.axis[a].hi)) return SampleStatus::outside;
+    std::int64_t i = 0;
+    double w = 0;
+    detail::locate<Rectilinear>(g.axis[a], x[a], i, u[a], w);
+    offset += i * g.stride[a];
+  }
+  double v0[3], v1[3];
+  if (!detail::interpolate_step<Axes, Components>(s.step0 + offset, g.stride, u[0], u[1], u[2],
+                                                  g.zero_is_no_data, v0) ||
+      !detail::interpolate_step<Axes, Components>(s.step1 + offset, g.stride, u[0], u[1], u[2],
+                                                  g.zero_is_no_data, v1))
+    return SampleStatus::no_data;
+  const double w = (t - s.t0) / (s.t1 - s.t0);
+  for (int c = 0; c < 3; ++c) v[c] = (1 - w) * v0[c] + w * v1[c];
+  return SampleStatus::inside;
+}
+
+}  // namespace orthofront::advect

@@ -1,0 +1,96 @@
+#include "orthofront/spacetime/bulk_flow_map.h"
+
+#include <cstring>
+
+namespace orthofront::spacetime {
+
+CachedSteps::CachedSteps(BrickCache& cache) : cache_(cache) {}
+
+const float* CachedSteps::acquire(std::size_t step) {
+  if (const auto it = held_.find(step); it != held_.end()) return it->second.data;
+  const io::BrickLayout& layout = cache_.layout();
+  std::vector<BrickKey> keys;
+  for (std::size_t b = 0; b < layout.bricks(); ++b)
+    keys.push_back({static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)});
+  Held h;
+  h.pins = cache_.acquire_all(keys);
+  const GridGeometry& g = geometry();
+  const auto c = static_cast<std::size_t>(components());
+  if (layout.bricks() == 1 && layout.size == g.size) {
+    h.data = h.pins.front().data();
+  } else {
+    // Rows of each brick into their place in the step (edge bricks are padded past the grid).
+    h.gathered.resize(g.point_count() * c);
+    for (std::int64_t bk = 0; bk < layout.count[2]; ++bk)
+      for (std::int64_t bj = 0; bj < layout.count[1]; ++bj)
+        for (std::int64_t bi = 0; bi < layout.count[0]; ++bi) {
+          const float* brick = h.pins[layout.brick_index(bi, bj, bk)].data();
+          const std::int64_t i0 = bi * layout.size[0], j0 = bj * layout.size[1], k0 = bk * layout.size[2];
+          const std::int64_t ni = std::min(layout.size[0], g.size[0] - i0);
+          for (std::int64_t k = 0; k < std::min(layout.size[2], g.size[2] - k0); ++k)
+            for (std::int64_t j = 0; j < std::min(layout.size[1], g.size[1] - j0); ++j) {
+              const std::size_t from =
+                  static_cast<std::size_t>((k * layout.size[1] + j) * layout.size[0]) * c;
+              std::memcpy(h.gathered.data() + g.index(i0, j0 + j, k0 + k) * c, brick + from,
+                          static_cast<std::size_t>(ni) * c * sizeof(float));
+            }
+        }
+    h.pins.clear();
+    h.data = h.gathered.data();
+  }
+  return held_.emplace(step, std::move(h)).first->second.data;
+}
+
+void CachedSteps::release(std::size_t step) { held_.erase(step); }
+
+BulkFlowMap::BulkFlowMap(advect::StepSource& steps, std::unique_ptr<advect::BatchAdvector> backend,
+                         advect::MethodOptions method)
+    : steps_(steps), backend_(std::move(backend)), method_(method), name_(backend_->name()) {}
+
+Advected BulkFlowMap::advect(const Vec3& x, double t0, double t1) const {
+  Vec3 p = x;
+  ParticleStatus status = ParticleStatus::moving;
+  const std::size_t evaluations = advect_all(std::span<Vec3>(&p, 1), std::span<const double>(&t0, 1), t1,
+                                             std::span<ParticleStatus>(&status, 1));
+  Advected out;
+  out.x = p;
+  out.status = status;
+  out.t = status == ParticleStatus::moving ? t1 : t0;
+  out.evaluations = static_cast<int>(evaluations);
+  return out;
+}
+
+std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
+                                    std::span<ParticleStatus> status) const {
+  advect::ParticleBatch batch;
+  batch.resize(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (int d = 0; d < 3; ++d) batch.x[static_cast<std::size_t>(d)][i] = x[i][d];
+    batch.t[i] = t0[i];
+  }
+  std::lock_guard lock(mutex_);
+  const advect::AdvectionStatistics s = backend_->advect(steps_, batch, t1, method_);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (int d = 0; d < 3; ++d) x[i][d] = batch.x[static_cast<std::size_t>(d)][i];
+    status[i] = batch.status[i];
+  }
+  total_.particles += s.particles;
+  total_.slabs += s.slabs;
+  total_.particle_steps += s.particle_steps;
+  total_.evaluations += s.evaluations;
+  total_.steps_loaded += s.steps_loaded;
+  total_.bytes_uploaded += s.bytes_uploaded;
+  total_.total_seconds += s.total_seconds;
+  total_.compute_seconds += s.compute_seconds;
+  total_.upload_seconds += s.upload_seconds;
+  total_.host_seconds += s.host_seconds;
+  total_.overlap_seconds += s.overlap_seconds;
+  return s.evaluations;
+}
+
+advect::AdvectionStatistics BulkFlowMap::statistics() const {
+  std::lock_guard lock(mutex_);
+  return total_;
+}
+
+}  // namespace orthofront::spacetime

@@ -1,0 +1,62 @@
+#pragma once
+/// The flow map of a gridded series by bulk advection: all particles of a call move together,
+/// slab by slab through whole time steps, on the CPU or a CUDA device (advect::BatchAdvector).
+/// Steps come from the BrickCache, bricks gathered into whole steps.
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "orthofront/advect/batch_advector.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/flow_map.h"
+
+namespace orthofront::spacetime {
+
+/// Whole time steps of a cached series (a step of one brick is used in place; bricks are gathered
+/// into a step buffer, outside the cache's budget: at most three steps at once).
+class CachedSteps final : public advect::StepSource {
+ public:
+  explicit CachedSteps(BrickCache& cache);
+  const GridGeometry& geometry() const override { return cache_.series().geometry(); }
+  int components() const override { return cache_.series().components(); }
+  bool zero_is_no_data() const override { return cache_.series().zero_is_no_data(); }
+  const std::vector<double>& times() const override { return cache_.times(); }
+  const float* acquire(std::size_t step) override;
+  void release(std::size_t step) override;
+
+ private:
+  struct Held {
+    std::vector<BrickCache::Handle> pins;
+    std::vector<float> gathered;
+    const float* data = nullptr;
+  };
+  BrickCache& cache_;
+  std::map<std::size_t, Held> held_;
+};
+
+/// Non-owning: `steps` must outlive the map. advect_all is the bulk call; advect() moves a batch
+/// of one. Calls are serialized (one batch at a time runs on the backend).
+class BulkFlowMap final : public FlowMap {
+ public:
+  BulkFlowMap(advect::StepSource& steps, std::unique_ptr<advect::BatchAdvector> backend,
+              advect::MethodOptions method);
+  int dimension() const override { return steps_.geometry().dimension; }
+  Advected advect(const Vec3& x, double t0, double t1) const override;
+  std::size_t advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
+                         std::span<ParticleStatus> status) const override;
+  const std::string& backend_name() const { return name_; }
+  /// What the backend did, summed over calls.
+  advect::AdvectionStatistics statistics() const;
+
+ private:
+  advect::StepSource& steps_;
+  std::unique_ptr<advect::BatchAdvector> backend_;
+  advect::MethodOptions method_;
+  std::string name_;
+  mutable std::mutex mutex_;
+  mutable advect::AdvectionStatistics total_;
+};
+
+}  // namespace orthofront::spacetime

@@ -1,0 +1,241 @@
+// Bulk advection on the CPU backend: against the exact flow of a linear field (which multilinear
+// interpolation and linear time interpolation reproduce exactly), statuses at the domain's edge,
+// in cells without data and outside the time range, and results that do not depend on the batch.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "orthofront/advect/batch_advector.h"
+#include "orthofront/error.h"
+
+using namespace orthofront;
+using namespace orthofront::advect;
+
+namespace {
+
+// v(x, t) = (A0 + t A1) x: a rotation in (x, y) with a strain growing in time, and a decay in z.
+// Samples on grids of quarter steps at times of quarter units are exact in float.
+std::array<double, 3> linear_velocity(const std::array<double, 3>& x, double t) {
+  return {-x[1] + 0.5 * t * x[0], x[0] - 0.5 * t * x[1], -0.25 * x[2]};
+}
+
+// The exact path by classic RK4 with a tiny fixed step on the formula (no grid, no slabs).
+std::array<double, 3> reference(std::array<double, 3> x, double t0, double t1, int dimension) {
+  const int n = 20000;
+  const double h = (t1 - t0) / n;
+  double t = t0;
+  const auto add = [](std::array<double, 3> a, const std::array<double, 3>& b, double s) {
+    for (int d = 0; d < 3; ++d) a[static_cast<std::size_t>(d)] += s * b[static_cast<std::size_t>(d)];
+    return a;
+  };
+  for (int i = 0; i < n; ++i) {
+    const auto k1 = linear_velocity(x, t), k2 = linear_velocity(add(x, k1, h / 2), t + h / 2);
+    const auto k3 = linear_velocity(add(x, k2, h / 2), t + h / 2), k4 = linear_velocity(add(x, k3, h), t + h);
+    for (std::size_t d = 0; d < 3; ++d) x[d] += h / 6 * (k1[d] + 2 * k2[d] + 2 * k3[d] + k4[d]);
+    t += h;
+  }
+  if (dimension == 2) x[2] = 0;
+  return x;
+}
+
+GridGeometry grid_of(int dimension, bool rectilinear) {
+  GridGeometry g;
+  g.dimension = dimension;
+  g.size = {17, 17, dimension == 3 ? 17 : 1};
+  g.origin = Vec3(-2, -2, dimension == 3 ? -2 : 0);
+  g.spacing = Vec3(0.25, 0.25, 0.25);
+  if (rectilinear) {
+    // Uneven widths (1/8 to 1/2), still exact binary fractions.
+    const std::vector<double> axis{-2,  -1.5, -1.25, -1,    -0.875, -0.75, -0.5, -0.25, 0,
+                                   0.125, 0.25, 0.5, 0.75, 1, 1.25, 1.5, 2};
+    for (int a = 0; a < dimension; ++a) g.axes[static_cast<std::size_t>(a)] = axis;
+    if (dimension == 2) g.axes[2] = {0};
+  }
+  return g;
+}
+
+ResidentSteps linear_series(int dimension, bool rectilinear, int components,
+                            double nan_beyond_x = std::numeric_limits<double>::infinity()) {
+  const GridGeometry g = grid_of(dimension, rectilinear);
+  std::vector<double> times{0, 0.25, 0.5, 0.75, 1};
+  std::vector<std::vector<float>> steps;
+  for (const double t : times) {
+    std::vector<float> v(g.point_count() * static_cast<std::size_t>(components));
+    for (std::int64_t k = 0; k < g.size[2]; ++k)
+      for (std::int64_t j = 0; j < g.size[1]; ++j)
+        for (std::int64_t i = 0; i < g.size[0]; ++i) {
+          const std::array<double, 3> x{g.coordinate(0, i), g.coordinate(1, j),
+                                        dimension == 3 ? g.coordinate(2, k) : 0.0};
+          const auto u = linear_velocity(x, t);
+          for (int c = 0; c < components; ++c) {
+            const double value = x[0] >= nan_beyond_x ? std::nan("") : u[static_cast<std::size_t>(c)];
+            v[g.index(i, j, k) * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] =
+                static_cast<float>(value);
+          }
+        }
+    steps.push_back(std::move(v));
+  }
+  return ResidentSteps(g, components, times, std::move(steps));
+}
+
+ParticleBatch batch_of(const std::vector<std::array<double, 3>>& points, double t0) {
+  ParticleBatch b;
+  b.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (std::size_t d = 0; d < 3; ++d) b.x[d][i] = points[i][d];
+    b.t[i] = t0;
+  }
+  return b;
+}
+
+std::vector<std::array<double, 3>> random_points(std::size_t n, double radius, int dimension,
+                                                 unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-radius, radius);
+  std::vector<std::array<double, 3>> out(n);
+  for (auto& p : out) p = {u(rng), u(rng), dimension == 3 ? u(rng) : 0.0};
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("bulk advection: the exact flow of a linear field through four slabs",
+          "[advect]") {
+  const auto advector = make_cpu_advector();
+  for (const int dimension : {2, 3})
+    for (const bool rectilinear : {false, true})
+      for (const Method method : {Method::rk4, Method::dopri5}) {
+        const int components = dimension;
+        INFO("dimension " << dimension << (rectilinear ? ", rectilinear" : ", uniform")
+                          << (method == Method::rk4 ? ", RK4" : ", DOPRI5"));
+        ResidentSteps series = linear_series(dimension, rectilinear, components);
+        const auto points = random_points(200, 0.7, dimension, 7);
+        // Each particle starts at its own time (as released particles do).
+        ParticleBatch b = batch_of(points, 0);
+        for (std::size_t i = 0; i < b.size(); ++i) b.t[i] = 0.3 * static_cast<double>(i % 4) / 3.0;
+        MethodOptions o;
+        o.method = method;
+        o.rk4_step = 1e-3;
+        o.absolute = o.relative = 1e-12;
+        const AdvectionStatistics s = advector->advect(series, b, 1.0, o);
+        CHECK(s.slabs == 4);
+        CHECK(s.steps_loaded == 5);
+        double worst = 0;
+        for (std::size_t i = 0; i < b.size(); ++i) {
+          REQUIRE(b.status[i] == ParticleStatus::moving);
+          REQUIRE(b.t[i] == 1.0);
+          const auto want = reference(points[i], 0.3 * static_cast<double>(i % 4) / 3.0, 1.0, dimension);
+          for (std::size_t d = 0; d < 3; ++d) worst = std::max(worst, std::abs(b.x[d][i] - want[d]));
+        }
+        CHECK(worst < 1e-10);
+        CHECK(s.particle_steps > 0);
+        CHECK(s.evaluations >= 4 * s.particle_steps);
+      }
+}
+
+TEST_CASE("bulk advection: leaving the grid, cells without data and times outside the series",
+          "[advect]") {
+  const auto advector = make_cpu_advector();
+  ResidentSteps series = linear_series(3, false, 3, /*nan_beyond_x=*/1.0);
+  MethodOptions o;
+  // Samples at x >= 1 are NaN, so cells from x = 0.75 on have no data. From (0.6, -0.5) the
+  // flow (-y + 0.5 t x, x - 0.5 t y) first moves +x: the particle stops on entering x = 0.75.
+  ParticleBatch b = batch_of({{0.6, -0.5, 0}, {-1.0, 0, 0}, {0, 0, 0.1}, {2.5, 0, 0}, {0, 0, 0}}, 0);
+  b.t[4] = 1.5;  // after the series
+  for (const Method method : {Method::rk4, Method::dopri5}) {
+    o.method = method;
+    ParticleBatch c = b;
+    advector->advect(series, c, 1.0, o);
+    INFO((method == Method::rk4 ? "RK4" : "DOPRI5"));
+    CHECK(c.status[0] == ParticleStatus::no_data);
+    CHECK(c.x[0][0] < 0.75);
+    CHECK(c.x[0][0] > 0.75 - 0.01);  // at the cell border (RK4: within one step of it)
+    CHECK(c.t[0] > 0);
+    CHECK(c.t[0] < 1.0);
+    CHECK(c.status[1] == ParticleStatus::moving);  // an orbit of radius about 1, inside
+    CHECK(c.status[2] == ParticleStatus::moving);
+    CHECK(c.status[3] == ParticleStatus::left_domain);
+    CHECK(c.x[0][3] == 2.5);  // never moved
+    CHECK(c.t[3] == 0);
+    CHECK(c.status[4] == ParticleStatus::time_bounds);
+    ParticleBatch d = b;
+    advector->advect(series, d, 1.25, o);  // t_end after the series: nobody moves
+    for (std::size_t i = 0; i < d.size(); ++i) CHECK(d.status[i] == ParticleStatus::time_bounds);
+  }
+  // A uniform flow straight out of the box: the particle stops at the wall it reaches.
+  GridGeometry g = grid_of(2, false);
+  std::vector<float> step(g.point_count() * 2);
+  for (std::size_t p = 0; p < g.point_count(); ++p) step[2 * p] = 1.0f;
+  ResidentSteps out(g, 2, {0, 1}, {step, step});
+  ParticleBatch e = batch_of({{1.5, 0, 0}}, 0);
+  o.method = Method::dopri5;
+  advector->advect(out, e, 1.0, o);
+  CHECK(e.status[0] == ParticleStatus::left_domain);
+  CHECK(e.x[0][0] <= 2.0);
+  CHECK(e.x[0][0] > 2.0 - 1e-6);
+  CHECK(e.t[0] == Approx(0.5).margin(1e-6));
+}
+
+TEST_CASE("bulk advection: a particle's result does not depend on the batch or on split calls",
+          "[advect]") {
+  const auto advector = make_cpu_advector();
+  ResidentSteps series = linear_series(3, true, 3);
+  const auto points = random_points(500, 1.0, 3, 11);
+  for (const Method method : {Method::rk4, Method::dopri5}) {
+    MethodOptions o;
+    o.method = method;
+    o.rk4_step = 0.01;
+    o.absolute = o.relative = 1e-8;
+    ParticleBatch all = batch_of(points, 0);
+    advector->advect(series, all, 1.0, o);
+    for (std::size_t i = 0; i < points.size(); i += 37) {
+      ParticleBatch one = batch_of({points[i]}, 0);
+      advector->advect(series, one, 1.0, o);
+      for (std::size_t d = 0; d < 3; ++d) REQUIRE(one.x[d][0] == all.x[d][i]);
+      REQUIRE(one.status[0] == all.status[i]);
+    }
+    // Two calls that meet at a step time give the bits of one call (DOPRI5 carries its step).
+    ParticleBatch split = batch_of(points, 0);
+    advector->advect(series, split, 0.5, o);
+    advector->advect(series, split, 1.0, o);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      for (std::size_t d = 0; d < 3; ++d) REQUIRE(split.x[d][i] == all.x[d][i]);
+  }
+}
+
+TEST_CASE("bulk advection: backward in time returns to the start", "[advect]") {
+  const auto advector = make_cpu_advector();
+  ResidentSteps series = linear_series(2, false, 2);
+  const auto points = random_points(100, 0.8, 2, 5);
+  ParticleBatch b = batch_of(points, 0.1);
+  MethodOptions o;
+  o.absolute = o.relative = 1e-12;
+  advector->advect(series, b, 0.9, o);
+  for (std::size_t i = 0; i < b.size(); ++i) b.h[i] = 0;
+  const AdvectionStatistics s = advector->advect(series, b, 0.1, o);
+  CHECK(s.slabs == 4);
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    REQUIRE(b.status[i] == ParticleStatus::moving);
+    CHECK(b.t[i] == 0.1);
+    CHECK(std::abs(b.x[0][i] - points[i][0]) < 1e-9);
+    CHECK(std::abs(b.x[1][i] - points[i][1]) < 1e-9);
+  }
+}
+
+TEST_CASE("bulk advection: devices by name, and cuda refused with the reason where absent",
+          "[advect]") {
+  CHECK(parse_device("cpu") == Device::cpu);
+  CHECK(parse_device("auto") == Device::auto_select);
+  CHECK_THROWS_WITH(parse_device("gpu"), Catch::Contains("'gpu'"));
+  CHECK(make_advector(Device::cpu)->name() == "cpu");
+  std::string why;
+  if (!cuda_available(&why)) {
+    CHECK_FALSE(why.empty());
+    CHECK_THROWS_WITH(make_advector(Device::cuda), Catch::Contains(why));
+    CHECK(make_advector(Device::auto_select)->name() == "cpu");
+  }
+}

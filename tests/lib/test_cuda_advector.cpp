@@ -1,0 +1,159 @@
+// [gpu] The CUDA backend against the CPU backend on the same inputs: random particles in analytic
+// flows sampled on 2D and 3D, uniform and rectilinear grids, crossing cells, leaving the domain
+// and entering cells without data; and uploads that overlap the kernels. Built only with CUDA;
+// on a machine without a CUDA device each test says so and does nothing.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "orthofront/advect/batch_advector.h"
+#include "orthofront/field/unsteady.h"
+
+using namespace orthofront;
+using namespace orthofront::advect;
+
+namespace {
+
+// The double gyre (2D) or unsteady ABC (3D) flow sampled on a grid over `steps` times; samples in
+// a disc (2D) or ball (3D) are NaN (no data).
+ResidentSteps sampled(int dimension, bool rectilinear, std::int64_t n, std::size_t steps,
+                      bool hole) {
+  const auto flow = make_unsteady_field(dimension == 2 ? "double-gyre" : "unsteady-abc");
+  const Box<3> box = flow->domain();
+  const std::array<double, 3> lo{box.lo[0], box.lo[1], box.lo[2]}, hi{box.hi[0], box.hi[1], box.hi[2]};
+  GridGeometry g;
+  g.dimension = dimension;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const bool used = static_cast<int>(a) < dimension;
+    g.size[a] = used ? n : 1;
+    g.origin[static_cast<int>(a)] = used ? lo[a] : 0;
+    g.spacing[static_cast<int>(a)] = used ? (hi[a] - lo[a]) / static_cast<double>(n - 1) : 1;
+    if (!rectilinear) continue;
+    // Cells widening along the axis (quadratic spacing).
+    for (std::int64_t i = 0; i < g.size[a]; ++i) {
+      const double s = used ? static_cast<double>(i) / static_cast<double>(n - 1) : 0;
+      g.axes[a].push_back(used ? lo[a] + (hi[a] - lo[a]) * (0.5 * s + 0.5 * s * s) : 0);
+    }
+  }
+  std::vector<double> times;
+  std::vector<std::vector<float>> data;
+  const int c = dimension;
+  for (std::size_t k = 0; k < steps; ++k) {
+    const double t = 0.1 * static_cast<double>(k);
+    times.push_back(t);
+    std::vector<float> v(g.point_count() * static_cast<std::size_t>(c));
+    for (std::int64_t z = 0; z < g.size[2]; ++z)
+      for (std::int64_t y = 0; y < g.size[1]; ++y)
+        for (std::int64_t x = 0; x < g.size[0]; ++x) {
+          const Vec3 p(g.coordinate(0, x), g.coordinate(1, y), dimension == 3 ? g.coordinate(2, z) : 0.0);
+          Vec3 u = Vec3::Zero();
+          flow->velocity(p, t, u);
+          // A disc (ball) around the centre, radius 15 % of the box's diagonal.
+          double r2 = 0, diagonal2 = 0;
+          for (int d = 0; d < dimension; ++d) {
+            const double centre = 0.5 * (box.lo[d] + box.hi[d]), width = box.hi[d] - box.lo[d];
+            r2 += (p[d] - centre) * (p[d] - centre);
+            diagonal2 += width * width;
+          }
+          const bool in_hole = hole && r2 < 0.0225 * diagonal2;
+          for (int d = 0; d < c; ++d)
+            v[g.index(x, y, z) * static_cast<std::size_t>(c) + static_cast<std::size_t>(d)] =
+                in_hole ? std::nanf("") : static_cast<float>(u[d]);
+        }
+    data.push_back(std::move(v));
+  }
+  return ResidentSteps(g, c, times, std::move(data));
+}
+
+ParticleBatch random_batch(const GridGeometry& g, std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  ParticleBatch b;
+  b.resize(n);
+  const Box<3> box = g.bounds();
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < g.dimension; ++d) {
+      // Some start just outside the box.
+      std::uniform_real_distribution<double> u(box.lo[d] - 0.02 * (box.hi[d] - box.lo[d]),
+                                               box.hi[d] + 0.02 * (box.hi[d] - box.lo[d]));
+      b.x[static_cast<std::size_t>(d)][i] = u(rng);
+    }
+    b.t[i] = 0.05 * static_cast<double>(i % 7);
+  }
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("cuda advection agrees with the CPU backend", "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);  // a CUDA build on a machine without a GPU (CI)
+    return;
+  }
+  const auto cpu = make_cpu_advector();
+  const auto gpu = make_advector(Device::cuda);
+  for (const int dimension : {2, 3})
+    for (const bool rectilinear : {false, true})
+      for (const Method method : {Method::rk4, Method::dopri5}) {
+        INFO("dimension " << dimension << (rectilinear ? " rectilinear" : " uniform")
+                          << (method == Method::rk4 ? " RK4" : " DOPRI5"));
+        ResidentSteps series = sampled(dimension, rectilinear, dimension == 2 ? 129 : 33, 9, true);
+        MethodOptions o;
+        o.method = method;
+        o.rk4_step = 0.005;
+        o.absolute = o.relative = 1e-9;
+        const ParticleBatch start = random_batch(series.geometry(), 20000, 3);
+        ParticleBatch a = start, b = start;
+        const AdvectionStatistics sa = cpu->advect(series, a, 0.8, o);
+        const AdvectionStatistics sb = gpu->advect(series, b, 0.8, o);
+        CHECK(sa.slabs == sb.slabs);
+        std::size_t differing_status = 0, moved = 0, left = 0, no_data = 0;
+        double worst = 0;
+        for (std::size_t i = 0; i < start.size(); ++i) {
+          if (a.status[i] != b.status[i]) ++differing_status;
+          moved += a.status[i] == ParticleStatus::moving;
+          left += a.status[i] == ParticleStatus::left_domain;
+          no_data += a.status[i] == ParticleStatus::no_data;
+          for (std::size_t d = 0; d < 3; ++d) {
+            const double scale = std::max(1.0, std::abs(a.x[d][i]));
+            worst = std::max(worst, std::abs(a.x[d][i] - b.x[d][i]) / scale);
+          }
+        }
+        INFO("moving " << moved << ", left " << left << ", no data " << no_data
+                       << ", largest relative difference " << worst);
+        CHECK(differing_status == 0);
+        CHECK(moved > 0);
+        CHECK(left > 0);
+        CHECK(no_data > 0);
+        // Same arithmetic (FMA contraction off): RK4 agrees to the bit; DOPRI5's controller calls
+        // pow(), whose last bit may differ between the host's and the device's library.
+        CHECK(worst <= (method == Method::rk4 ? 0.0 : 1e-9));
+        CHECK(sa.particle_steps == sb.particle_steps);
+      }
+}
+
+TEST_CASE("cuda advection: the upload of the next step overlaps the kernels of this slab",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  const auto gpu = make_advector(Device::cuda);
+  ResidentSteps series = sampled(3, false, 160, 8, false);
+  ParticleBatch b = random_batch(series.geometry(), 2'000'000, 9);
+  for (std::size_t i = 0; i < b.size(); ++i) b.t[i] = 0;
+  MethodOptions o;
+  o.method = Method::rk4;
+  o.rk4_step = 0.002;
+  const AdvectionStatistics s = gpu->advect(series, b, 0.7, o);
+  INFO("kernels " << s.compute_seconds << " s, uploads " << s.upload_seconds << " s, overlap "
+                  << s.overlap_seconds << " s");
+  CHECK(s.slabs == 7);
+  CHECK(s.bytes_uploaded == 8 * series.geometry().point_count() * 3 * sizeof(float));
+  // Six of the eight uploads are issued while a slab computes; most of their time overlaps.
+  CHECK(s.overlap_seconds > 0.5 * s.upload_seconds * 6.0 / 8.0);
+}

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# On the GPU machine (CUDA, CMake, ninja and a compiler, none of the project's Debian libraries):
+# unpacks what tools/gpu-carry.sh packed (into /, never replacing a file that is there), builds
+# with the CUDA backend, and runs the [gpu] tests. Extra arguments go to the test binaries.
+#   usage: tools/gpu-build.sh [BUILD_DIR=build-gpu]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build-gpu}
+carry=${ORTHOFRONT_CARRY:-.gpu-carry}
+[[ -f $carry/orthofront-deps.tar.xz ]] || { echo "gpu-build: $carry/orthofront-deps.tar.xz missing (run tools/gpu-carry.sh where the Debian packages are)" >&2; exit 1; }
+tar -xJf "$carry/orthofront-deps.tar.xz" -P --skip-old-files
+ldconfig
+generator=(); command -v ninja >/dev/null && generator=(-G Ninja)
+cmake -S . -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON \
+  -DCMAKE_CUDA_ARCHITECTURES="${CUDA_ARCHITECTURES:-90}"
+cmake --build "$build" -j"$(nproc)" --target orthofront lib_test_cuda_advector lib_test_batch_advector
+"$build"/tests/lib_test_batch_advector
+"$build"/tests/lib_test_cuda_advector "$@"
