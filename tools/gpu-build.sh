@@ -6,12 +6,21 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-gpu}
+shift || true
 carry=${ORTHOFRONT_CARRY:-.gpu-carry}
 [[ -f $carry/orthofront-deps.tar.xz ]] || { echo "gpu-build: $carry/orthofront-deps.tar.xz missing (run tools/gpu-carry.sh where the Debian packages are)" >&2; exit 1; }
 tar -xJf "$carry/orthofront-deps.tar.xz" -P --skip-old-files
 ldconfig
+# Packages the machine has in another major version (Catch2 3 where the tests use Catch2 2) are
+# taken from a copy under /opt/orthofront-deps.
+mkdir -p /opt/orthofront-deps
+tar -xJf "$carry/orthofront-deps.tar.xz" -C /opt/orthofront-deps --wildcards '/usr/lib/cmake/Catch2/*' '/usr/include/catch2/*' '/usr/lib/libCatch2*' 2>/dev/null ||
+  tar -xJf "$carry/orthofront-deps.tar.xz" -C /opt/orthofront-deps
+catch2=(-DCatch2_DIR=/opt/orthofront-deps/usr/lib/cmake/Catch2)
 generator=(); command -v ninja >/dev/null && generator=(-G Ninja)
-cmake -S . -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON \
+# The Boost that OpenVDB was built with, where the machine has another one (its config first).
+boost=(); [[ -d /usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0 ]] && boost=(-DBoost_DIR=/usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0)
+cmake -S . -B "$build" "${generator[@]}" "${boost[@]}" "${catch2[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON \
   -DCMAKE_CUDA_ARCHITECTURES="${CUDA_ARCHITECTURES:-90}"
 cmake --build "$build" -j"$(nproc)" --target orthofront lib_test_cuda_advector lib_test_batch_advector
 "$build"/tests/lib_test_batch_advector

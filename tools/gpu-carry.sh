@@ -68,9 +68,17 @@ for d in /usr/lib/x86_64-linux-gnu/cmake/{TBB,Imath,OpenEXR,OpenVDB} \
          /usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0 /usr/lib/x86_64-linux-gnu/cmake/boost_*-1.74.0 \
          /usr/lib/x86_64-linux-gnu/cmake/BoostDetectToolset-1.74.0.cmake \
          /usr/lib/cmake/Catch2 /usr/share/cmake/CLI11 /usr/share/cmake/nlohmann_json \
-         /usr/share/eigen3/cmake /usr/lib/x86_64-linux-gnu/hdf5/serial /usr/lib/x86_64-linux-gnu/pkgconfig/hdf5*.pc; do
+         /usr/share/eigen3/cmake /usr/lib/x86_64-linux-gnu/hdf5/serial /usr/lib/x86_64-linux-gnu/pkgconfig/hdf5*.pc \
+         /usr/lib/x86_64-linux-gnu/pkgconfig/blosc.pc; do
   if [[ -e $d ]]; then find "$d" \( -type f -o -type l \); fi
 done >>"$list"
+# Libraries the package files name (TBB's targets name tbbmalloc too), with their .so links.
+grep -h -o -E '(\$\{_IMPORT_PREFIX\}|/usr)/lib/(x86_64-linux-gnu/)?lib[A-Za-z0-9_.+-]*\.(so[0-9.]*|a)' \
+    $(grep -E '\.cmake$' "$list" | sort -u) 2>/dev/null | sed 's|${_IMPORT_PREFIX}|/usr|' | sort -u |
+  while read -r lib; do
+    if [[ -e $lib ]]; then echo "$lib"; readlink -f "$lib"; fi
+  done >>"$list.libs"
+cat "$list.libs" >>"$list"; rm -f "$list.libs"
 for w in /usr/bin/h5cc; do if [[ -e $w ]]; then echo "$w"; readlink -f "$w"; fi; done >>"$list"
 # The library links the HDF5 folder points to.
 find /usr/lib/x86_64-linux-gnu/hdf5/serial -type l -exec readlink -f {} \; >>"$list"

@@ -137,7 +137,9 @@ void add_bench_gpu_command(CLI::App& app) {
     const auto cpu = advect::make_cpu_advector();
 
     std::vector<Row> rows;
-    double cpu_rate[2] = {0, 0};  // particle-steps per second of the last CPU row, per method
+    // Per method: particle-steps per second and per particle of the last CPU row (the prediction
+    // that skips a row too long for --cpu-seconds).
+    double cpu_rate[2] = {0, 0}, cpu_steps_per_particle[2] = {0, 0};
     for (const std::size_t n : counts) {
       const advect::ParticleBatch start = random_particles(series.geometry(), n);
       for (const advect::Method method : {advect::Method::rk4, advect::Method::dopri5}) {
@@ -153,11 +155,12 @@ void add_bench_gpu_command(CLI::App& app) {
           rows.push_back({gpu->name(), method_name, n, gpu->advect(series, p, 1.0, o), false, ""});
         }
         const int m = static_cast<int>(method);
-        const double predicted = cpu_rate[m] > 0 ? static_cast<double>(n) * (method == advect::Method::rk4 ? a->rk4_steps : 6.0) / cpu_rate[m] : 0;
+        const double predicted =
+            cpu_rate[m] > 0 ? static_cast<double>(n) * cpu_steps_per_particle[m] / cpu_rate[m] : 0;
         if (predicted > a->cpu_seconds) {
           Row r{"cpu (" + std::to_string(threads) + " threads)", method_name, n, {}, true, ""};
           char note[96];
-          std::snprintf(note, sizeof note, "skipped: about %.0f s predicted (--cpu-seconds %g)",
+          std::snprintf(note, sizeof note, "skipped: about %.3g s predicted (--cpu-seconds %g)",
                         predicted, a->cpu_seconds);
           r.note = note;
           rows.push_back(r);
@@ -166,6 +169,7 @@ void add_bench_gpu_command(CLI::App& app) {
         advect::ParticleBatch p = start;
         Row r{"cpu (" + std::to_string(threads) + " threads)", method_name, n, cpu->advect(series, p, 1.0, o), false, ""};
         cpu_rate[m] = static_cast<double>(r.stats.particle_steps) / r.stats.total_seconds;
+        cpu_steps_per_particle[m] = static_cast<double>(r.stats.particle_steps) / static_cast<double>(n);
         rows.push_back(r);
       }
     }

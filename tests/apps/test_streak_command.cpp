@@ -197,3 +197,47 @@ TEST_CASE("streak command: the space-time route writes one surface in (x, y, t)"
   CHECK(three_d.status == 2);
   CHECK(three_d.output.find("needs a 2D flow") != std::string::npos);
 }
+
+TEST_CASE("streak command: --device moves particles by bulk advection, the same frames under any "
+          "budget, and names what it cannot do",
+          "[apps][streak][advect]") {
+  test_support::TempDir dir;
+  const fs::path h5 = dir.path() / "gyre.h5";
+  REQUIRE(cli_test::run("generate --field double-gyre --resolution 101,51 --steps 41 --t1 4 "
+                        "--brick 16 --out " + h5.string() + " --quiet").status == 0);
+  const auto streak = [&](const std::string& name, const std::string& extra) {
+    return cli_test::run("streak --field " + h5.string() +
+                         " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
+                         "--edge 0.03 --insert interpolate --out " +
+                         (dir.path() / (name + ".pvd")).string() + " --report " +
+                         (dir.path() / (name + ".json")).string() + " " + extra);
+  };
+  const auto big = streak("big", "--device cpu");
+  INFO(big.output);
+  REQUIRE(big.status == 0);
+  const auto small = streak("small", "--device cpu --cache-budget 1MiB");
+  INFO(small.output);
+  REQUIRE(small.status == 0);
+  for (const char* frame : {"_0000.vtp", "_0001.vtp", "_0002.vtp"})
+    CHECK(read_text(dir.path() / "big" / (std::string("big") + frame)) ==
+          read_text(dir.path() / "small" / (std::string("small") + frame)));
+  const auto j = nlohmann::json::parse(read_text(dir.path() / "small.json"));
+  CHECK(j["device"]["backend"] == "cpu");
+  CHECK(j["device"]["slabs"].get<std::size_t>() > 0);
+  CHECK(j["device"]["particle_steps"].get<std::size_t>() > 0);
+  CHECK(j["frames_written"] == 3);
+  // An analytic field has no grid to move through.
+  const auto analytic = cli_test::run(
+      "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
+      "--device cpu --out " + (dir.path() / "a.pvd").string());
+  CHECK(analytic.status == 2);
+  CHECK(analytic.output.find("--device") != std::string::npos);
+  CHECK(!fs::exists(dir.path() / "a.pvd"));
+  // Without a CUDA device (or a CUDA build), --device cuda says why and writes nothing.
+  const auto cuda = streak("cuda", "--device cuda");
+  if (cuda.status != 0) {
+    CHECK(cuda.status == 2);
+    CHECK(cuda.output.find("--device cuda:") != std::string::npos);
+    CHECK(!fs::exists(dir.path() / "cuda.pvd"));
+  }
+}

@@ -1,8 +1,7 @@
 #pragma once
 /// One particle through one slab: fixed-step RK4, or Dormand-Prince 5(4) with per-particle step
 /// control (the controller of integrate/runge_kutta.h: same coefficients, growth and rejection
-/// rules). Written once for the CPU and a CUDA kernel: plain arrays, no Eigen, no exceptions.
-#include <math.h>  // ::pow, a device function under nvcc too
+/// rules; the factor norm^(-1/5) by a fixed Newton iteration). Written once for the CPU and a CUDA kernel: plain arrays, no Eigen, no exceptions.
 #include <cstdint>
 
 #include "orthofront/advect/particle_status.h"
@@ -40,6 +39,23 @@ ORTHOFRONT_HD inline ParticleStatus stopped_by(SampleStatus s) {
 ORTHOFRONT_HD inline double abs_of(double a) { return a < 0 ? -a : a; }
 ORTHOFRONT_HD inline double max_of(double a, double b) { return a < b ? b : a; }
 ORTHOFRONT_HD inline double min_of(double a, double b) { return a < b ? a : b; }
+
+/// norm^(-1/5) for the step controller, from + - * / only: scaled by powers of 32 (exact) into
+/// [1, 32), then ten Newton steps for the fifth root from 2 (above the root; converged to an ulp).
+/// IEEE arithmetic rounds these the same on the host and on a device (FMA contraction off), where
+/// pow() may differ in the last bit: CPU and GPU then accept the same steps. Outside [1e-5, 1e5]
+/// the controller clamps anyway.
+ORTHOFRONT_HD inline double inverse_fifth_root(double norm) {
+  double x = min_of(max_of(norm, 1e-5), 1e5), scale = 1;
+  while (x >= 32) x /= 32, scale *= 2;
+  while (x < 1) x *= 32, scale /= 2;
+  double r = 2;
+  for (int i = 0; i < 10; ++i) {
+    const double r2 = r * r;
+    r = (4.0 * r + x / (r2 * r2)) / 5.0;
+  }
+  return 1.0 / (r * scale);
+}
 
 }  // namespace detail
 
@@ -187,10 +203,10 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
       p.t = last ? t_end : t_start + dir * done;
       ++p.steps;
       rejections_in_row = 0;
-      const double grow = norm == 0 ? 5.0 : detail::min_of(5.0, 0.9 * ::pow(norm, -0.2));
+      const double grow = norm == 0 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
       h = last ? planned : h * grow;
     } else {
-      h *= detail::max_of(0.2, 0.9 * ::pow(norm, -0.2));
+      h *= detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm));
       if (h < h_min || ++rejections_in_row > 60) {
         p.status = ParticleStatus::no_data;  // step control failed: no usable flow
         return;
