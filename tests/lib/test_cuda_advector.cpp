@@ -157,3 +157,39 @@ TEST_CASE("cuda advection: the upload of the next step overlaps the kernels of t
   // Six of the eight uploads are issued while a slab computes; most of their time overlaps.
   CHECK(s.overlap_seconds > 0.5 * s.upload_seconds * 6.0 / 8.0);
 }
+
+TEST_CASE("cuda advection: steps stay on the device between calls on the same source",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  const auto cpu = make_cpu_advector();
+  const auto gpu = make_advector(Device::cuda);
+  ResidentSteps series = sampled(2, false, 257, 11, false);
+  const std::size_t step_bytes = series.geometry().point_count() * 2 * sizeof(float);
+  const ParticleBatch start = random_batch(series.geometry(), 5000, 4);
+  ParticleBatch a = start, b = start;
+  MethodOptions o;
+  // One interval a call, as a streak surface advances: each call after the first finds one of
+  // its two steps on the device already.
+  std::size_t uploaded = 0;
+  for (int k = 1; k <= 10; ++k) {
+    const double t = 0.1 * k;
+    cpu->advect(series, a, t, o);
+    const AdvectionStatistics s = gpu->advect(series, b, t, o);
+    uploaded += s.bytes_uploaded;
+  }
+  INFO("uploaded " << uploaded << " bytes, a step is " << step_bytes);
+  CHECK(uploaded == 11 * step_bytes);  // every step once
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    REQUIRE(a.status[i] == b.status[i]);
+    for (std::size_t d = 0; d < 3; ++d) REQUIRE(a.x[d][i] == b.x[d][i]);
+  }
+  // Another source (even with the same contents) is uploaded again.
+  ResidentSteps copy = series;
+  ParticleBatch c = start;
+  const AdvectionStatistics s = gpu->advect(copy, c, 0.1, o);
+  CHECK(s.bytes_uploaded == 2 * step_bytes);
+}

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -55,6 +56,13 @@ void ParticleBatch::store(std::size_t i, const ParticleState& p) {
   evaluations[i] = p.evaluations;
   status[i] = p.status;
 }
+
+namespace {
+std::atomic<std::uint64_t> next_source_identity{1};
+}  // namespace
+
+StepSource::StepSource() : identity_(next_source_identity.fetch_add(1)) {}
+StepSource::StepSource(const StepSource&) : identity_(next_source_identity.fetch_add(1)) {}
 
 ResidentSteps::ResidentSteps(GridGeometry geometry, int components, std::vector<double> times,
                              std::vector<std::vector<float>> steps, bool zero_is_no_data)

@@ -34,7 +34,13 @@ struct ParticleBatch {
 /// thread, in time order, at most three steps held at once.
 class StepSource {
  public:
+  StepSource();
+  StepSource(const StepSource&);  // a copy is another source (its own identity)
+  StepSource& operator=(const StepSource&) { return *this; }
   virtual ~StepSource() = default;
+  /// Unique in the process: a backend may keep copies of a source's steps between calls under it
+  /// (steps never change).
+  std::uint64_t identity() const { return identity_; }
   virtual const GridGeometry& geometry() const = 0;
   virtual int components() const = 0;
   /// A zero vector marks land or solid (the series' convention, as StreamedField reads it).
@@ -44,6 +50,9 @@ class StepSource {
   /// Throws what the reader throws.
   virtual const float* acquire(std::size_t step) = 0;
   virtual void release(std::size_t step) = 0;
+
+ private:
+  std::uint64_t identity_;
 };
 
 /// Steps held in memory (tests, benchmarks, analytic fields sampled on a grid).

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <memory>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -173,6 +174,11 @@ class CudaAdvector final : public BatchAdvector {
     check(cudaGetDeviceProperties(&prop, device), "cudaGetDeviceProperties");
     name_ = std::string("cuda (") + prop.name + ")";
   }
+  ~CudaAdvector() override {
+    // Nothing may still read the buffers freed next.
+    cudaStreamSynchronize(compute_.get());
+    cudaStreamSynchronize(upload_.get());
+  }
   std::string name() const override { return name_; }
 
   AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
@@ -188,36 +194,10 @@ class CudaAdvector final : public BatchAdvector {
       return stats;
     }
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
-
-    // Axis tables and the grid view with device pointers.
-    GridView grid = tables.view();
-    std::array<DeviceArray<double>, 3> coordinates, inverse_widths;
-    for (int a = 0; a < grid.axes && grid.rectilinear; ++a) {
-      const auto ua = static_cast<std::size_t>(a);
-      coordinates[ua] = DeviceArray<double>(tables.coordinates()[ua].size());
-      coordinates[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size());
-      inverse_widths[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size());
-      inverse_widths[ua].upload(tables.inverse_widths()[ua].data(),
-                                tables.inverse_widths()[ua].size());
-      grid.axis[a].coordinates = coordinates[ua].get();
-      grid.axis[a].inverse_width = inverse_widths[ua].get();
-    }
-
-    // Particles stay on the device for the whole call.
-    std::array<DeviceArray<double>, 3> px{DeviceArray<double>(n), DeviceArray<double>(n),
-                                          DeviceArray<double>(n)};
-    DeviceArray<double> pt(n), ph(n);
-    DeviceArray<std::uint32_t> pe(n);
-    DeviceArray<ParticleStatus> ps(n);
-    for (std::size_t d = 0; d < 3; ++d) px[d].upload(particles.x[d].data(), n);
-    pt.upload(particles.t.data(), n);
-    ph.upload(particles.h.data(), n);
-    pe.upload(particles.evaluations.data(), n);
-    ps.upload(particles.status.data(), n);
-    DeviceArray<unsigned long long> steps_taken(1);
-    check(cudaMemset(steps_taken.get(), 0, sizeof(unsigned long long)), "cudaMemset");
-    const DeviceParticles view{{px[0].get(), px[1].get(), px[2].get()}, pt.get(), ph.get(),
-                               pe.get(), ps.get()};
+    const GridView grid = device_grid(source, tables);
+    const DeviceParticles view = upload_particles(particles);
+    check(cudaMemsetAsync(steps_taken_.get(), 0, sizeof(unsigned long long), compute_.get()),
+          "cudaMemset");
 
     // Steps in the order the slabs use them; slab j uses sequence[j] and sequence[j + 1].
     std::vector<std::size_t> sequence;
@@ -226,95 +206,116 @@ class CudaAdvector final : public BatchAdvector {
       if (sequence.empty()) sequence.push_back(first);
       sequence.push_back(second);
     }
-    const std::size_t floats =
-        source.geometry().point_count() * static_cast<std::size_t>(source.components());
-    const std::size_t bytes = floats * sizeof(float);
-    std::array<DeviceArray<float>, 3> device_steps;
-    for (std::size_t i = 0; i < std::min<std::size_t>(3, sequence.size()); ++i)
-      device_steps[i] = DeviceArray<float>(floats);
-    PinnedBuffer staging0(bytes), staging1(bytes);
-    float* staging[2] = {staging0.get(), staging1.get()};
-    Stream compute, upload;
+    prepare_buffers(source.geometry().point_count() * static_cast<std::size_t>(source.components()));
     Event base;
-    std::vector<Event> upload_begin(sequence.size()), upload_end(sequence.size());
-    std::vector<Event> kernel_begin(plan.slabs.size()), kernel_end(plan.slabs.size());
-    check(cudaEventRecord(base.get(), compute.get()), "cudaEventRecord");
-    check(cudaEventRecord(base.get(), upload.get()), "cudaEventRecord");
+    std::vector<std::array<double, 2>> kernels, uploads;
+    std::vector<std::unique_ptr<Event>> marks;  // begin/end events of this call's work
+    const auto mark = [&](cudaStream_t stream) {
+      marks.push_back(std::make_unique<Event>());
+      check(cudaEventRecord(marks.back()->get(), stream), "cudaEventRecord");
+      return marks.size() - 1;
+    };
+    std::vector<std::array<std::size_t, 2>> kernel_marks, upload_marks;
+    check(cudaEventRecord(base.get(), compute_.get()), "cudaEventRecord");
+    check(cudaStreamWaitEvent(upload_.get(), base.get(), 0), "cudaStreamWaitEvent");
 
-    const auto upload_step = [&](std::size_t i) {
-      float* pinned = staging[i % 2];
-      // The pinned buffer is free once the upload that last used it finished; the device buffer
-      // once the kernels that read its old step finished.
-      if (i >= 2) check(cudaEventSynchronize(upload_end[i - 2].get()), "cudaEventSynchronize");
-      // (Buffer i % 3 held step i - 3, read by the kernels of slabs i - 4 and i - 3.)
-      if (i >= 3)
-        check(cudaStreamWaitEvent(upload.get(), kernel_end[i - 3].get(), 0), "cudaStreamWaitEvent");
+    // Makes sequence[i] resident in a slot other than `keep0` and `keep1` (the current slab's) and
+    // returns the slot: a step already there, from an earlier call on the same source too, is
+    // not uploaded again.
+    const auto need = [&](std::size_t i, int keep0, int keep1) -> int {
+      const std::size_t step = sequence[i];
+      for (int s = 0; s < 3; ++s)
+        if (slots_[s].source == source.identity() && slots_[s].step == step) {
+          slots_[s].last_use = ++clock_;
+          return s;
+        }
+      int victim = -1;
+      for (int s = 0; s < 3; ++s)
+        if (s != keep0 && s != keep1 && (victim < 0 || slots_[s].last_use < slots_[victim].last_use))
+          victim = s;
+      Slot& slot = slots_[victim];
+      // The pinned buffer is free once its last upload finished; the slot once the kernels that
+      // read its old step finished.
+      const int p = next_staging_;
+      next_staging_ = 1 - next_staging_;
+      if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
+      if (slot.used) check(cudaStreamWaitEvent(upload_.get(), slot.used_event.get(), 0), "cudaStreamWaitEvent");
       const auto host = std::chrono::steady_clock::now();
-      const float* data = source.acquire(sequence[i]);
+      const float* data = source.acquire(step);
+      float* pinned = staging_[p]->get();
+      const std::size_t floats = slot_floats_;
       tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
         const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
         std::memcpy(pinned + lo, data + lo, (hi - lo) * sizeof(float));
       });
-      source.release(sequence[i]);
+      source.release(step);
       stats.host_seconds += seconds_since(host);
       ++stats.steps_loaded;
-      check(cudaEventRecord(upload_begin[i].get(), upload.get()), "cudaEventRecord");
-      check(cudaMemcpyAsync(device_steps[i % 3].get(), pinned, bytes, cudaMemcpyHostToDevice,
-                            upload.get()),
+      const std::size_t b = mark(upload_.get());
+      check(cudaMemcpyAsync(slot.data.get(), pinned, floats * sizeof(float), cudaMemcpyHostToDevice,
+                            upload_.get()),
             "cudaMemcpyAsync");
-      check(cudaEventRecord(upload_end[i].get(), upload.get()), "cudaEventRecord");
-      stats.bytes_uploaded += bytes;
+      upload_marks.push_back({b, mark(upload_.get())});
+      check(cudaEventRecord(slot.ready_event.get(), upload_.get()), "cudaEventRecord");
+      check(cudaEventRecord(staged_event_[p].get(), upload_.get()), "cudaEventRecord");
+      staged_[p] = true;
+      slot.ready = true;
+      slot.source = source.identity();
+      slot.step = step;
+      slot.last_use = ++clock_;
+      stats.bytes_uploaded += floats * sizeof(float);
+      return victim;
     };
 
-    upload_step(0);
-    upload_step(1);
+    int a = need(0, -1, -1);
+    int b = need(1, a, -1);
     for (std::size_t j = 0; j < plan.slabs.size(); ++j) {
       const std::size_t k = plan.slabs[j];
       SlabView slab;
       slab.grid = grid;
       slab.t0 = times[k];
       slab.t1 = times[k + 1];
-      const float* a = device_steps[j % 3].get();
-      const float* b = device_steps[(j + 1) % 3].get();
-      slab.step0 = plan.forward ? a : b;
-      slab.step1 = plan.forward ? b : a;
-      check(cudaStreamWaitEvent(compute.get(), upload_end[j].get(), 0), "cudaStreamWaitEvent");
-      check(cudaStreamWaitEvent(compute.get(), upload_end[j + 1].get(), 0), "cudaStreamWaitEvent");
-      check(cudaEventRecord(kernel_begin[j].get(), compute.get()), "cudaEventRecord");
+      slab.step0 = slots_[plan.forward ? a : b].data.get();
+      slab.step1 = slots_[plan.forward ? b : a].data.get();
+      for (const int s : {a, b})
+        if (slots_[s].ready)
+          check(cudaStreamWaitEvent(compute_.get(), slots_[s].ready_event.get(), 0), "cudaStreamWaitEvent");
+      const std::size_t begin = mark(compute_.get());
       const unsigned threads = 128;
       const auto blocks = static_cast<unsigned>((n + threads - 1) / threads);
-      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options, steps_taken.get(),
-                                  blocks, threads, compute.get()});
+      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options, steps_taken_.get(),
+                                  blocks, threads, compute_.get()});
       check(cudaGetLastError(), "kernel launch");
-      check(cudaEventRecord(kernel_end[j].get(), compute.get()), "cudaEventRecord");
-      // The next step goes up while this slab computes.
-      if (j + 2 < sequence.size()) upload_step(j + 2);
+      kernel_marks.push_back({begin, mark(compute_.get())});
+      for (const int s : {a, b}) {
+        check(cudaEventRecord(slots_[s].used_event.get(), compute_.get()), "cudaEventRecord");
+        slots_[s].used = true;
+      }
       ++stats.slabs;
+      if (j + 1 < plan.slabs.size()) {
+        // The next step goes up (into the third slot) while this slab computes.
+        const int c = need(j + 2, a, b);
+        a = b;
+        b = c;
+      }
     }
-    check(cudaStreamSynchronize(compute.get()), "advection kernels");
-    check(cudaStreamSynchronize(upload.get()), "uploads");
+    check(cudaStreamSynchronize(compute_.get()), "advection kernels");
+    check(cudaStreamSynchronize(upload_.get()), "uploads");
 
-    for (std::size_t d = 0; d < 3; ++d) px[d].download(particles.x[d].data(), n);
-    pt.download(particles.t.data(), n);
-    ph.download(particles.h.data(), n);
     const std::vector<std::uint32_t> before = particles.evaluations;
-    pe.download(particles.evaluations.data(), n);
-    ps.download(particles.status.data(), n);
+    download_particles(particles);
     unsigned long long steps = 0;
-    steps_taken.download(&steps, 1);
+    steps_taken_.download(&steps, 1);
     stats.particle_steps = static_cast<std::size_t>(steps);
     for (std::size_t i = 0; i < n; ++i) stats.evaluations += particles.evaluations[i] - before[i];
 
-    const auto at = [&](const Event& e) {
+    const auto at = [&](std::size_t m) {
       float ms = 0;
-      check(cudaEventElapsedTime(&ms, base.get(), e.get()), "cudaEventElapsedTime");
+      check(cudaEventElapsedTime(&ms, base.get(), marks[m]->get()), "cudaEventElapsedTime");
       return 1e-3 * static_cast<double>(ms);
     };
-    std::vector<std::array<double, 2>> kernels, uploads;
-    for (std::size_t j = 0; j < kernel_begin.size(); ++j)
-      kernels.push_back({at(kernel_begin[j]), at(kernel_end[j])});
-    for (std::size_t i = 0; i < upload_begin.size(); ++i)
-      uploads.push_back({at(upload_begin[i]), at(upload_end[i])});
+    for (const auto& km : kernel_marks) kernels.push_back({at(km[0]), at(km[1])});
+    for (const auto& um : upload_marks) uploads.push_back({at(um[0]), at(um[1])});
     for (const auto& k : kernels) stats.compute_seconds += k[1] - k[0];
     for (const auto& u : uploads) {
       stats.upload_seconds += u[1] - u[0];
@@ -325,7 +326,94 @@ class CudaAdvector final : public BatchAdvector {
   }
 
  private:
+  /// A device buffer for one step, with what it holds and events for when it is ready and when
+  /// the last kernel reading it ends.
+  struct Slot {
+    DeviceArray<float> data;
+    std::uint64_t source = 0;
+    std::size_t step = 0;
+    std::uint64_t last_use = 0;
+    Event ready_event, used_event;
+    bool ready = false, used = false;
+  };
+
+  // Step buffers (three slots, two pinned staging buffers) for steps of `floats` floats; a new
+  // size drops what the slots held.
+  void prepare_buffers(std::size_t floats) {
+    if (floats == slot_floats_) return;
+    check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
+    for (Slot& s : slots_) {
+      s.data = DeviceArray<float>(floats);
+      s.source = 0;
+      s.ready = s.used = false;
+      s.last_use = 0;
+    }
+    for (auto& p : staging_) p = std::make_unique<PinnedBuffer>(floats * sizeof(float));
+    staged_[0] = staged_[1] = false;
+    slot_floats_ = floats;
+  }
+
+  // The grid view with device pointers to its axis tables (uploaded for every call: small).
+  GridView device_grid(const StepSource&, const GridTables& tables) {
+    GridView grid = tables.view();
+    for (int a = 0; a < grid.axes && grid.rectilinear; ++a) {
+      const auto ua = static_cast<std::size_t>(a);
+      coordinates_[ua] = DeviceArray<double>(tables.coordinates()[ua].size());
+      coordinates_[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size());
+      inverse_widths_[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size());
+      inverse_widths_[ua].upload(tables.inverse_widths()[ua].data(), tables.inverse_widths()[ua].size());
+      grid.axis[a].coordinates = coordinates_[ua].get();
+      grid.axis[a].inverse_width = inverse_widths_[ua].get();
+    }
+    return grid;
+  }
+
+  // Particle arrays on the device (grown, never shrunk), filled from `particles`.
+  DeviceParticles upload_particles(const ParticleBatch& particles) {
+    const std::size_t n = particles.size();
+    if (n > capacity_) {
+      check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
+      const std::size_t c = std::max(n, capacity_ + capacity_ / 2);
+      for (auto& x : px_) x = DeviceArray<double>(c);
+      pt_ = DeviceArray<double>(c);
+      ph_ = DeviceArray<double>(c);
+      pe_ = DeviceArray<std::uint32_t>(c);
+      ps_ = DeviceArray<ParticleStatus>(c);
+      capacity_ = c;
+    }
+    for (std::size_t d = 0; d < 3; ++d) px_[d].upload(particles.x[d].data(), n);
+    pt_.upload(particles.t.data(), n);
+    ph_.upload(particles.h.data(), n);
+    pe_.upload(particles.evaluations.data(), n);
+    ps_.upload(particles.status.data(), n);
+    return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get()};
+  }
+
+  void download_particles(ParticleBatch& particles) const {
+    const std::size_t n = particles.size();
+    for (std::size_t d = 0; d < 3; ++d) px_[d].download(particles.x[d].data(), n);
+    pt_.download(particles.t.data(), n);
+    ph_.download(particles.h.data(), n);
+    pe_.download(particles.evaluations.data(), n);
+    ps_.download(particles.status.data(), n);
+  }
+
   std::string name_;
+  Stream compute_, upload_;
+  std::array<Slot, 3> slots_;
+  std::size_t slot_floats_ = 0;
+  std::array<std::unique_ptr<PinnedBuffer>, 2> staging_;
+  std::array<Event, 2> staged_event_;
+  bool staged_[2] = {false, false};
+  int next_staging_ = 0;
+  std::uint64_t clock_ = 0;
+  std::array<DeviceArray<double>, 3> coordinates_, inverse_widths_;
+  std::array<DeviceArray<double>, 3> px_;
+  DeviceArray<double> pt_, ph_;
+  DeviceArray<std::uint32_t> pe_;
+  DeviceArray<ParticleStatus> ps_;
+  std::size_t capacity_ = 0;
+  DeviceArray<unsigned long long> steps_taken_{1};
 };
 
 }  // namespace
