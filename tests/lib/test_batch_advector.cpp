@@ -232,6 +232,17 @@ TEST_CASE("bulk advection: devices by name, and cuda refused with the reason whe
   CHECK(parse_device("auto") == Device::auto_select);
   CHECK_THROWS_WITH(parse_device("gpu"), Catch::Contains("'gpu'"));
   CHECK(make_advector(Device::cpu)->name() == "cpu");
+  // Options that cannot integrate are refused before any particle moves.
+  ResidentSteps series = linear_series(2, false, 2);
+  ParticleBatch b = batch_of({{0.1, 0.2, 0}}, 0);
+  MethodOptions o;
+  o.method = Method::rk4;
+  o.rk4_step = 0;
+  CHECK_THROWS_WITH(make_cpu_advector()->advect(series, b, 1.0, o), Catch::Contains("RK4 step 0"));
+  o.method = Method::dopri5;
+  o.relative = std::nan("");
+  CHECK_THROWS_WITH(make_cpu_advector()->advect(series, b, 1.0, o), Catch::Contains("tolerances"));
+  CHECK(b.x[0][0] == 0.1);
   std::string why;
   if (!cuda_available(&why)) {
     CHECK_FALSE(why.empty());

@@ -115,6 +115,17 @@ GridTables::GridTables(const GridGeometry& g, int components, bool zero_is_no_da
   }
 }
 
+void check_method(const MethodOptions& o) {
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  if (o.method == Method::rk4 && !positive(o.rk4_step))
+    throw InvalidArgument("bulk advection: RK4 step " + std::to_string(o.rk4_step) +
+                          " must be finite and > 0");
+  if (o.method == Method::dopri5 && !(positive(o.absolute) && positive(o.relative)))
+    throw InvalidArgument("bulk advection: DOPRI5 tolerances " + std::to_string(o.absolute) +
+                          " / " + std::to_string(o.relative) + " must be finite and > 0");
+  if (o.max_evaluations == 0) throw InvalidArgument("bulk advection: no evaluation budget");
+}
+
 SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, double t_end) {
   if (times.size() < 2)
     throw InvalidArgument("bulk advection needs at least 2 time steps, the series has " +
@@ -166,6 +177,7 @@ class CpuAdvector final : public BatchAdvector {
     const auto start = std::chrono::steady_clock::now();
     AdvectionStatistics stats;
     stats.particles = particles.size();
+    check_method(options);
     const std::vector<double>& times = source.times();
     const SlabPlan plan = plan_slabs(times, particles, t_end);
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());

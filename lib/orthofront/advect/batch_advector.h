@@ -110,6 +110,10 @@ struct SlabPlan {
   std::vector<std::size_t> slabs;  ///< k: the slab [times[k], times[k + 1]]
 };
 
+/// Throws InvalidArgument naming the value when `options` cannot integrate (an RK4 step or a
+/// tolerance that is not finite and > 0, no evaluation budget).
+void check_method(const MethodOptions& options);
+
 /// Marks particles whose time or t_end lies outside the series (time_bounds) and plans the slabs
 /// from the earliest particle time to t_end. Throws InvalidArgument for fewer than two steps.
 SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, double t_end);

@@ -186,6 +186,7 @@ class CudaAdvector final : public BatchAdvector {
     const auto start = std::chrono::steady_clock::now();
     AdvectionStatistics stats;
     stats.particles = particles.size();
+    check_method(options);
     const std::vector<double>& times = source.times();
     const SlabPlan plan = plan_slabs(times, particles, t_end);
     const std::size_t n = particles.size();
