@@ -12,6 +12,7 @@
 #include <tuple>
 #include <utility>
 
+#include "orthofront/advect/advect_call.h"
 #include "orthofront/advect/dispatch.h"
 #include "orthofront/error.h"
 
@@ -164,10 +165,6 @@ SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, 
 
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 class CpuAdvector final : public BatchAdvector {
  public:
   std::string name() const override { return "cpu"; }
@@ -176,10 +173,8 @@ class CpuAdvector final : public BatchAdvector {
                              const MethodOptions& options) override {
     const auto start = std::chrono::steady_clock::now();
     AdvectionStatistics stats;
-    stats.particles = particles.size();
-    check_method(options);
     const std::vector<double>& times = source.times();
-    const SlabPlan plan = plan_slabs(times, particles, t_end);
+    const SlabPlan plan = begin_call(times, particles, t_end, options, stats);
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
     // The two steps of the current slab; moving on releases the one not needed any more.
     std::size_t held[2] = {SIZE_MAX, SIZE_MAX};

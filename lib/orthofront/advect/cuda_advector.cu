@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "orthofront/advect/advect_call.h"
 #include "orthofront/advect/dispatch.h"
 #include "orthofront/error.h"
 
@@ -105,9 +106,9 @@ struct DeviceParticles {
 template <int Axes, int Components, bool Rectilinear, Method M>
 __global__ void advance_kernel(SlabView slab, DeviceParticles p, std::size_t n, bool forward,
                                double t_end, MethodOptions options,
-                               unsigned long long* steps_taken) {
+                               unsigned long long* counters) {
   const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-  unsigned steps = 0;
+  unsigned steps = 0, evaluations = 0;
   if (i < n && p.status[i] == ParticleStatus::moving &&
       in_slab(slab.t0, slab.t1, forward, p.t[i], t_end)) {
     ParticleState s;
@@ -124,13 +125,19 @@ __global__ void advance_kernel(SlabView slab, DeviceParticles p, std::size_t n, 
     for (int d = 0; d < 3; ++d) p.x[d][i] = s.x[d];
     p.t[i] = s.t;
     p.h[i] = s.h;
+    evaluations = s.evaluations - p.evaluations[i];
     p.evaluations[i] = s.evaluations;
     p.status[i] = s.status;
     steps = s.steps;
   }
-  // One atomic per warp.
-  for (int offset = 16; offset > 0; offset /= 2) steps += __shfl_down_sync(0xffffffffu, steps, offset);
-  if ((threadIdx.x & 31) == 0 && steps) atomicAdd(steps_taken, static_cast<unsigned long long>(steps));
+  // counters[0] += accepted steps, counters[1] += evaluations: one atomic each per warp.
+  for (int offset = 16; offset > 0; offset /= 2) {
+    steps += __shfl_down_sync(0xffffffffu, steps, offset);
+    evaluations += __shfl_down_sync(0xffffffffu, evaluations, offset);
+  }
+  if ((threadIdx.x & 31) == 0 && steps) atomicAdd(counters, static_cast<unsigned long long>(steps));
+  if ((threadIdx.x & 31) == 0 && evaluations)
+    atomicAdd(counters + 1, static_cast<unsigned long long>(evaluations));
 }
 
 /// Launches the kernel for a grid kind (dispatch_grid's callee), one method per kernel.
@@ -141,7 +148,7 @@ struct Launch {
   bool forward;
   double t_end;
   MethodOptions options;
-  unsigned long long* steps_taken;
+  unsigned long long* counters;
   unsigned blocks, threads;
   cudaStream_t stream;
 
@@ -149,16 +156,12 @@ struct Launch {
   void operator()() const {
     if (options.method == Method::rk4)
       advance_kernel<Axes, Components, Rectilinear, Method::rk4><<<blocks, threads, 0, stream>>>(
-          slab, particles, n, forward, t_end, options, steps_taken);
+          slab, particles, n, forward, t_end, options, counters);
     else
       advance_kernel<Axes, Components, Rectilinear, Method::dopri5><<<blocks, threads, 0, stream>>>(
-          slab, particles, n, forward, t_end, options, steps_taken);
+          slab, particles, n, forward, t_end, options, counters);
   }
 };
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// Seconds of [a0, a1] that overlap [b0, b1].
 double overlap(double a0, double a1, double b0, double b1) {
@@ -185,10 +188,8 @@ class CudaAdvector final : public BatchAdvector {
                              const MethodOptions& options) override {
     const auto start = std::chrono::steady_clock::now();
     AdvectionStatistics stats;
-    stats.particles = particles.size();
-    check_method(options);
     const std::vector<double>& times = source.times();
-    const SlabPlan plan = plan_slabs(times, particles, t_end);
+    const SlabPlan plan = begin_call(times, particles, t_end, options, stats);
     const std::size_t n = particles.size();
     if (plan.slabs.empty() || n == 0) {
       stats.total_seconds = seconds_since(start);
@@ -197,7 +198,7 @@ class CudaAdvector final : public BatchAdvector {
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
     const GridView grid = device_grid(source, tables);
     const DeviceParticles view = upload_particles(particles);
-    check(cudaMemsetAsync(steps_taken_.get(), 0, sizeof(unsigned long long), compute_.get()),
+    check(cudaMemsetAsync(counters_.get(), 0, 2 * sizeof(unsigned long long), compute_.get()),
           "cudaMemset");
 
     // Steps in the order the slabs use them; slab j uses sequence[j] and sequence[j + 1].
@@ -284,7 +285,7 @@ class CudaAdvector final : public BatchAdvector {
       const std::size_t begin = mark(compute_.get());
       const unsigned threads = 128;
       const auto blocks = static_cast<unsigned>((n + threads - 1) / threads);
-      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options, steps_taken_.get(),
+      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options, counters_.get(),
                                   blocks, threads, compute_.get()});
       check(cudaGetLastError(), "kernel launch");
       kernel_marks.push_back({begin, mark(compute_.get())});
@@ -303,12 +304,11 @@ class CudaAdvector final : public BatchAdvector {
     check(cudaStreamSynchronize(compute_.get()), "advection kernels");
     check(cudaStreamSynchronize(upload_.get()), "uploads");
 
-    const std::vector<std::uint32_t> before = particles.evaluations;
     download_particles(particles);
-    unsigned long long steps = 0;
-    steps_taken_.download(&steps, 1);
-    stats.particle_steps = static_cast<std::size_t>(steps);
-    for (std::size_t i = 0; i < n; ++i) stats.evaluations += particles.evaluations[i] - before[i];
+    unsigned long long counts[2] = {0, 0};
+    counters_.download(counts, 2);
+    stats.particle_steps = static_cast<std::size_t>(counts[0]);
+    stats.evaluations = static_cast<std::size_t>(counts[1]);
 
     const auto at = [&](std::size_t m) {
       float ms = 0;
@@ -414,7 +414,7 @@ class CudaAdvector final : public BatchAdvector {
   DeviceArray<std::uint32_t> pe_;
   DeviceArray<ParticleStatus> ps_;
   std::size_t capacity_ = 0;
-  DeviceArray<unsigned long long> steps_taken_{1};
+  DeviceArray<unsigned long long> counters_{2};  // accepted steps, evaluations
 };
 
 }  // namespace
