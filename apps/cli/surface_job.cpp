@@ -9,16 +9,8 @@
 
 namespace orthofront::cli {
 
-SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
-  const auto field = open_field(job.field);
-  const SeedCurve curve = parse_seed(job.seed);
-  if (job.seed_count < 2)
-    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
-  if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
-    throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
-                          " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
-                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
-  const Seed<3> seed = make_seed(curve, job.seed_count);
+void check_stream_seed(const Field3& field_ref, const Seed<3>& seed, const SurfaceJob& job) {
+  const Field3* field = &field_ref;
   std::size_t inside = 0, no_data = 0, outside = 0, still = 0;
   Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero(), first_still = Vec3::Zero();
   for (double s : seed.parameters) {
@@ -58,6 +50,19 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
                           job.seed + "' inside its domain (" + vertices_inside +
                           " inside; e.g. at the point " + point(first_still) +
                           "): no flow to build a surface from");
+}
+
+SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
+  const auto field = open_field(job.field);
+  const SeedCurve curve = parse_seed(job.seed);
+  if (job.seed_count < 2)
+    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
+  if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
+    throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
+                          " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
+                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
+  const Seed<3> seed = make_seed(curve, job.seed_count);
+  check_stream_seed(*field, seed, job);
   if (!show_progress) return build_stream_surface(*field, seed, job.options);
   ProgressBar bar(job.field, job.options.max_vertices);
   return build_stream_surface(*field, seed, job.options,

@@ -3,6 +3,8 @@
 #include <string>
 
 #include "orthofront/engine/stream_surface.h"
+#include "orthofront/field/field.h"
+#include "orthofront/seed/seed.h"
 
 namespace orthofront::cli {
 
@@ -12,6 +14,10 @@ struct SurfaceJob {
   int seed_count = 20;
   StreamSurfaceOptions options;
 };
+
+/// Refuses a seed with fewer than 2 vertices inside `field`'s domain with data, or one where the
+/// flow stands still at every vertex (InvalidArgument naming job.seed and job.field).
+void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job);
 
 /// Opens the field, builds the seed and runs the engine (with a progress bar when asked).
 /// Throws InvalidArgument for a bad field, seed, or a seed outside the domain.

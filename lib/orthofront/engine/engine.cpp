@@ -7,7 +7,7 @@
 #include <numeric>
 #include <string>
 
-#include "orthofront/engine/stream_surface.h"
+#include "orthofront/engine/surface_builder.h"
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
 #include "orthofront/integrate/runge_kutta.h"
@@ -101,31 +101,15 @@ void for_range(std::size_t n, std::size_t threshold, const Body& body, std::size
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
-template <int N>
-struct FrontVertex {
-  Vec<N> x;       ///< current position on its stream line
-  Vec<N> anchor;  ///< position of the mesh vertex that stands for it
-  double s = 0;   ///< seed parameter (may exceed 1 on closed fronts: taken modulo 1)
-  double t = 0;   ///< integration time in v since the seed
-  std::int32_t mesh = -1;
-  std::int32_t origin = -1;  ///< index in the previous front (-1: inserted this step)
-};
-
-template <int N>
-struct Front {
-  std::vector<FrontVertex<N>> v;
-  bool closed = false;
-  std::int32_t id = 0;
-};
-
 enum class VertexState : unsigned char { ok, outside, no_data, zero_speed };
+
+}  // namespace
 
 template <int N>
 class Engine {
  public:
-  Engine(const Field<N>& field, const Seed<N>& seed, const StreamSurfaceOptions& options,
-         const ProgressCallback& progress, const FrontHook& before_step)
-      : field_(field), seed_(seed), opt_(options), progress_(progress), before_step_(before_step) {
+  Engine(const Field<N>& field, const Seed<N>& seed, const StreamSurfaceOptions& options)
+      : field_(field), seed_(seed), opt_(options) {
     validate();
     report_.options = opt_;
     tol_.absolute = opt_.tolerance * opt_.edge;
@@ -133,74 +117,101 @@ class Engine {
     h_star_ = -std::log(1.0 - opt_.damping);
   }
 
-  SurfaceResult run() {
-    const auto t_start = Clock::now();
-    std::vector<Front<N>> fronts = initial_fronts();
-    int step = 0;
-    StopReason reason = StopReason::none;
-    bool died_outside = false;
-    while (true) {
-      if (fronts.empty()) {
-        reason = died_outside ? StopReason::left_domain : StopReason::fronts_exhausted;
-        break;
-      }
-      if (step >= opt_.max_steps) {
-        reason = StopReason::steps;
-        break;
-      }
-      if (mesh_.vertex_count() >= opt_.max_vertices) {
-        reason = StopReason::vertex_budget;
-        break;
-      }
-      const double elapsed = seconds_since(t_start);
-      if (elapsed > opt_.time_budget_seconds) {
-        reason = StopReason::time_budget;
-        break;
-      }
-      if (before_step_) {
-        front_positions_.clear();
-        for (const auto& f : fronts)
-          for (const auto& fv : f.v)
-            for (int i = 0; i < N; ++i) front_positions_.push_back(fv.x[i]);
-        if (!before_step_(FrontSnapshot{step + 1, N, front_positions_})) {
-          reason = StopReason::cancelled;
-          report_.complete = false;
-          break;
-        }
-      }
-      if (progress_) {
-        Progress p{step, opt_.max_steps, mesh_.vertex_count(), fronts.size(), 0, elapsed};
-        for (const auto& f : fronts) p.front_vertices += f.v.size();
-        if (!progress_(p)) {
-          reason = StopReason::cancelled;
-          report_.complete = false;
-          break;
-        }
-      }
-      ++step;
-      step_record_ = StepRecord{};
-      step_record_.step = step;
-      step_record_.h_min = std::numeric_limits<double>::infinity();
-      ortho_sum_ = 0;
-      ortho_count_ = 0;
-      exits_this_step_ = 0;
-      std::vector<Front<N>> next;
-      std::vector<Front<N>> queue = std::move(fronts);
-      while (!queue.empty()) {
-        Front<N> f = std::move(queue.back());
-        queue.pop_back();
-        advance_front(std::move(f), step, queue, next);
-      }
-      fronts = std::move(next);
-      died_outside = fronts.empty() && exits_this_step_ > 0;
-      step_record_.fronts = fronts.size();
-      for (const auto& f : fronts) step_record_.front_vertices += f.v.size();
-      step_record_.orthogonality_mean = ortho_count_ ? ortho_sum_ / ortho_count_ : 0.0;
-      if (!std::isfinite(step_record_.h_min)) step_record_.h_min = 0;
-      report_.per_step.push_back(step_record_);
+  /// Lays the seed as the first front.
+  void begin() {
+    t_start_ = Clock::now();
+    fronts_ = initial_fronts();
+  }
+
+  /// Continues from a saved state.
+  void restore(EngineState<N> state) {
+    t_start_ = Clock::now();
+    fronts_ = std::move(state.fronts);
+    step_ = state.step;
+    died_outside_ = state.died_outside;
+    next_front_id_ = state.next_front_id;
+    elapsed_before_ = state.elapsed_seconds;
+    mesh_ = std::move(state.mesh);
+    report_ = std::move(state.report);
+    report_.options = opt_;
+  }
+
+  EngineState<N> state() const {
+    EngineState<N> s;
+    s.fronts = fronts_;
+    s.step = step_;
+    s.died_outside = died_outside_;
+    s.next_front_id = next_front_id_;
+    s.elapsed_seconds = elapsed();
+    s.mesh = mesh_;
+    s.report = report_;
+    return s;
+  }
+
+  double elapsed() const { return elapsed_before_ + seconds_since(t_start_); }
+
+  bool next() {
+    if (reason_ != StopReason::none) return false;
+    if (fronts_.empty())
+      reason_ = died_outside_ ? StopReason::left_domain : StopReason::fronts_exhausted;
+    else if (step_ >= opt_.max_steps)
+      reason_ = StopReason::steps;
+    else if (mesh_.vertex_count() >= opt_.max_vertices)
+      reason_ = StopReason::vertex_budget;
+    else if (elapsed() > opt_.time_budget_seconds)
+      reason_ = StopReason::time_budget;
+    return reason_ == StopReason::none;
+  }
+
+  void cancel() {
+    reason_ = StopReason::cancelled;
+    report_.complete = false;
+  }
+
+  FrontSnapshot front() {
+    front_positions_.clear();
+    for (const auto& f : fronts_)
+      for (const auto& fv : f.v)
+        for (int i = 0; i < N; ++i) front_positions_.push_back(fv.x[i]);
+    return FrontSnapshot{step_ + 1, N, front_positions_};
+  }
+
+  Progress progress() const {
+    Progress p{step_, opt_.max_steps, mesh_.vertex_count(), fronts_.size(), 0, elapsed()};
+    for (const auto& f : fronts_) p.front_vertices += f.v.size();
+    return p;
+  }
+
+  int steps_done() const { return step_; }
+
+  void step() {
+    ++step_;
+    step_record_ = StepRecord{};
+    step_record_.step = step_;
+    step_record_.h_min = std::numeric_limits<double>::infinity();
+    ortho_sum_ = 0;
+    ortho_count_ = 0;
+    exits_this_step_ = 0;
+    std::vector<Front<N>> next;
+    std::vector<Front<N>> queue = std::move(fronts_);
+    fronts_.clear();
+    while (!queue.empty()) {
+      Front<N> f = std::move(queue.back());
+      queue.pop_back();
+      advance_front(std::move(f), step_, queue, next);
     }
-    report_.stop_reason = reason;
-    report_.steps = step;
+    fronts_ = std::move(next);
+    died_outside_ = fronts_.empty() && exits_this_step_ > 0;
+    step_record_.fronts = fronts_.size();
+    for (const auto& f : fronts_) step_record_.front_vertices += f.v.size();
+    step_record_.orthogonality_mean = ortho_count_ ? ortho_sum_ / ortho_count_ : 0.0;
+    if (!std::isfinite(step_record_.h_min)) step_record_.h_min = 0;
+    report_.per_step.push_back(step_record_);
+  }
+
+  SurfaceResult finish() {
+    report_.stop_reason = reason_;
+    report_.steps = step_;
     report_.vertices = mesh_.vertex_count();
     report_.faces = mesh_.face_count();
     report_.quads = static_cast<std::size_t>(std::count_if(
@@ -210,7 +221,7 @@ class Engine {
       StageTimer timer(report_.times.quality);
       report_.quality = measure_quality(mesh_);
     }
-    report_.times.total = seconds_since(t_start);
+    report_.times.total = elapsed();
     return SurfaceResult{std::move(mesh_), std::move(report_)};
   }
 
@@ -1205,9 +1216,14 @@ class Engine {
   const Field<N>& field_;
   const Seed<N>& seed_;
   StreamSurfaceOptions opt_;
-  ProgressCallback progress_;
-  FrontHook before_step_;
   std::vector<double> front_positions_;
+  // Between steps (EngineState).
+  std::vector<Front<N>> fronts_;
+  int step_ = 0;
+  bool died_outside_ = false;
+  double elapsed_before_ = 0;
+  Clock::time_point t_start_ = Clock::now();
+  StopReason reason_ = StopReason::none;
   Tolerance tol_;
   double h_star_ = 0;
   Mesh mesh_;
@@ -1226,15 +1242,81 @@ class Engine {
   std::vector<VertexState> state_;
 };
 
-}  // namespace
+template <int N>
+SurfaceBuilder<N>::SurfaceBuilder(const Field<N>& field, const Seed<N>& seed,
+                                  const StreamSurfaceOptions& options)
+    : engine_(std::make_unique<Engine<N>>(field, seed, options)) {
+  engine_->begin();
+}
+
+template <int N>
+SurfaceBuilder<N>::SurfaceBuilder(const Field<N>& field, const Seed<N>& seed,
+                                  const StreamSurfaceOptions& options, EngineState<N> state)
+    : engine_(std::make_unique<Engine<N>>(field, seed, options)) {
+  engine_->restore(std::move(state));
+}
+
+template <int N>
+SurfaceBuilder<N>::~SurfaceBuilder() = default;
+template <int N>
+SurfaceBuilder<N>::SurfaceBuilder(SurfaceBuilder&&) noexcept = default;
+template <int N>
+SurfaceBuilder<N>& SurfaceBuilder<N>::operator=(SurfaceBuilder&&) noexcept = default;
+
+template <int N>
+bool SurfaceBuilder<N>::next() {
+  return engine_->next();
+}
+template <int N>
+void SurfaceBuilder<N>::step() {
+  engine_->step();
+}
+template <int N>
+void SurfaceBuilder<N>::cancel() {
+  engine_->cancel();
+}
+template <int N>
+FrontSnapshot SurfaceBuilder<N>::front() {
+  return engine_->front();
+}
+template <int N>
+Progress SurfaceBuilder<N>::progress() const {
+  return engine_->progress();
+}
+template <int N>
+int SurfaceBuilder<N>::steps_done() const {
+  return engine_->steps_done();
+}
+template <int N>
+EngineState<N> SurfaceBuilder<N>::state() const {
+  return engine_->state();
+}
+template <int N>
+SurfaceResult SurfaceBuilder<N>::finish() {
+  return engine_->finish();
+}
+
+template class SurfaceBuilder<3>;
+template class SurfaceBuilder<4>;
 
 template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
                                    const ProgressCallback& progress,
                                    const FrontHook& before_step) {
-  Engine<N> engine(field, seed, options, progress, before_step);
-  return engine.run();
+  SurfaceBuilder<N> builder(field, seed, options);
+  while (builder.next()) {
+    if (before_step && !before_step(builder.front())) {
+      builder.cancel();
+      break;
+    }
+    if (progress && !progress(builder.progress())) {
+      builder.cancel();
+      break;
+    }
+    builder.step();
+  }
+  return builder.finish();
 }
 
 template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,

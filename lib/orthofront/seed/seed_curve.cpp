@@ -57,6 +57,13 @@ SeedCurve SeedCurve::polyline(std::vector<Vec3> points, bool closed) {
   return c;
 }
 
+SeedCurve SeedCurve::translated(const Vec3& offset) const {
+  SeedCurve moved = *this;
+  moved.center_ += offset;
+  for (Vec3& p : moved.points_) p += offset;
+  return moved;
+}
+
 Vec3 SeedCurve::point(double s) const {
   if (closed_ || open_circle_) s -= std::floor(s);
   if (kind_ == Kind::circle) {

@@ -20,6 +20,8 @@ class SeedCurve {
   /// Polyline through `points` (at least two), closed when `closed` is true.
   static SeedCurve polyline(std::vector<Vec3> points, bool closed);
 
+  /// The same curve moved by `offset` (seed rakes and grids of a batch job).
+  SeedCurve translated(const Vec3& offset) const;
   /// Point at parameter s; closed curves take s modulo 1.
   Vec3 point(double s) const;
   bool closed() const { return closed_; }

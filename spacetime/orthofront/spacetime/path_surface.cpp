@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
+#include <variant>
 
 #include "orthofront/error.h"
 #include "orthofront/seed/seed.h"
+#include "orthofront/engine/surface_builder.h"
 #include "orthofront/spacetime/lifted_field.h"
 #include "orthofront/spacetime/streamed_field.h"
 
@@ -163,229 +166,381 @@ struct Run {
   const UnsteadyField& flow;
   StreamedField* streamed = nullptr;
   BrickCache* cache = nullptr;
+  bool shared_band = false;  ///< the driver holds one band for several surfaces
 };
 
-template <int N>
-PathSurfaceResult run_path(const Run& run, const SeedCurve& curve, int seed_count,
-                           const PathSurfaceOptions& o) {
-  const auto start = Clock::now();
-  if (seed_count < 2)
-    throw InvalidArgument("a path surface needs at least 2 seed vertices, got " +
-                          std::to_string(seed_count));
-  PathSurfaceResult result;
-  PathReport& pr = result.path;
-  pr.t0 = o.t0;
-  pr.t1 = o.t1;
-  pr.dimension = N - 1;
-  pr.streamed = run.streamed != nullptr;
-  TrackedFlow tracked(run.flow);
-  const Seed<3> seed3 = make_seed(curve, seed_count);
-  if (run.streamed) {
-    // The seed's own units, for the time scale and the engine's first evaluations (checks fit).
-    std::vector<FrontSample> seeds;
-    for (double s : seed3.parameters) seeds.push_back({seed3.point(s), o.t0, Vec3::Zero()});
-    BandPrediction around;
-    around.edge = o.engine.edge;
-    around.time_scale = 1e300;  // no reach in time: the steps around t0
-    around.pinned_steps = 1;
-    around.prefetch_steps = 0;
-    run.streamed->update_front(seeds, around);
-  }
-  check_seed(run.flow, seed3, o);
-  // Not a structured binding: lambdas below capture c (clang before 16 refuses bindings there).
-  const std::pair<double, std::string> scale = choose_time_scale(run.flow, seed3, o);
-  const double c = scale.first;
-  pr.time_scale = c;
-  pr.time_scale_source = scale.second;
-  const LiftedField<N> lifted(tracked, c, TimeRange{o.t0, o.t1});
-  Seed<N> seed;
-  seed.parameters = seed3.parameters;
-  seed.closed = seed3.closed;
-  seed.point = [curve, &lifted, t0 = o.t0](double s) { return lifted.lift(curve.point(s), t0); };
+}  // namespace
 
-  const double step_time = o.engine.edge / c;  // the most a vertex moves in time per step
-  const bool backwards = o.engine.negative_alpha == NegativeAlpha::keep;
-  std::pair<double, double> observed{o.t0, o.t0};
-  double wait_before = 0;
-  BandUpdate band;
-  BandPrediction prediction;
-  prediction.edge = o.engine.edge;
-  prediction.time_scale = c;
-  prediction.back_time = (backwards ? 1.0 : 0.25) * step_time;
-  std::vector<FrontSample> samples;
-  // The cache's own hook: before each front step, pin what the step samples around each vertex
-  // and prefetch what the following steps will reach.
-  FrontHook before_step;
-  CacheStatistics before;
-  if (run.streamed) {
-    before = run.cache->statistics();
-    wait_before = before.wait_seconds;
-    before_step = [&](const FrontSnapshot& f) -> bool {
-      samples.resize(f.positions.size() / N);
-      for (std::size_t i = 0; i < samples.size(); ++i) {
-        FrontSample& sample = samples[i];
-        sample.x.setZero();
-        for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i * N + static_cast<std::size_t>(a)];
-        sample.t = f.positions[i * N + N - 1] / c;
-        if (!run.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
+/// One path surface through the lifted field R^N (N = d + 1), one front step at a time.
+class PathSurfaceBuilder::Impl {
+ public:
+  virtual ~Impl() = default;
+  virtual bool next() = 0;
+  virtual void step() = 0;
+  virtual void cancel() = 0;
+  virtual double front_time() = 0;
+  virtual double step_time() const = 0;
+  virtual void front_samples(std::vector<FrontSample>& out) = 0;
+  virtual BandPrediction prediction() const = 0;
+  virtual int steps_done() const = 0;
+  virtual PathState state() const = 0;
+  virtual PathSurfaceResult finish() = 0;
+};
+
+namespace {
+
+template <int N>
+class PathRun final : public PathSurfaceBuilder::Impl {
+ public:
+  PathRun(const Run& run, const SeedCurve& curve, int seed_count, const PathSurfaceOptions& o,
+          const PathState* resume)
+      : run_(run), curve_(curve), o_(o), tracked_(run.flow), start_(Clock::now()) {
+    if (seed_count < 2)
+      throw InvalidArgument("a path surface needs at least 2 seed vertices, got " +
+                            std::to_string(seed_count));
+    PathReport& pr = result_.path;
+    pr.t0 = o.t0;
+    pr.t1 = o.t1;
+    pr.dimension = N - 1;
+    pr.streamed = run.streamed != nullptr;
+    const Seed<3> seed3 = make_seed(curve, seed_count);
+    if (resume) {
+      // The seed was checked and c chosen when the surface began: the state carries c, so a
+      // resumed surface needs no data at t0.
+      pr.time_scale = resume->time_scale;
+      pr.time_scale_source = resume->time_scale_source;
+      pr.band = resume->band;
+      pr.time_reached = resume->time_reached;
+      observed_ = {resume->observed_begin, resume->observed_end};
+    } else {
+      if (run.streamed) {
+        // The seed's own units, for the time scale and the engine's first evaluations.
+        std::vector<FrontSample> seeds;
+        for (double s : seed3.parameters) seeds.push_back({seed3.point(s), o.t0, Vec3::Zero()});
+        BandPrediction around;
+        around.edge = o.engine.edge;
+        around.time_scale = 1e300;  // no reach in time: the steps around t0
+        around.pinned_steps = 1;
+        around.prefetch_steps = 0;
+        run.streamed->update_front(seeds, around);
       }
-      try {
-        band = run.streamed->update_front(samples, prediction);
-      } catch (const std::exception& e) {
-        pr.complete = false;
-        pr.message = e.what();
-        return false;
-      }
-      return true;
+      check_seed(run.flow, seed3, o);
+      const std::pair<double, std::string> scale = choose_time_scale(run.flow, seed3, o);
+      pr.time_scale = scale.first;
+      pr.time_scale_source = scale.second;
+      observed_ = {o.t0, o.t0};
+    }
+    c_ = pr.time_scale;
+    lifted_ = std::make_unique<LiftedField<N>>(tracked_, c_, TimeRange{o.t0, o.t1});
+    seed_.parameters = seed3.parameters;
+    seed_.closed = seed3.closed;
+    seed_.point = [curve = curve_, lifted = lifted_.get(), t0 = o.t0](double s) {
+      return lifted->lift(curve.point(s), t0);
     };
+    const double step_time = o.engine.edge / c_;  // the most a vertex moves in time per step
+    const bool backwards = o.engine.negative_alpha == NegativeAlpha::keep;
+    prediction_.edge = o.engine.edge;
+    prediction_.time_scale = c_;
+    prediction_.back_time = (backwards ? 1.0 : 0.25) * step_time;
+    if (run.streamed) {
+      before_ = run.cache->statistics();
+      wait_before_ = before_.wait_seconds;
+    }
+    StreamSurfaceOptions engine = o.engine;
+    if (o.max_band > 0) {
+      engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
+      engine.max_lag = c_ * o.max_band;
+    }
+    if (resume) {
+      const auto* state = std::get_if<EngineState<N>>(&resume->engine);
+      if (!state)
+        throw InvalidArgument("path surface: the saved state is of a " +
+                              std::to_string(resume->engine.index() == 0 ? 2 : 3) +
+                              "D flow, this series is " + std::to_string(N - 1) + "D");
+      builder_ = std::make_unique<SurfaceBuilder<N>>(*lifted_, seed_, engine, *state);
+    } else {
+      builder_ = std::make_unique<SurfaceBuilder<N>>(*lifted_, seed_, engine);
+    }
   }
-  auto callback = [&](const Progress& p) -> bool {
-    const auto [lo, hi] = tracked.take();
-    if (lo <= hi) observed = {lo, hi};
-    if (p.step > 0) {
+
+  bool next() override {
+    if (!builder_->next()) return false;
+    // The cache's own hook: before each front step, pin what the step samples around each
+    // vertex and prefetch what the following steps will reach.
+    if (run_.streamed && !run_.shared_band && !hold_band(builder_->front())) {
+      builder_->cancel();
+      return false;
+    }
+    if (!after_step(builder_->progress())) {
+      builder_->cancel();
+      return false;
+    }
+    return true;
+  }
+
+  void step() override { builder_->step(); }
+  void cancel() override { builder_->cancel(); }
+  int steps_done() const override { return builder_->steps_done(); }
+
+  double front_time() override {
+    const FrontSnapshot f = builder_->front();
+    double t = kInf;
+    for (std::size_t i = N - 1; i < f.positions.size(); i += N) t = std::min(t, f.positions[i] / c_);
+    return t;
+  }
+
+  double step_time() const override { return o_.engine.edge / c_; }
+
+  void front_samples(std::vector<FrontSample>& out) override {
+    const FrontSnapshot f = builder_->front();
+    for (std::size_t i = 0; i + N <= f.positions.size(); i += N) {
+      FrontSample sample;
+      for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i + static_cast<std::size_t>(a)];
+      sample.t = f.positions[i + N - 1] / c_;
+      if (!run_.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
+      out.push_back(sample);
+    }
+  }
+
+  BandPrediction prediction() const override { return prediction_; }
+
+  PathState state() const override {
+    PathState s;
+    s.engine = builder_->state();
+    s.time_scale = c_;
+    s.time_scale_source = result_.path.time_scale_source;
+    s.band = result_.path.band;
+    s.time_reached = result_.path.time_reached;
+    s.observed_begin = observed_.first;
+    s.observed_end = observed_.second;
+    return s;
+  }
+
+  PathSurfaceResult finish() override {
+    PathReport& pr = result_.path;
+    SurfaceResult sr = builder_->finish();
+    // The last step has no progress call after it: record its band here.
+    if (const auto [lo, hi] = tracked_.take(); lo <= hi && sr.report.steps > 0 &&
+                                              pr.band.size() < static_cast<std::size_t>(sr.report.steps)) {
       BandRecord b;
-      b.step = p.step;
-      b.t_min = observed.first;
-      b.t_max = observed.second;
-      if (run.streamed) b.first_step = band.first_step, b.last_step = band.last_step;
-      if (run.streamed) b.pinned_units = band.pinned;
+      b.step = sr.report.steps;
+      b.t_min = lo;
+      b.t_max = hi;
+      if (run_.streamed) b.first_step = band_.first_step, b.last_step = band_.last_step;
+      if (run_.streamed) b.pinned_units = band_.pinned;
       pr.band.push_back(b);
     }
-    pr.time_reached = std::max(pr.time_reached, observed.second);
-    if (run.streamed) {
-      if (const std::string e = run.streamed->error(); !e.empty()) {
+    if (run_.streamed && pr.complete) {
+      if (const std::string e = run_.streamed->error(); !e.empty()) {
+        pr.complete = false;
+        pr.message = e;
+      }
+    }
+    // Spatial mesh with physical time; space-time positions for 2D flows.
+    result_.mesh = std::move(sr.mesh);
+    Mesh& mesh = result_.mesh;
+    for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+      if constexpr (N == 3) {
+        const double t = mesh.positions[i][2] / c_;
+        result_.spacetime_positions.emplace_back(mesh.positions[i][0], mesh.positions[i][1], t);
+        mesh.positions[i][2] = 0;
+        mesh.time[i] = t;
+      } else {
+        mesh.time[i] += o_.t0;
+      }
+      pr.time_reached = std::max(pr.time_reached, mesh.time[i]);
+    }
+    // Per step: the time range of the vertices it created.
+    for (BandRecord& b : pr.band) {
+      b.vertex_t_min = kInf;
+      b.vertex_t_max = -kInf;
+    }
+    for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+      const auto k = static_cast<std::size_t>(mesh.step[i]);
+      if (k >= 1 && k <= pr.band.size()) {
+        BandRecord& b = pr.band[k - 1];
+        b.vertex_t_min = std::min(b.vertex_t_min, mesh.time[i]);
+        b.vertex_t_max = std::max(b.vertex_t_max, mesh.time[i]);
+      }
+    }
+    for (BandRecord& b : pr.band)
+      if (b.vertex_t_min > b.vertex_t_max) b.vertex_t_min = b.vertex_t_max = b.t_max;
+    // A surface cut short by a budget before its path lines reached t1 did not do what was asked.
+    const StopReason reason = sr.report.stop_reason;
+    if (pr.complete && pr.time_reached < o_.t1 - 1e-6 * (o_.t1 - o_.t0) &&
+        (reason == StopReason::steps || reason == StopReason::vertex_budget ||
+         reason == StopReason::time_budget)) {
+      pr.complete = false;
+      const char* raise = reason == StopReason::steps           ? "--steps"
+                          : reason == StopReason::vertex_budget ? "--max-vertices"
+                                                                : "--time-budget";
+      pr.message = "stopped at t = " + std::to_string(pr.time_reached) + " of t1 = " +
+                   std::to_string(o_.t1) + ": " + to_string(reason) + " reached (raise " + raise +
+                   ")";
+    }
+    result_.report = std::move(sr.report);
+    if (!pr.complete) {
+      result_.report.complete = false;
+      if (!result_.report.message.empty()) result_.report.message += "; ";
+      result_.report.message += pr.message;
+    }
+    pr.total_seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+    if (run_.streamed) {
+      pr.cache = run_.cache->statistics();
+      pr.slow_evaluations = run_.streamed->slow_evaluations();
+      pr.wait_seconds = pr.cache.wait_seconds - wait_before_;
+      // This surface's share (a cache may have served an earlier surface first).
+      pr.io_seconds = pr.cache.read_seconds - before_.read_seconds;
+      pr.decode_seconds = pr.cache.decode_seconds - before_.decode_seconds;
+    }
+    pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
+    return std::move(result_);
+  }
+
+ private:
+  bool hold_band(const FrontSnapshot& f) {
+    PathReport& pr = result_.path;
+    samples_.resize(f.positions.size() / N);
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      FrontSample& sample = samples_[i];
+      sample.x.setZero();
+      for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i * N + static_cast<std::size_t>(a)];
+      sample.t = f.positions[i * N + N - 1] / c_;
+      if (!run_.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
+    }
+    try {
+      band_ = run_.streamed->update_front(samples_, prediction_);
+    } catch (const std::exception& e) {
+      pr.complete = false;
+      pr.message = e.what();
+      return false;
+    }
+    return true;
+  }
+
+  // After each front step (and before the first): the band it used, errors, the user's progress.
+  bool after_step(const Progress& p) {
+    PathReport& pr = result_.path;
+    const auto [lo, hi] = tracked_.take();
+    if (lo <= hi) observed_ = {lo, hi};
+    if (p.step > 0 && pr.band.size() < static_cast<std::size_t>(p.step)) {
+      BandRecord b;
+      b.step = p.step;
+      b.t_min = observed_.first;
+      b.t_max = observed_.second;
+      if (run_.streamed) b.first_step = band_.first_step, b.last_step = band_.last_step;
+      if (run_.streamed) b.pinned_units = band_.pinned;
+      pr.band.push_back(b);
+    }
+    pr.time_reached = std::max(pr.time_reached, observed_.second);
+    if (run_.streamed) {
+      if (const std::string e = run_.streamed->error(); !e.empty()) {
         pr.complete = false;
         pr.message = e;
         return false;
       }
     }
-    if (o.progress) {
+    if (o_.progress) {
       PathProgress pp;
       pp.engine = p;
-      pp.t0 = o.t0;
-      pp.t1 = o.t1;
+      pp.t0 = o_.t0;
+      pp.t1 = o_.t1;
       pp.time_reached = pr.time_reached;
-      pp.band_begin = observed.first;
-      pp.band_end = observed.second;
+      pp.band_begin = observed_.first;
+      pp.band_end = observed_.second;
       pp.streamed = pr.streamed;
-      if (run.streamed) {
-        pp.band_first = band.first_step;
-        pp.band_last = band.last_step;
-        pp.cache = run.cache->statistics();
+      if (run_.streamed) {
+        pp.band_first = band_.first_step;
+        pp.band_last = band_.last_step;
+        pp.cache = run_.cache->statistics();
       }
-      if (!o.progress(pp)) {
+      if (!o_.progress(pp)) {
         pr.complete = false;
         if (pr.message.empty()) pr.message = "cancelled";
         return false;
       }
     }
     return true;
-  };
-  StreamSurfaceOptions engine = o.engine;
-  if (o.max_band > 0) {
-    engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
-    engine.max_lag = c * o.max_band;
   }
-  SurfaceResult sr = build_stream_surface<N>(lifted, seed, engine, callback, before_step);
-  // The last step has no callback after it: record its band here.
-  if (const auto [lo, hi] = tracked.take(); lo <= hi && sr.report.steps > 0 &&
-                                            pr.band.size() < static_cast<std::size_t>(sr.report.steps)) {
-    BandRecord b;
-    b.step = sr.report.steps;
-    b.t_min = lo;
-    b.t_max = hi;
-    if (run.streamed) b.first_step = band.first_step, b.last_step = band.last_step;
-    if (run.streamed) b.pinned_units = band.pinned;
-    pr.band.push_back(b);
-  }
-  if (run.streamed && pr.complete) {
-    if (const std::string e = run.streamed->error(); !e.empty()) {
-      pr.complete = false;
-      pr.message = e;
-    }
-  }
-  // Spatial mesh with physical time; space-time positions for 2D flows.
-  result.mesh = std::move(sr.mesh);
-  Mesh& mesh = result.mesh;
-  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    if constexpr (N == 3) {
-      const double t = mesh.positions[i][2] / c;
-      result.spacetime_positions.emplace_back(mesh.positions[i][0], mesh.positions[i][1], t);
-      mesh.positions[i][2] = 0;
-      mesh.time[i] = t;
-    } else {
-      mesh.time[i] += o.t0;
-    }
-    pr.time_reached = std::max(pr.time_reached, mesh.time[i]);
-  }
-  // Per step: the time range of the vertices it created.
-  for (BandRecord& b : pr.band) {
-    b.vertex_t_min = kInf;
-    b.vertex_t_max = -kInf;
-  }
-  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    const auto k = static_cast<std::size_t>(mesh.step[i]);
-    if (k >= 1 && k <= pr.band.size()) {
-      BandRecord& b = pr.band[k - 1];
-      b.vertex_t_min = std::min(b.vertex_t_min, mesh.time[i]);
-      b.vertex_t_max = std::max(b.vertex_t_max, mesh.time[i]);
-    }
-  }
-  for (BandRecord& b : pr.band)
-    if (b.vertex_t_min > b.vertex_t_max) b.vertex_t_min = b.vertex_t_max = b.t_max;
-  // A surface cut short by a budget before its path lines reached t1 did not do what was asked.
-  const StopReason reason = sr.report.stop_reason;
-  if (pr.complete && pr.time_reached < o.t1 - 1e-6 * (o.t1 - o.t0) &&
-      (reason == StopReason::steps || reason == StopReason::vertex_budget ||
-       reason == StopReason::time_budget)) {
-    pr.complete = false;
-    const char* raise = reason == StopReason::steps           ? "--steps"
-                        : reason == StopReason::vertex_budget ? "--max-vertices"
-                                                              : "--time-budget";
-    pr.message = "stopped at t = " + std::to_string(pr.time_reached) + " of t1 = " +
-                 std::to_string(o.t1) + ": " + to_string(reason) + " reached (raise " + raise +
-                 ")";
-  }
-  result.report = std::move(sr.report);
-  if (!pr.complete) {
-    result.report.complete = false;
-    if (!result.report.message.empty()) result.report.message += "; ";
-    result.report.message += pr.message;
-  }
-  pr.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  if (run.streamed) {
-    pr.cache = run.cache->statistics();
-    pr.slow_evaluations = run.streamed->slow_evaluations();
-    pr.wait_seconds = pr.cache.wait_seconds - wait_before;
-    // This surface's share (a cache may have served an earlier surface first).
-    pr.io_seconds = pr.cache.read_seconds - before.read_seconds;
-    pr.decode_seconds = pr.cache.decode_seconds - before.decode_seconds;
-  }
-  pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
-  return result;
+
+  Run run_;
+  SeedCurve curve_;
+  PathSurfaceOptions o_;
+  TrackedFlow tracked_;
+  Clock::time_point start_;
+  PathSurfaceResult result_;
+  double c_ = 1;
+  std::unique_ptr<LiftedField<N>> lifted_;
+  Seed<N> seed_;
+  std::unique_ptr<SurfaceBuilder<N>> builder_;
+  std::pair<double, double> observed_{0, 0};
+  double wait_before_ = 0;
+  BandUpdate band_;
+  BandPrediction prediction_;
+  std::vector<FrontSample> samples_;
+  CacheStatistics before_;
+};
+
+std::unique_ptr<PathSurfaceBuilder::Impl> make_run(const Run& run, const SeedCurve& seed,
+                                                   int seed_count, const PathSurfaceOptions& options,
+                                                   const PathState* resume) {
+  check_options(options, run.flow);
+  if (run.flow.dimension() == 2)
+    return std::make_unique<PathRun<3>>(run, seed, seed_count, options, resume);
+  return std::make_unique<PathRun<4>>(run, seed, seed_count, options, resume);
 }
 
-PathSurfaceResult dispatch(const Run& run, const SeedCurve& seed, int seed_count,
-                           const PathSurfaceOptions& options) {
-  check_options(options, run.flow);
-  if (run.flow.dimension() == 2) return run_path<3>(run, seed, seed_count, options);
-  return run_path<4>(run, seed, seed_count, options);
+PathSurfaceResult drive(PathSurfaceBuilder& builder) {
+  while (builder.next()) builder.step();
+  return builder.finish();
 }
 
 }  // namespace
 
+PathSurfaceBuilder::PathSurfaceBuilder(const UnsteadyField& flow, const SeedCurve& seed,
+                                       int seed_count, const PathSurfaceOptions& options,
+                                       const PathState* resume)
+    : impl_(make_run(Run{flow}, seed, seed_count, options, resume)) {}
+
+PathSurfaceBuilder::PathSurfaceBuilder(BrickCache& cache, const SeedCurve& seed, int seed_count,
+                                       const PathSurfaceOptions& options, const PathState* resume)
+    : streamed_(std::make_unique<StreamedField>(cache)) {
+  PathSurfaceOptions o = options;
+  // Inserting on the true path line would integrate from the seed time, outside the band.
+  if (o.engine.insertion == Insertion::streamline) o.engine.insertion = Insertion::cubic;
+  impl_ = make_run(Run{*streamed_, streamed_.get(), &cache}, seed, seed_count, o, resume);
+}
+
+PathSurfaceBuilder::PathSurfaceBuilder(StreamedField& shared, BrickCache& cache,
+                                       const SeedCurve& seed, int seed_count,
+                                       const PathSurfaceOptions& options, const PathState* resume) {
+  PathSurfaceOptions o = options;
+  if (o.engine.insertion == Insertion::streamline) o.engine.insertion = Insertion::cubic;
+  impl_ = make_run(Run{shared, &shared, &cache, true}, seed, seed_count, o, resume);
+}
+
+PathSurfaceBuilder::~PathSurfaceBuilder() = default;
+bool PathSurfaceBuilder::next() { return impl_->next(); }
+void PathSurfaceBuilder::step() { impl_->step(); }
+void PathSurfaceBuilder::cancel() { impl_->cancel(); }
+double PathSurfaceBuilder::front_time() { return impl_->front_time(); }
+double PathSurfaceBuilder::step_time() const { return impl_->step_time(); }
+void PathSurfaceBuilder::front_samples(std::vector<FrontSample>& out) { impl_->front_samples(out); }
+BandPrediction PathSurfaceBuilder::prediction() const { return impl_->prediction(); }
+int PathSurfaceBuilder::steps_done() const { return impl_->steps_done(); }
+PathState PathSurfaceBuilder::state() const { return impl_->state(); }
+PathSurfaceResult PathSurfaceBuilder::finish() { return impl_->finish(); }
+
 PathSurfaceResult build_path_surface(const UnsteadyField& flow, const SeedCurve& seed,
                                      int seed_count, const PathSurfaceOptions& options) {
-  return dispatch(Run{flow}, seed, seed_count, options);
+  PathSurfaceBuilder builder(flow, seed, seed_count, options);
+  return drive(builder);
 }
 
 PathSurfaceResult build_path_surface(BrickCache& cache, const SeedCurve& seed, int seed_count,
                                      const PathSurfaceOptions& options) {
-  StreamedField field(cache);
-  PathSurfaceOptions o = options;
-  // Inserting on the true path line would integrate from the seed time, outside the band.
-  if (o.engine.insertion == Insertion::streamline) o.engine.insertion = Insertion::cubic;
-  return dispatch(Run{field, &field, &cache}, seed, seed_count, o);
+  PathSurfaceBuilder builder(cache, seed, seed_count, options);
+  return drive(builder);
 }
 
 }  // namespace orthofront::spacetime

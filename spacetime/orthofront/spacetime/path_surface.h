@@ -3,13 +3,16 @@
 /// built by the flow-orthogonal engine, from analytic fields or from time series streamed
 /// through the space-time BrickCache.
 #include <functional>
+#include <memory>
 #include <string>
+#include <variant>
 #include <vector>
 
-#include "orthofront/engine/stream_surface.h"
+#include "orthofront/engine/surface_builder.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/seed/seed_curve.h"
 #include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/streamed_field.h"
 
 namespace orthofront::spacetime {
 
@@ -74,6 +77,63 @@ struct PathSurfaceResult {
   std::vector<Vec3> spacetime_positions;  ///< 2D flows: (x, y, t) per vertex; empty for 3D
   SurfaceReport report;
   PathReport path;
+};
+
+/// What a path surface carries between front steps: the engine's state in the lifted space
+/// (R^3 for 2D flows, R^4 for 3D flows) and the driver's own records. A surface continued from it
+/// builds the same mesh, bit for bit, as one that never stopped.
+struct PathState {
+  std::variant<EngineState<3>, EngineState<4>> engine;
+  double time_scale = 0;           ///< c, chosen when the surface began
+  std::string time_scale_source;
+  std::vector<BandRecord> band;
+  double time_reached = 0;
+  double observed_begin = 0, observed_end = 0;  ///< time range the last step evaluated
+};
+
+/// A path surface one front step at a time, for drivers that interleave several surfaces over
+/// one cache or save checkpoints. The loop is `while (b.next()) b.step(); b.finish();`.
+class PathSurfaceBuilder {
+ public:
+  /// From an in-memory field, or a series read through `cache` (which must outlive the builder).
+  /// `resume`: continue from a saved state instead of the seed (same flow, seed and options).
+  /// Throws what build_path_surface throws.
+  PathSurfaceBuilder(const UnsteadyField& flow, const SeedCurve& seed, int seed_count,
+                     const PathSurfaceOptions& options, const PathState* resume = nullptr);
+  PathSurfaceBuilder(BrickCache& cache, const SeedCurve& seed, int seed_count,
+                     const PathSurfaceOptions& options, const PathState* resume = nullptr);
+  /// One of several surfaces that read `shared` (over `cache`) in one pass: the driver pins the
+  /// band of all of them (front_samples, prediction) before their steps; next() pins nothing.
+  PathSurfaceBuilder(StreamedField& shared, BrickCache& cache, const SeedCurve& seed,
+                     int seed_count, const PathSurfaceOptions& options,
+                     const PathState* resume = nullptr);
+  ~PathSurfaceBuilder();
+  PathSurfaceBuilder(const PathSurfaceBuilder&) = delete;
+  PathSurfaceBuilder& operator=(const PathSurfaceBuilder&) = delete;
+
+  /// Checks the stop conditions; when another step is due, pins its band (streamed) and
+  /// records the last step's. False: the surface is done (or stopped by an error or a cancel).
+  bool next();
+  void step();
+  void cancel();
+  /// Earliest time on the front (a shared pass steps the surface that lags most first).
+  double front_time();
+  /// The most a front step advances a vertex in time (ℓ / c).
+  double step_time() const;
+  /// Appends the front's vertices as the band sees them (streamed builders).
+  void front_samples(std::vector<FrontSample>& out);
+  /// How far ahead of this surface's front its band must reach.
+  BandPrediction prediction() const;
+  int steps_done() const;
+  /// The state for a checkpoint: take it after next() returned true, before step().
+  PathState state() const;
+  PathSurfaceResult finish();
+
+  class Impl;
+
+ private:
+  std::unique_ptr<StreamedField> streamed_;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Path surface of an analytic (or any in-memory) unsteady field from `seed` sampled with

@@ -1,0 +1,200 @@
+#include "cli/batch_checkpoint.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/state_codec.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+constexpr std::uint32_t kFormat = 1;
+constexpr char kMagic[] = "orthofront-checkpoint\n";
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw io::IoError("cannot read checkpoint file '" + path.string() + "'");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+void write_path_state(io::ByteWriter& out, const spacetime::PathState& state) {
+  out.u8(static_cast<std::uint8_t>(state.engine.index()));
+  if (const auto* e3 = std::get_if<EngineState<3>>(&state.engine))
+    io::write_engine_state(out, *e3);
+  else
+    io::write_engine_state(out, std::get<EngineState<4>>(state.engine));
+  out.f64(state.time_scale);
+  out.text(state.time_scale_source);
+  out.u64(state.band.size());
+  for (const spacetime::BandRecord& b : state.band) {
+    out.i32(b.step);
+    for (double v : {b.t_min, b.t_max, b.vertex_t_min, b.vertex_t_max}) out.f64(v);
+    for (std::size_t v : {b.first_step, b.last_step, b.pinned_units}) out.u64(v);
+  }
+  out.f64(state.time_reached);
+  out.f64(state.observed_begin);
+  out.f64(state.observed_end);
+}
+
+spacetime::PathState read_path_state(io::ByteReader& in) {
+  spacetime::PathState state;
+  const std::uint8_t kind = in.u8();
+  if (kind == 0)
+    state.engine = io::read_engine_state<3>(in);
+  else if (kind == 1)
+    state.engine = io::read_engine_state<4>(in);
+  else
+    in.fail("a path state of kind " + std::to_string(kind));
+  state.time_scale = in.f64();
+  state.time_scale_source = in.text();
+  state.band.resize(in.count(4 + 4 * 8 + 3 * 8));
+  for (spacetime::BandRecord& b : state.band) {
+    b.step = in.i32();
+    for (double* v : {&b.t_min, &b.t_max, &b.vertex_t_min, &b.vertex_t_max}) *v = in.f64();
+    for (std::size_t* v : {&b.first_step, &b.last_step, &b.pinned_units}) *v = in.u64();
+  }
+  state.time_reached = in.f64();
+  state.observed_begin = in.f64();
+  state.observed_end = in.f64();
+  if (!(state.time_scale > 0)) in.fail("time scale " + std::to_string(state.time_scale));
+  return state;
+}
+
+std::string digest_text(std::uint64_t digest) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(digest));
+  return text;
+}
+
+}  // namespace
+
+std::string checkpoint_version() {
+  return std::string(ORTHOFRONT_VERSION) + "/state-" + std::to_string(kFormat);
+}
+
+CheckpointFolder::CheckpointFolder(std::filesystem::path folder, std::uint64_t job_digest)
+    : folder_(std::move(folder)), digest_(job_digest) {}
+
+std::filesystem::path CheckpointFolder::file(const std::string& surface, const char* ext) const {
+  return folder_ / (surface + ext);
+}
+
+bool CheckpointFolder::exists() const { return std::filesystem::exists(folder_ / "job.id"); }
+
+void CheckpointFolder::start() {
+  std::error_code ec;
+  std::filesystem::create_directories(folder_, ec);
+  if (ec)
+    throw io::IoError("cannot create the checkpoint folder '" + folder_.string() + "': " +
+                      ec.message());
+  const nlohmann::json id = {{"version", checkpoint_version()}, {"job", digest_text(digest_)}};
+  io::write_atomically(folder_ / "job.id", [&](std::ofstream& out) { out << id.dump() << '\n'; });
+}
+
+void CheckpointFolder::check_owner() const {
+  const std::filesystem::path path = folder_ / "job.id";
+  nlohmann::json id;
+  try {
+    id = nlohmann::json::parse(read_file(path));
+  } catch (const nlohmann::json::exception&) {
+    throw io::FormatError("corrupt checkpoint '" + path.string() + "': not the JSON it writes");
+  }
+  const std::string version = id.value("version", std::string("?"));
+  const std::string job = id.value("job", std::string("?"));
+  if (version != checkpoint_version())
+    throw InvalidArgument("the checkpoint in '" + folder_.string() + "' was written by version " +
+                          version + ", this is " + checkpoint_version() +
+                          "; it cannot be resumed (remove the folder to start again)");
+  if (job != digest_text(digest_))
+    throw InvalidArgument("the checkpoint in '" + folder_.string() + "' belongs to another job " +
+                          "(digest " + job + ", this job file's is " + digest_text(digest_) +
+                          "); resume with the job file that wrote it, or remove the folder");
+}
+
+void CheckpointFolder::clear() {
+  std::error_code ec;
+  std::filesystem::remove_all(folder_, ec);
+  if (ec)
+    throw io::IoError("cannot remove the old checkpoint folder '" + folder_.string() + "': " +
+                      ec.message());
+}
+
+void CheckpointFolder::save_state(const std::string& surface, const SurfaceState& state) const {
+  io::ByteWriter out;
+  out.text(checkpoint_version());
+  out.u64(digest_);
+  out.text(surface);
+  out.u8(static_cast<std::uint8_t>(state.index()));
+  if (const auto* stream = std::get_if<EngineState<3>>(&state))
+    io::write_engine_state(out, *stream);
+  else
+    write_path_state(out, std::get<spacetime::PathState>(state));
+  io::write_atomically(file(surface, ".state"), [&](std::ofstream& f) {
+    f.write(kMagic, sizeof kMagic - 1);
+    f.write(out.bytes().data(), static_cast<std::streamsize>(out.bytes().size()));
+  });
+}
+
+std::optional<SurfaceState> CheckpointFolder::load_state(const std::string& surface) const {
+  const std::filesystem::path path = file(surface, ".state");
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  const std::string bytes = read_file(path);
+  const std::string_view magic(kMagic, sizeof kMagic - 1);
+  if (bytes.compare(0, magic.size(), magic) != 0)
+    throw io::FormatError("'" + path.string() + "' is not an orthofront checkpoint");
+  io::ByteReader in(std::string_view(bytes).substr(magic.size()), path.string());
+  const std::string version = in.text();
+  if (version != checkpoint_version())
+    throw InvalidArgument("checkpoint '" + path.string() + "' was written by version " + version +
+                          ", this is " + checkpoint_version());
+  if (in.u64() != digest_)
+    throw InvalidArgument("checkpoint '" + path.string() + "' belongs to another job file");
+  if (const std::string name = in.text(); name != surface)
+    in.fail("it names surface '" + name + "', not '" + surface + "'");
+  const std::uint8_t kind = in.u8();
+  SurfaceState state;
+  if (kind == 0)
+    state = io::read_engine_state<3>(in);
+  else if (kind == 1)
+    state = read_path_state(in);
+  else
+    in.fail("a surface state of kind " + std::to_string(kind));
+  if (in.left() != 0) in.fail(std::to_string(in.left()) + " bytes after the state");
+  return state;
+}
+
+void CheckpointFolder::remove_state(const std::string& surface) const {
+  std::error_code ec;
+  std::filesystem::remove(file(surface, ".state"), ec);
+}
+
+void CheckpointFolder::save_done(const std::string& surface, const nlohmann::json& row) const {
+  nlohmann::json record = {{"version", checkpoint_version()}, {"job", digest_text(digest_)},
+                           {"row", row}};
+  io::write_atomically(file(surface, ".done"),
+                       [&](std::ofstream& out) { out << record.dump() << '\n'; });
+}
+
+std::optional<nlohmann::json> CheckpointFolder::load_done(const std::string& surface) const {
+  const std::filesystem::path path = file(surface, ".done");
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  nlohmann::json record;
+  try {
+    record = nlohmann::json::parse(read_file(path));
+  } catch (const nlohmann::json::exception&) {
+    throw io::FormatError("corrupt checkpoint '" + path.string() + "': not the JSON it writes");
+  }
+  if (record.value("version", std::string()) != checkpoint_version() ||
+      record.value("job", std::string()) != digest_text(digest_) || !record.contains("row"))
+    throw InvalidArgument("checkpoint '" + path.string() +
+                          "' belongs to another job file or version");
+  return record["row"];
+}
+
+}  // namespace orthofront::cli

@@ -1,0 +1,536 @@
+// `orthofront batch JOB`: many surfaces from one job file. Surfaces over the same data advance
+// together (the one that lags in time steps first), so a streamed series is read once for all of
+// them through one cache; unfinished surfaces are checkpointed and a killed job resumes.
+#include <unistd.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "cli/batch_checkpoint.h"
+#include "cli/batch_job.h"
+#include "cli/commands.h"
+#include "cli/field_source.h"
+#include "cli/process_memory.h"
+#include "cli/progress_bar.h"
+#include "cli/seed_spec.h"
+#include "cli/surface_job.h"
+#include "orthofront/error.h"
+#include "orthofront/io/atomic_file.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/report_json.h"
+#include "orthofront/spacetime/path_command_json.h"
+#include "orthofront/spacetime/path_surface.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct BatchArgs {
+  std::string job, out;
+  bool resume = false, restart = false, quiet = false;
+  double checkpoint_every = -1;  // < 0: the job file's
+  int fail_after_steps = -1;     // tests: stop as if killed after this many front steps
+};
+
+std::filesystem::path output_path(const BatchJob& job, const SurfaceSpec& s) {
+  return job.out / (s.name + "." + s.format);
+}
+
+/// One surface of the run, between front steps.
+class SurfaceTask {
+ public:
+  explicit SurfaceTask(const SurfaceSpec& spec) : spec_(spec) {}
+  virtual ~SurfaceTask() = default;
+  SurfaceTask(const SurfaceTask&) = delete;
+  SurfaceTask& operator=(const SurfaceTask&) = delete;
+
+  const SurfaceSpec& spec() const { return spec_; }
+  bool ready() const { return ready_; }
+  /// Where the surface stands in the pass: the earliest time on its front (path surfaces) or
+  /// its steps (stream surfaces). A round steps the surfaces within step_span() of the least.
+  virtual double lag_key() = 0;
+  virtual double step_span() const = 0;
+  /// Streamed path surfaces of one pass: the front as the shared band sees it.
+  virtual void front_samples(std::vector<spacetime::FrontSample>&) {}
+  virtual spacetime::BandPrediction prediction() const { return {}; }
+  /// One front step, then the check whether another is due.
+  virtual void step() = 0;
+  virtual SurfaceState state() const = 0;
+  /// The finished surface: its mesh and report (JSON, with the summary fields).
+  virtual std::pair<Mesh, json> finish() = 0;
+
+ protected:
+  SurfaceSpec spec_;
+  bool ready_ = false;
+};
+
+class StreamTask final : public SurfaceTask {
+ public:
+  StreamTask(const SurfaceSpec& spec, const Field3& field, const EngineState<3>* resume)
+      : SurfaceTask(spec) {
+    const SeedCurve curve = parse_seed(spec.seed).translated(spec.offset);
+    seed_ = make_seed(curve, spec.seed_count);
+    SurfaceJob job{spec.field, spec.seed, spec.seed_count, spec.options};
+    if (!resume) check_stream_seed(field, seed_, job);
+    builder_ = resume ? std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options, *resume)
+                      : std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options);
+    ready_ = builder_->next();
+  }
+  double lag_key() override { return builder_->steps_done(); }
+  double step_span() const override { return 0.5; }
+  void step() override {
+    builder_->step();
+    ready_ = builder_->next();
+  }
+  SurfaceState state() const override { return builder_->state(); }
+  std::pair<Mesh, json> finish() override {
+    SurfaceResult r = builder_->finish();
+    json report = io::to_json(r.report);
+    report["complete"] = r.report.complete && r.report.stop_reason != StopReason::vertex_budget;
+    return {std::move(r.mesh), std::move(report)};
+  }
+
+ private:
+  Seed<3> seed_;
+  std::unique_ptr<SurfaceBuilder<3>> builder_;
+};
+
+class PathTask final : public SurfaceTask {
+ public:
+  /// From an in-memory flow, or one of the surfaces of a pass over `shared`.
+  PathTask(const SurfaceSpec& spec, const UnsteadyField& flow, const spacetime::PathState* resume)
+      : SurfaceTask(spec) {
+    builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(flow, seed(), spec.seed_count,
+                                                               options(), resume);
+    ready_ = builder_->next();
+  }
+  PathTask(const SurfaceSpec& spec, spacetime::StreamedField& shared,
+           spacetime::BrickCache& cache, const spacetime::PathState* resume)
+      : SurfaceTask(spec) {
+    builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(shared, cache, seed(),
+                                                               spec.seed_count, options(), resume);
+    ready_ = builder_->next();
+  }
+  double lag_key() override { return builder_->front_time(); }
+  double step_span() const override { return builder_->step_time(); }
+  void front_samples(std::vector<spacetime::FrontSample>& out) override {
+    builder_->front_samples(out);
+  }
+  spacetime::BandPrediction prediction() const override { return builder_->prediction(); }
+  void step() override {
+    builder_->step();
+    ready_ = builder_->next();
+  }
+  SurfaceState state() const override { return builder_->state(); }
+  std::pair<Mesh, json> finish() override {
+    spacetime::PathSurfaceResult r = builder_->finish();
+    json report = io::to_json(r.report);
+    report["path"] = spacetime::to_json(r.path);
+    report["complete"] = r.report.complete;
+    return {std::move(r.mesh), std::move(report)};
+  }
+
+ private:
+  SeedCurve seed() const { return parse_seed(spec_.seed).translated(spec_.offset); }
+  spacetime::PathSurfaceOptions options() const {
+    spacetime::PathSurfaceOptions o;
+    o.engine = spec_.options;
+    o.t0 = spec_.t0;
+    o.t1 = spec_.t1;
+    o.time_scale = spec_.time_scale;
+    o.max_band = spec_.max_band;
+    o.seed_name = spec_.seed;
+    o.field_name = spec_.field;
+    return o;
+  }
+  std::unique_ptr<spacetime::PathSurfaceBuilder> builder_;
+};
+
+/// Surfaces that read the same data: one steady field, one analytic flow, or one series through
+/// one cache.
+struct Group {
+  std::string field;
+  SurfaceKind kind = SurfaceKind::path;
+  bool streamed = false;
+  std::vector<std::size_t> members;  // indices into job.surfaces
+};
+
+std::vector<Group> group_surfaces(const BatchJob& job) {
+  std::vector<Group> groups;
+  std::map<std::pair<std::string, int>, std::size_t> index;
+  for (std::size_t i = 0; i < job.surfaces.size(); ++i) {
+    const SurfaceSpec& s = job.surfaces[i];
+    const auto key = std::make_pair(s.field, static_cast<int>(s.kind));
+    auto [it, added] = index.emplace(key, groups.size());
+    if (added) {
+      Group g;
+      g.field = s.field;
+      g.kind = s.kind;
+      g.streamed = s.kind == SurfaceKind::path && !is_unsteady_field_name(s.field);
+      groups.push_back(std::move(g));
+    }
+    groups[it->second].members.push_back(i);
+  }
+  return groups;
+}
+
+json summary_row(const SurfaceSpec& s, const std::string& status, const json& report,
+                 double seconds, const std::string& message, const std::string& output) {
+  json row = {{"name", s.name}, {"kind", to_string(s.kind)}, {"status", status},
+              {"seconds", seconds}, {"message", message}, {"output", output}};
+  if (!report.is_null()) {
+    if (report.contains("counts")) {
+      row["vertices"] = report["counts"].value("vertices", 0);
+      row["faces"] = report["counts"].value("faces", 0);
+    }
+    row["steps"] = report.value("steps", 0);
+    row["stop_reason"] = report.value("stop_reason", std::string());
+    if (report.contains("path")) row["time_reached"] = report["path"].value("time_reached", 0.0);
+    if (report.contains("quality")) {
+      const json& q = report["quality"];
+      row["quad_share"] = q.value("quad_share", 0.0);
+      row["quad_angles_within_10"] = q.value("quad_angles_within_10deg", 0.0);
+      row["folds"] = q.value("folds", 0);
+      row["degenerate_faces"] = q.value("degenerate_faces", 0);
+    }
+  }
+  return row;
+}
+
+std::string summary_table(const json& rows) {
+  std::string out;
+  char line[512];
+  std::snprintf(line, sizeof line, "%-24s %-6s %-10s %9s %9s %6s %7s %6s %5s %8s\n", "surface",
+                "kind", "status", "vertices", "faces", "steps", "quads%", "±10°%", "folds",
+                "seconds");
+  out += line;
+  for (const json& r : rows) {
+    std::snprintf(line, sizeof line, "%-24s %-6s %-10s %9lld %9lld %6lld %7.1f %6.1f %5lld %8.2f\n",
+                  r.value("name", std::string()).c_str(), r.value("kind", std::string()).c_str(),
+                  r.value("status", std::string()).c_str(), r.value("vertices", 0LL),
+                  r.value("faces", 0LL), r.value("steps", 0LL), 100.0 * r.value("quad_share", 0.0),
+                  100.0 * r.value("quad_angles_within_10", 0.0), r.value("folds", 0LL),
+                  r.value("seconds", 0.0));
+    out += line;
+    if (const std::string m = r.value("message", std::string()); !m.empty())
+      out += "    " + m + "\n";
+  }
+  return out;
+}
+
+class BatchRun {
+ public:
+  BatchRun(BatchJob job, const BatchArgs& args)
+      : job_(std::move(job)), args_(args), checkpoints_(job_.out / ".checkpoint", job_.digest) {
+    if (args.checkpoint_every >= 0) job_.checkpoint_every = args.checkpoint_every;
+    rows_.resize(job_.surfaces.size());
+  }
+
+  void run() {
+    const auto start = Clock::now();
+    std::error_code ec;
+    std::filesystem::create_directories(job_.out, ec);
+    if (ec)
+      throw io::IoError("cannot create the output folder '" + job_.out.string() + "': " +
+                        ec.message());
+    const io::OutputLock lock(job_.out / "summary.json");
+    prepare_checkpoints();
+    last_checkpoint_ = Clock::now();
+    for (const Group& g : group_surfaces(job_)) run_group(g);
+    // Every surface has its row: the job is finished, the checkpoint holds only .done records.
+    checkpoints_.start();
+    json summary = {{"job", job_.file.string()},
+                    {"name", job_.name},
+                    {"surfaces", rows_},
+                    {"seconds", seconds_since(start)},
+                    {"resumed", args_.resume},
+                    {"passes", passes_},
+                    {"peak_rss_bytes", peak_rss_bytes()}};
+    std::size_t failed = 0, incomplete = 0;
+    for (const json& r : rows_) {
+      failed += r["status"] == "failed";
+      incomplete += r["status"] == "incomplete";
+    }
+    summary["failed"] = failed;
+    summary["incomplete"] = incomplete;
+    const std::string table = summary_table(rows_);
+    io::AtomicFileSet files;
+    io::write_json(summary, job_.out / "summary.json", files);
+    files.add(job_.out / "summary.txt", [&](std::ofstream& out) { out << table; });
+    files.commit();
+    if (!args_.quiet) {
+      std::printf("%s", table.c_str());
+      std::printf("Batch %s: %zu surfaces, %zu failed, %zu incomplete, %.2f s. Wrote %s and %s\n",
+                  job_.file.string().c_str(), rows_.size(), failed, incomplete,
+                  seconds_since(start), (job_.out / "summary.json").string().c_str(),
+                  (job_.out / "summary.txt").string().c_str());
+    }
+    if (failed > 0)
+      throw Error(std::to_string(failed) + " of " + std::to_string(rows_.size()) +
+                  " surfaces failed (see " + (job_.out / "summary.txt").string() + ")");
+  }
+
+ private:
+  void prepare_checkpoints() {
+    if (checkpoints_.exists()) {
+      if (args_.resume) {
+        checkpoints_.check_owner();
+        return;
+      }
+      if (!args_.restart)
+        throw InvalidArgument("the output folder '" + job_.out.string() +
+                              "' holds the checkpoint of an earlier run: continue it with "
+                              "--resume, or start afresh with --restart");
+      checkpoints_.clear();
+    } else if (args_.resume && !args_.quiet) {
+      std::printf("No checkpoint in '%s': starting the job from the beginning.\n",
+                  checkpoints_.folder().string().c_str());
+    }
+    checkpoints_.start();
+  }
+
+  void run_group(const Group& g) {
+    std::vector<std::unique_ptr<SurfaceTask>> tasks;
+    // What the group reads, opened once for all of its surfaces.
+    std::unique_ptr<Field3> steady;
+    std::unique_ptr<UnsteadyField> flow;
+    std::unique_ptr<io::TimeSeries> series;
+    std::unique_ptr<spacetime::BrickCache> cache;
+    std::unique_ptr<spacetime::StreamedField> shared;
+    std::vector<std::size_t> todo;
+    for (std::size_t i : g.members) {
+      const SurfaceSpec& s = job_.surfaces[i];
+      if (auto done = checkpoints_.load_done(s.name);
+          done && std::filesystem::exists(output_path(job_, s))) {
+        rows_[i] = *done;
+        rows_[i]["resumed"] = "finished before";
+        continue;
+      }
+      todo.push_back(i);
+    }
+    if (todo.empty()) return;
+    try {
+      if (g.kind == SurfaceKind::stream) {
+        steady = open_field(g.field);
+      } else if (!g.streamed) {
+        flow = make_unsteady_field(g.field);
+      } else {
+        series = open_time_series(g.field, "path surfaces");
+        spacetime::CacheOptions co;
+        co.budget_bytes = job_.cache_budget.empty()
+                              ? cache_budget_for(available_memory_bytes())
+                              : spacetime::parse_bytes(job_.cache_budget);
+        cache = std::make_unique<spacetime::BrickCache>(*series, co);
+        shared = std::make_unique<spacetime::StreamedField>(*cache);
+      }
+    } catch (const std::exception& e) {
+      for (std::size_t i : todo)
+        rows_[i] = summary_row(job_.surfaces[i], "failed", json(), 0, e.what(), "");
+      return;
+    }
+    std::vector<std::size_t> index;  // job index of each task
+    for (std::size_t i : todo) {
+      const SurfaceSpec& s = job_.surfaces[i];
+      try {
+        std::optional<SurfaceState> saved = checkpoints_.load_state(s.name);
+        std::unique_ptr<SurfaceTask> task;
+        if (s.kind == SurfaceKind::stream) {
+          const auto* resume = saved ? std::get_if<EngineState<3>>(&*saved) : nullptr;
+          if (saved && !resume) throw InvalidArgument("checkpoint of '" + s.name + "' is not a stream surface's");
+          task = std::make_unique<StreamTask>(s, *steady, resume);
+        } else {
+          const auto* resume = saved ? std::get_if<spacetime::PathState>(&*saved) : nullptr;
+          if (saved && !resume) throw InvalidArgument("checkpoint of '" + s.name + "' is not a path surface's");
+          if (shared)
+            task = std::make_unique<PathTask>(s, *shared, *cache, resume);
+          else
+            task = std::make_unique<PathTask>(s, *flow, resume);
+        }
+        tasks.push_back(std::move(task));
+        index.push_back(i);
+      } catch (const std::exception& e) {
+        fail(s, i, e.what());
+      }
+    }
+    // The pass, in rounds: the surfaces whose fronts lie within one front step of the one
+    // furthest behind step once (in parallel), the others wait; streamed surfaces share one band,
+    // pinned for all of them before each round, so each brick is read once for the whole group.
+    std::vector<char> finished(tasks.size(), 0);
+    std::vector<std::size_t> round;
+    std::vector<spacetime::FrontSample> samples;
+    while (true) {
+      round.clear();
+      double least = 0, span = 0;
+      bool any = false;
+      for (std::size_t k = 0; k < tasks.size(); ++k) {
+        if (finished[k]) continue;
+        if (!tasks[k]->ready()) {  // stopped: write it now
+          complete(*tasks[k], index[k]);
+          finished[k] = 1;
+          continue;
+        }
+        const double key = tasks[k]->lag_key();
+        if (!any || key < least) least = key;
+        span = std::max(span, tasks[k]->step_span());
+        any = true;
+      }
+      if (!any) break;
+      maybe_checkpoint(tasks, finished);
+      for (std::size_t k = 0; k < tasks.size(); ++k)
+        if (!finished[k] && tasks[k]->lag_key() <= least + span) round.push_back(k);
+      if (shared) {
+        samples.clear();
+        spacetime::BandPrediction prediction;
+        prediction.time_scale = std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < tasks.size(); ++k) {
+          if (finished[k]) continue;
+          tasks[k]->front_samples(samples);
+          const spacetime::BandPrediction p = tasks[k]->prediction();
+          // The widest reach of any surface: the largest ℓ, the slowest lift c.
+          prediction.edge = std::max(prediction.edge, p.edge);
+          prediction.time_scale = std::min(prediction.time_scale, p.time_scale);
+          prediction.back_time = std::max(prediction.back_time, p.back_time);
+        }
+        try {
+          shared->update_front(samples, prediction);
+        } catch (const std::exception& e) {
+          // The band of all surfaces does not fit the budget: none of them can go on.
+          for (std::size_t k = 0; k < tasks.size(); ++k)
+            if (!finished[k]) {
+              fail(tasks[k]->spec(), index[k], std::string(e.what()) +
+                                                   " (the band of all " +
+                                                   std::to_string(tasks.size()) +
+                                                   " surfaces of this series)");
+              finished[k] = 1;
+            }
+          break;
+        }
+      }
+      std::vector<std::string> errors(round.size());
+      tbb::parallel_for(std::size_t{0}, round.size(), [&](std::size_t r) {
+        try {
+          tasks[round[r]]->step();
+        } catch (const std::exception& e) {
+          errors[r] = e.what();
+        }
+      });
+      for (std::size_t r = 0; r < round.size(); ++r)
+        if (!errors[r].empty()) {
+          fail(tasks[round[r]]->spec(), index[round[r]], errors[r]);
+          finished[round[r]] = 1;
+        }
+      steps_taken_ += static_cast<long long>(round.size());
+    }
+    json pass = {{"field", g.field}, {"kind", to_string(g.kind)}, {"surfaces", tasks.size()}};
+    if (cache) pass["cache"] = spacetime::to_json(cache->statistics());
+    passes_.push_back(pass);
+  }
+
+  void fail(const SurfaceSpec& s, std::size_t i, const std::string& message) {
+    rows_[i] = summary_row(s, "failed", json(), 0, message, "");
+    checkpoints_.save_done(s.name, rows_[i]);
+    checkpoints_.remove_state(s.name);
+  }
+
+  void maybe_checkpoint(const std::vector<std::unique_ptr<SurfaceTask>>& tasks,
+                        const std::vector<char>& finished) {
+    const bool killed = args_.fail_after_steps >= 0 && steps_taken_ >= args_.fail_after_steps;
+    const bool due = job_.checkpoint_every > 0 &&
+                     seconds_since(last_checkpoint_) >= job_.checkpoint_every;
+    if (!due && !interrupted() && !killed) return;
+    if (killed) std::_Exit(9);  // as kill -9: nothing saved since the last checkpoint
+    for (std::size_t k = 0; k < tasks.size(); ++k)
+      if (!finished[k]) checkpoints_.save_state(tasks[k]->spec().name, tasks[k]->state());
+    last_checkpoint_ = Clock::now();
+    ++checkpoints_written_;
+    if (interrupted())
+      throw Error("interrupted: the unfinished surfaces were checkpointed in '" +
+                  checkpoints_.folder().string() + "'; continue with --resume");
+  }
+
+  void complete(SurfaceTask& task, std::size_t i) {
+    const SurfaceSpec& s = task.spec();
+    const auto t0 = Clock::now();
+    try {
+      auto [mesh, report] = task.finish();
+      const std::filesystem::path out = output_path(job_, s);
+      report["name"] = s.name;
+      report["field"] = s.field;
+      report["seed"] = s.seed;
+      report["seed_offset"] = {s.offset.x(), s.offset.y(), s.offset.z()};
+      report["seed_count"] = s.seed_count;
+      report["output"] = out.string();
+      const bool complete = report.value("complete", true);
+      io::AtomicFileSet files;
+      io::write_mesh(mesh, out, files);
+      io::write_json(report, job_.out / (s.name + ".json"), files);
+      files.commit();
+      const double seconds =
+          report.contains("times_s") ? report["times_s"].value("total", 0.0) : 0.0;
+      rows_[i] = summary_row(s, complete ? "done" : "incomplete", report, seconds,
+                             complete ? "" : report.value("message", std::string()), out.string());
+    } catch (const std::exception& e) {
+      rows_[i] = summary_row(s, "failed", json(), seconds_since(t0), e.what(), "");
+    }
+    checkpoints_.save_done(s.name, rows_[i]);
+    checkpoints_.remove_state(s.name);
+  }
+
+  BatchJob job_;
+  BatchArgs args_;
+  CheckpointFolder checkpoints_;
+  std::vector<json> rows_;
+  json passes_ = json::array();
+  Clock::time_point last_checkpoint_;
+  long long steps_taken_ = 0;
+  std::size_t checkpoints_written_ = 0;
+};
+
+}  // namespace
+
+void add_batch_command(CLI::App& app) {
+  auto args = std::make_shared<BatchArgs>();
+  CLI::App* c = app.add_subcommand(
+      "batch",
+      "Build the surfaces of a job file (TOML or JSON; see examples/batch/): one pass over the "
+      "data for all surfaces that share it, checkpoints, --resume after a kill");
+  c->add_option("job", args->job, "Job file (.toml or .json)")->required();
+  c->add_option("--out", args->out, "Output folder (default: the job file's job.out)");
+  c->add_flag("--resume", args->resume,
+              "Continue from the output folder's checkpoint: finished surfaces are kept, "
+              "unfinished ones continue from their last saved step");
+  c->add_flag("--restart", args->restart,
+              "Start afresh over an earlier run's checkpoint (removes it)");
+  c->add_option("--checkpoint-every", args->checkpoint_every,
+                "Seconds between checkpoints (default: the job file's job.checkpoint_every, "
+                "else 60; 0: only on SIGTERM/SIGINT)")
+      ->check(CLI::NonNegativeNumber);
+  c->add_option("--fail-after-steps", args->fail_after_steps,
+                "Testing: exit at once, as if killed with SIGKILL, after this many front steps")
+      ->group("");
+  c->add_flag("--quiet", args->quiet, "No table on stdout");
+  c->callback([args]() {
+    if (args->resume && args->restart)
+      throw InvalidArgument("--resume and --restart exclude each other");
+    BatchJob job = read_batch_job(args->job);
+    if (!args->out.empty()) job.out = args->out;
+    BatchRun(std::move(job), *args).run();
+  });
+}
+
+}  // namespace orthofront::cli

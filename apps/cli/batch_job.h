@@ -1,0 +1,52 @@
+#pragma once
+/// A batch job file (TOML or JSON): the data set, defaults, and the surfaces to build, with
+/// generated families (a rake of seed lines, a grid of them, a sweep over t0). See
+/// examples/batch/README.md for the keys.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "orthofront/engine/options.h"
+#include "orthofront/types.h"
+
+namespace orthofront::cli {
+
+enum class SurfaceKind { stream, path };
+
+/// One surface of a job, with every default applied and every family expanded.
+struct SurfaceSpec {
+  std::string name;                 ///< unique in the job; names the outputs NAME.vtp, NAME.json
+  SurfaceKind kind = SurfaceKind::path;
+  std::string field;                ///< as --field takes it
+  std::string seed;                 ///< as --seed takes it
+  Vec3 offset = Vec3::Zero();       ///< families move the seed curve by this
+  int seed_count = 20;
+  double t0 = 0, t1 = 1;            ///< path
+  double time_scale = 0, max_band = 0;
+  StreamSurfaceOptions options;
+  std::string format = "vtp";       ///< vtp, ply or obj
+  bool steps_given = false;         ///< else stream surfaces take `stream`'s 100, path ones run to t1
+  int line = 0;                     ///< where the job file defines it (0: unknown)
+};
+
+struct BatchJob {
+  std::filesystem::path file;
+  std::string name;
+  std::filesystem::path out = "batch-out";  ///< output folder
+  std::string cache_budget;         ///< bytes syntax; empty: a quarter of the memory available
+  double checkpoint_every = 60;     ///< seconds between checkpoints (0: only on SIGTERM/SIGINT)
+  std::vector<SurfaceSpec> surfaces;
+  /// A digest of what the job computes (the expanded surfaces and the data), not of its text:
+  /// a checkpoint is valid only for the job that wrote it.
+  std::uint64_t digest = 0;
+};
+
+/// Reads and checks a job file. Throws InvalidArgument naming the file, the line and the key
+/// (for example "job.toml:12: surface[2].edge: must be a number > 0, got -1"); io::IoError for
+/// a file that cannot be read.
+BatchJob read_batch_job(const std::filesystem::path& file);
+
+const char* to_string(SurfaceKind kind);
+
+}  // namespace orthofront::cli

@@ -1,0 +1,260 @@
+#include "orthofront/io/state_codec.h"
+
+#include <cstring>
+
+#include "orthofront/io/error.h"
+
+namespace orthofront::io {
+
+void ByteReader::fail(const std::string& what) const {
+  throw FormatError("corrupt checkpoint '" + source_ + "': " + what + " at byte " +
+                    std::to_string(at_) + " of " + std::to_string(bytes_.size()));
+}
+
+void ByteReader::take(void* out, std::size_t size) {
+  if (size > left()) fail("ends early (" + std::to_string(size) + " bytes wanted)");
+  std::memcpy(out, bytes_.data() + at_, size);
+  at_ += size;
+}
+
+std::uint8_t ByteReader::u8() {
+  std::uint8_t v = 0;
+  take(&v, sizeof v);
+  return v;
+}
+std::uint32_t ByteReader::u32() {
+  std::uint32_t v = 0;
+  take(&v, sizeof v);
+  return v;
+}
+std::uint64_t ByteReader::u64() {
+  std::uint64_t v = 0;
+  take(&v, sizeof v);
+  return v;
+}
+std::int32_t ByteReader::i32() {
+  std::int32_t v = 0;
+  take(&v, sizeof v);
+  return v;
+}
+double ByteReader::f64() {
+  double v = 0;
+  take(&v, sizeof v);
+  return v;
+}
+
+std::uint64_t ByteReader::count(std::size_t item_bytes) {
+  const std::uint64_t n = u64();
+  if (item_bytes > 0 && n > left() / item_bytes)
+    fail("a count of " + std::to_string(n) + " items that the " + std::to_string(left()) +
+         " bytes left cannot hold");
+  return n;
+}
+
+std::string ByteReader::text() {
+  const std::uint64_t n = count(1);
+  std::string s(n, '\0');
+  if (n) take(s.data(), n);
+  return s;
+}
+
+namespace {
+
+void write_vec3s(ByteWriter& out, const std::vector<Vec3>& values) {
+  out.u64(values.size());
+  for (const Vec3& p : values)
+    for (int a = 0; a < 3; ++a) out.f64(p[a]);
+}
+
+std::vector<Vec3> read_vec3s(ByteReader& in) {
+  const std::uint64_t n = in.count(3 * sizeof(double));
+  std::vector<Vec3> values(n);
+  for (Vec3& p : values)
+    for (int a = 0; a < 3; ++a) p[a] = in.f64();
+  return values;
+}
+
+void write_report(ByteWriter& out, const SurfaceReport& r) {
+  out.u8(static_cast<std::uint8_t>(r.stop_reason));
+  out.i32(r.steps);
+  for (const std::size_t count :
+       {r.vertices, r.faces, r.quads, r.triangles, r.vertex_steps, r.rips, r.negative_alpha,
+        r.clamped_alpha, r.lag_raised_alpha, r.splits, r.merges, r.streamline_insertions,
+        r.insertion_fallbacks, r.skipped_vertex_steps, r.domain_exits, r.no_data_hits,
+        r.zero_velocity_cuts, r.fronts_created, r.fronts_dropped_short, r.fronts_stalled,
+        r.infeasible_damping_steps, r.field_evaluations})
+    out.u64(count);
+  out.f64(r.timeline_step);
+  out.u8(r.closed_seed);
+  out.u8(r.closed_front_opened);
+  out.f64(r.closed_log_product);
+  out.u64(r.per_step.size());
+  for (const StepRecord& s : r.per_step) {
+    out.i32(s.step);
+    out.u64(s.fronts);
+    out.u64(s.front_vertices);
+    for (double v : {s.h_min, s.h_max, s.orthogonality_mean, s.orthogonality_max}) out.f64(v);
+  }
+  const StageTimes& t = r.times;
+  for (double v : {t.alpha, t.rip, t.advance, t.adapt, t.stitch, t.quality, t.total}) out.f64(v);
+  out.u8(r.complete);
+  out.text(r.message);
+}
+
+SurfaceReport read_report(ByteReader& in) {
+  SurfaceReport r;
+  const std::uint8_t reason = in.u8();
+  if (reason > static_cast<std::uint8_t>(StopReason::cancelled))
+    in.fail("stop reason " + std::to_string(reason) + " is not one this version knows");
+  r.stop_reason = static_cast<StopReason>(reason);
+  r.steps = in.i32();
+  for (std::size_t* count :
+       {&r.vertices, &r.faces, &r.quads, &r.triangles, &r.vertex_steps, &r.rips, &r.negative_alpha,
+        &r.clamped_alpha, &r.lag_raised_alpha, &r.splits, &r.merges, &r.streamline_insertions,
+        &r.insertion_fallbacks, &r.skipped_vertex_steps, &r.domain_exits, &r.no_data_hits,
+        &r.zero_velocity_cuts, &r.fronts_created, &r.fronts_dropped_short, &r.fronts_stalled,
+        &r.infeasible_damping_steps, &r.field_evaluations})
+    *count = in.u64();
+  r.timeline_step = in.f64();
+  r.closed_seed = in.u8() != 0;
+  r.closed_front_opened = in.u8() != 0;
+  r.closed_log_product = in.f64();
+  const std::uint64_t steps = in.count(4 + 2 * 8 + 4 * 8);
+  r.per_step.resize(steps);
+  for (StepRecord& s : r.per_step) {
+    s.step = in.i32();
+    s.fronts = in.u64();
+    s.front_vertices = in.u64();
+    for (double* v : {&s.h_min, &s.h_max, &s.orthogonality_mean, &s.orthogonality_max})
+      *v = in.f64();
+  }
+  StageTimes& t = r.times;
+  for (double* v : {&t.alpha, &t.rip, &t.advance, &t.adapt, &t.stitch, &t.quality, &t.total})
+    *v = in.f64();
+  r.complete = in.u8() != 0;
+  r.message = in.text();
+  return r;
+}
+
+}  // namespace
+
+void write_mesh_state(ByteWriter& out, const Mesh& mesh) {
+  write_vec3s(out, mesh.positions);
+  out.u64(mesh.faces.size());
+  for (const Face& f : mesh.faces) {
+    out.u8(f.size);
+    for (std::int32_t v : f.v) out.i32(v);
+  }
+  out.array(mesh.time);
+  out.array(mesh.alpha);
+  out.array(mesh.s);
+  out.array(mesh.error);
+  out.array(mesh.front_id);
+  out.array(mesh.step);
+  out.array(mesh.release_time);
+  out.array(mesh.age);
+  out.array(mesh.speed);
+  out.array(mesh.particle_id);
+}
+
+Mesh read_mesh_state(ByteReader& in) {
+  Mesh mesh;
+  mesh.positions = read_vec3s(in);
+  const std::uint64_t faces = in.count(1 + 4 * 4);
+  const auto vertices = static_cast<std::int64_t>(mesh.positions.size());
+  mesh.faces.resize(faces);
+  for (Face& f : mesh.faces) {
+    f.size = in.u8();
+    if (f.size != 3 && f.size != 4) in.fail("a face of " + std::to_string(f.size) + " vertices");
+    for (std::int32_t& v : f.v) v = in.i32();
+    for (int k = 0; k < f.size; ++k)
+      if (f.v[static_cast<std::size_t>(k)] < 0 || f.v[static_cast<std::size_t>(k)] >= vertices)
+        in.fail("a face names vertex " + std::to_string(f.v[static_cast<std::size_t>(k)]) +
+                " of " + std::to_string(vertices));
+  }
+  mesh.time = in.array<double>();
+  mesh.alpha = in.array<double>();
+  mesh.s = in.array<double>();
+  mesh.error = in.array<double>();
+  mesh.front_id = in.array<std::int32_t>();
+  mesh.step = in.array<std::int32_t>();
+  mesh.release_time = in.array<double>();
+  mesh.age = in.array<double>();
+  mesh.speed = in.array<double>();
+  mesh.particle_id = in.array<std::int32_t>();
+  const auto n = mesh.positions.size();
+  for (const std::size_t size : {mesh.time.size(), mesh.alpha.size(), mesh.s.size(),
+                                 mesh.error.size(), mesh.front_id.size(), mesh.step.size()})
+    if (size != n) in.fail("a vertex attribute of " + std::to_string(size) + " values for " +
+                           std::to_string(n) + " vertices");
+  return mesh;
+}
+
+template <int N>
+void write_engine_state(ByteWriter& out, const EngineState<N>& state) {
+  out.u8(N);
+  out.u64(state.fronts.size());
+  for (const Front<N>& f : state.fronts) {
+    out.u8(f.closed);
+    out.i32(f.id);
+    out.u64(f.v.size());
+    for (const FrontVertex<N>& fv : f.v) {
+      for (int a = 0; a < N; ++a) out.f64(fv.x[a]);
+      for (int a = 0; a < N; ++a) out.f64(fv.anchor[a]);
+      out.f64(fv.s);
+      out.f64(fv.t);
+      out.i32(fv.mesh);
+      out.i32(fv.origin);
+    }
+  }
+  out.i32(state.step);
+  out.u8(state.died_outside);
+  out.i32(state.next_front_id);
+  out.f64(state.elapsed_seconds);
+  write_mesh_state(out, state.mesh);
+  write_report(out, state.report);
+}
+
+template <int N>
+EngineState<N> read_engine_state(ByteReader& in) {
+  EngineState<N> state;
+  const std::uint8_t n = in.u8();
+  if (n != N)
+    in.fail("a state in R^" + std::to_string(n) + " where R^" + std::to_string(N) +
+            " was expected");
+  const std::uint64_t fronts = in.count(1 + 4 + 8);
+  state.fronts.resize(fronts);
+  for (Front<N>& f : state.fronts) {
+    f.closed = in.u8() != 0;
+    f.id = in.i32();
+    f.v.resize(in.count((2 * N + 2) * 8 + 2 * 4));
+    for (FrontVertex<N>& fv : f.v) {
+      for (int a = 0; a < N; ++a) fv.x[a] = in.f64();
+      for (int a = 0; a < N; ++a) fv.anchor[a] = in.f64();
+      fv.s = in.f64();
+      fv.t = in.f64();
+      fv.mesh = in.i32();
+      fv.origin = in.i32();
+    }
+  }
+  state.step = in.i32();
+  state.died_outside = in.u8() != 0;
+  state.next_front_id = in.i32();
+  state.elapsed_seconds = in.f64();
+  state.mesh = read_mesh_state(in);
+  state.report = read_report(in);
+  const auto vertices = static_cast<std::int64_t>(state.mesh.vertex_count());
+  for (const Front<N>& f : state.fronts)
+    for (const FrontVertex<N>& fv : f.v)
+      if (fv.mesh < -1 || fv.mesh >= vertices)
+        in.fail("a front vertex stands for mesh vertex " + std::to_string(fv.mesh) + " of " +
+                std::to_string(vertices));
+  return state;
+}
+
+template void write_engine_state<3>(ByteWriter&, const EngineState<3>&);
+template void write_engine_state<4>(ByteWriter&, const EngineState<4>&);
+template EngineState<3> read_engine_state<3>(ByteReader&);
+template EngineState<4> read_engine_state<4>(ByteReader&);
+
+}  // namespace orthofront::io
