@@ -77,6 +77,10 @@ class SurfaceTask {
  protected:
   SurfaceSpec spec_;
   bool ready_ = false;
+  int resumed_at_step_ = -1;  ///< the front step a checkpoint resumed it at (-1: not resumed)
+
+ public:
+  int resumed_at_step() const { return resumed_at_step_; }
 };
 
 class StreamTask final : public SurfaceTask {
@@ -89,6 +93,7 @@ class StreamTask final : public SurfaceTask {
     if (!resume) check_stream_seed(field, seed_, job);
     builder_ = resume ? std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options, *resume)
                       : std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options);
+    if (resume) resumed_at_step_ = resume->step;
     ready_ = builder_->next();
   }
   double lag_key() override { return builder_->steps_done(); }
@@ -117,6 +122,7 @@ class PathTask final : public SurfaceTask {
       : SurfaceTask(spec) {
     builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(flow, seed(), spec.seed_count,
                                                                options(), resume);
+    if (resume) resumed_at_step_ = resumed_step(*resume);
     ready_ = builder_->next();
   }
   PathTask(const SurfaceSpec& spec, spacetime::StreamedField& shared,
@@ -124,6 +130,7 @@ class PathTask final : public SurfaceTask {
       : SurfaceTask(spec) {
     builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(shared, cache, seed(),
                                                                spec.seed_count, options(), resume);
+    if (resume) resumed_at_step_ = resumed_step(*resume);
     ready_ = builder_->next();
   }
   double lag_key() override { return builder_->front_time(); }
@@ -146,6 +153,9 @@ class PathTask final : public SurfaceTask {
   }
 
  private:
+  static int resumed_step(const spacetime::PathState& state) {
+    return std::visit([](const auto& e) { return e.step; }, state.engine);
+  }
   SeedCurve seed() const { return parse_seed(spec_.seed).translated(spec_.offset); }
   spacetime::PathSurfaceOptions options() const {
     spacetime::PathSurfaceOptions o;
@@ -200,6 +210,7 @@ json summary_row(const SurfaceSpec& s, const std::string& status, const json& re
     }
     row["steps"] = report.value("steps", 0);
     row["stop_reason"] = report.value("stop_reason", std::string());
+    row["resumed_at_step"] = report.value("resumed_at_step", -1);
     if (report.contains("path")) row["time_reached"] = report["path"].value("time_reached", 0.0);
     if (report.contains("quality")) {
       const json& q = report["quality"];
@@ -475,6 +486,7 @@ class BatchRun {
       report["seed_offset"] = {s.offset.x(), s.offset.y(), s.offset.z()};
       report["seed_count"] = s.seed_count;
       report["output"] = out.string();
+      report["resumed_at_step"] = task.resumed_at_step();
       const bool complete = report.value("complete", true);
       io::AtomicFileSet files;
       io::write_mesh(mesh, out, files);

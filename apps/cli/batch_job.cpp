@@ -193,6 +193,7 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       if (spec.max_band < 0) d.fail(at, "must be >= 0 (0: none), got " + v.dump());
     } else if (key == "max_vertices") {
       o.max_vertices = static_cast<std::size_t>(integer(d, v, at, 2, 4'000'000'000LL));
+      spec.max_vertices_given = true;
     } else if (key == "damping") {
       o.damping = number(d, v, at);
       if (!(o.damping > 0 && o.damping < 1)) d.fail(at, "must lie in (0, 1), got " + v.dump());
@@ -383,7 +384,8 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
     const StreamSurfaceOptions& o = s.options;
     expanded.push_back({s.name, to_string(s.kind), s.field, s.seed,
                         {s.offset.x(), s.offset.y(), s.offset.z()}, s.seed_count, s.t0, s.t1,
-                        s.time_scale, s.max_band, o.edge, o.max_steps, o.max_vertices, o.damping,
+                        s.time_scale, s.max_band, o.edge, o.max_steps,
+                        s.max_vertices_given ? o.max_vertices : 0, o.damping,
                         o.tolerance, static_cast<int>(o.integrator), static_cast<int>(o.insertion),
                         s.format});
   }

@@ -26,7 +26,8 @@ struct SurfaceSpec {
   double time_scale = 0, max_band = 0;
   StreamSurfaceOptions options;
   std::string format = "vtp";       ///< vtp, ply or obj
-  bool steps_given = false;         ///< else stream surfaces take `stream`'s 100, path ones run to t1
+  bool steps_given = false;
+  bool max_vertices_given = false;  ///< else the memory available decides (not part of the digest)         ///< else stream surfaces take `stream`'s 100, path ones run to t1
   int line = 0;                     ///< where the job file defines it (0: unknown)
 };
 

@@ -1,0 +1,313 @@
+// `orthofront batch`: a job's surfaces equal separate runs byte for byte, the shared pass reads
+// each brick once, kill -9 and --resume give the same files, and bad job files are refused
+// naming the file, the line and the key.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "cli_run.h"
+#include "temp_dir.h"
+
+namespace fs = std::filesystem;
+using cli_test::run;
+using test_support::TempDir;
+
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// A small double-gyre series: 64 x 32 points, 41 steps over [0, 8], bricks of 16 points.
+fs::path make_series(const TempDir& dir) {
+  const fs::path file = dir / "gyre.h5";
+  const auto r = run("generate --field double-gyre --resolution 64,32 --steps 41 --t1 8 --brick 16 "
+                     "--out " + q(file) + " --quiet");
+  REQUIRE(r.status == 0);
+  return file;
+}
+
+// Three surfaces: a stream surface, an analytic path surface and a streamed one.
+std::string three_surface_job(const fs::path& series) {
+  return R"([job]
+field = "double-gyre"
+cache_budget = "8MiB"
+
+[defaults]
+edge = 0.04
+seed_count = 12
+t0 = 0.0
+t1 = 4.0
+
+[[surface]]
+name = "saddle"
+kind = "stream"
+field = "saddle3d"
+seed = "line:-3,1,1:-3,1,3"
+edge = 0.1
+steps = 60
+
+[[surface]]
+name = "gyre"
+seed = "line:0.3,0.2,0:0.3,0.8,0"
+
+[[surface]]
+name = "streamed"
+field = ")" + series.string() + R"("
+seed = "line:1.2,0.2,0:1.2,0.8,0"
+t0 = 1.0
+t1 = 5.0
+)";
+}
+
+// The same surfaces through the single-surface commands.
+void separate_runs(const fs::path& series, const TempDir& dir) {
+  REQUIRE(run("stream --field saddle3d --seed line:-3,1,1:-3,1,3 --seed-count 12 --edge 0.1 "
+              "--steps 60 --quiet --out " + q(dir / "saddle.vtp")).status == 0);
+  REQUIRE(run("path --field double-gyre --seed line:0.3,0.2,0:0.3,0.8,0 --seed-count 12 --edge "
+              "0.04 --t0 0 --t1 4 --quiet --out " + q(dir / "gyre.vtp")).status == 0);
+  REQUIRE(run("path --field " + q(series) + " --cache-budget 8MiB --seed line:1.2,0.2,0:1.2,0.8,0 "
+              "--seed-count 12 --edge 0.04 --t0 1 --t1 5 --quiet --out " + q(dir / "streamed.vtp"))
+              .status == 0);
+}
+
+void require_same_meshes(const TempDir& expected, const fs::path& out) {
+  for (const char* name : {"saddle.vtp", "gyre.vtp", "streamed.vtp"}) {
+    INFO(name);
+    REQUIRE(fs::exists(out / name));
+    REQUIRE(read_text(out / name) == read_text(expected / name));
+  }
+}
+
+nlohmann::json summary(const fs::path& out) {
+  return nlohmann::json::parse(read_text(out / "summary.json"));
+}
+
+}  // namespace
+
+TEST_CASE("batch: a job of three surfaces writes the meshes of three separate runs, byte for byte",
+          "[batch]") {
+  TempDir dir("batch");
+  const fs::path series = make_series(dir);
+  TempDir expected("batch-expected");
+  separate_runs(series, expected);
+  write_text(dir / "job.toml", three_surface_job(series));
+  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  require_same_meshes(expected, dir / "out");
+  const auto s = summary(dir / "out");
+  REQUIRE(s["surfaces"].size() == 3);
+  for (const auto& row : s["surfaces"]) {
+    CHECK(row["status"] == "done");
+    CHECK(row["vertices"].get<int>() > 50);
+    CHECK(fs::exists(dir / "out" / (row["name"].get<std::string>() + ".json")));
+  }
+  CHECK(read_text(dir / "out" / "summary.txt").find("streamed") != std::string::npos);
+}
+
+TEST_CASE("batch: the surfaces of one series share one pass that reads each brick once",
+          "[batch]") {
+  TempDir dir("batch-pass");
+  const fs::path series = make_series(dir);
+  // A rake of four path surfaces across the gyres.
+  write_text(dir / "rake.toml", "[job]\nfield = \"" + series.string() +
+                                    "\"\ncache_budget = \"64MiB\"\n[defaults]\nedge = 0.04\n"
+                                    "seed_count = 12\nt0 = 0.0\nt1 = 6.0\n[[rake]]\nname = \"r\"\n"
+                                    "seed = \"line:0.2,0.2,0:0.2,0.8,0\"\ncount = 4\n"
+                                    "offset = [0.45, 0.0]\n");
+  const auto r = run("batch " + q(dir / "rake.toml") + " --out " + q(dir / "out") + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const auto s = summary(dir / "out");
+  REQUIRE(s["passes"].size() == 1);
+  const auto& cache = s["passes"][0]["cache"];
+  CHECK(cache["max_reads_of_a_unit"] == 1);
+  CHECK(cache["loads"] == cache["units_touched"]);
+  // And each of them equals its own single-surface run.
+  for (int k = 0; k < 4; ++k) {
+    const double x = 0.2 + 0.45 * k;
+    const std::string seed = "line:" + std::to_string(x) + ",0.2,0:" + std::to_string(x) + ",0.8,0";
+    const fs::path alone = dir / ("alone-" + std::to_string(k) + ".vtp");
+    REQUIRE(run("path --field " + q(series) + " --seed " + seed +
+                " --seed-count 12 --edge 0.04 --t0 0 --t1 6 --quiet --out " + q(alone))
+                .status == 0);
+    INFO(k);
+    CHECK(read_text(alone) == read_text(dir / "out" / ("r-" + std::to_string(k) + ".vtp")));
+  }
+}
+
+TEST_CASE("batch: killed at any point and resumed, a job writes the files of an uninterrupted run",
+          "[batch]") {
+  TempDir dir("batch-kill");
+  const fs::path series = make_series(dir);
+  TempDir expected("batch-kill-expected");
+  separate_runs(series, expected);
+  write_text(dir / "job.toml", three_surface_job(series));
+  const std::string job = q(dir / "job.toml");
+
+  SECTION("at chosen front steps: inside the first surface, between surfaces, inside the pass") {
+    // The stream surface takes its steps first (its own pass); the two path surfaces follow.
+    for (const int steps : {5, 23, 25, 60, 90, 110}) {
+      const fs::path out = dir / ("out-" + std::to_string(steps));
+      const auto killed = run("batch " + job + " --out " + q(out) +
+                              " --checkpoint-every 0.000001 --quiet --fail-after-steps " +
+                              std::to_string(steps));
+      INFO("killed after " << steps << " steps: " << killed.output);
+      REQUIRE(killed.status == 9);
+      REQUIRE_FALSE(fs::exists(out / "summary.json"));
+      const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+      INFO(resumed.output);
+      REQUIRE(resumed.status == 0);
+      require_same_meshes(expected, out);
+      // Something was continued from a checkpoint, not built again from its seed.
+      bool continued = false;
+      const nlohmann::json resumed_summary = summary(out);
+      for (const auto& row : resumed_summary.at("surfaces"))
+        continued = continued || row.value("resumed_at_step", -1) > 0 || row.contains("resumed");
+      CHECK(continued);
+    }
+  }
+
+  SECTION("by SIGKILL at random moments, also while checkpoints are written") {
+    const fs::path out = dir / "out-signal";
+    std::mt19937 random(12345);
+    std::uniform_int_distribution<int> delay_ms(5, 120);
+    int kills = 0;
+    for (int attempt = 0; attempt < 40; ++attempt) {
+      std::vector<std::string> args{"batch", (dir / "job.toml").string(), "--out", out.string(),
+                                    "--checkpoint-every", "0.000001", "--quiet"};
+      if (attempt > 0) args.push_back("--resume");
+      const pid_t pid = cli_test::start(args, (dir / "log.txt").string());
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(random)));
+      ::kill(pid, SIGKILL);
+      int status = 0;
+      ::waitpid(pid, &status, 0);
+      if (WIFEXITED(status)) {
+        INFO(read_text(dir / "log.txt"));
+        REQUIRE(WEXITSTATUS(status) == 0);
+        break;  // finished before the kill
+      }
+      ++kills;
+      // Whatever the moment, every mesh present is whole: the one the uninterrupted run writes.
+      for (const char* name : {"saddle.vtp", "gyre.vtp", "streamed.vtp"})
+        if (fs::exists(out / name)) {
+          INFO(name << " after kill " << kills);
+          REQUIRE(read_text(out / name) == read_text(expected / name));
+        }
+    }
+    CHECK(kills > 0);
+    const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+    INFO(resumed.output);
+    REQUIRE(resumed.status == 0);
+    require_same_meshes(expected, out);
+  }
+}
+
+TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are refused by name",
+          "[batch]") {
+  TempDir dir("batch-owner");
+  write_text(dir / "a.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
+                             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
+                             "edge = 0.02\n");
+  write_text(dir / "b.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
+                             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
+                             "edge = 0.03\n");
+  const fs::path out = dir / "out";
+  REQUIRE(run("batch " + q(dir / "a.toml") + " --out " + q(out) +
+              " --checkpoint-every 0.000001 --quiet --fail-after-steps 10").status == 9);
+  REQUIRE(fs::exists(out / ".checkpoint" / "s.state"));
+
+  const auto other = run("batch " + q(dir / "b.toml") + " --out " + q(out) + " --resume");
+  CHECK(other.status == 2);
+  CHECK(other.output.find("belongs to another job") != std::string::npos);
+
+  const auto fresh = run("batch " + q(dir / "a.toml") + " --out " + q(out));
+  CHECK(fresh.status == 2);
+  CHECK(fresh.output.find("--resume") != std::string::npos);
+
+  // A state file cut short: refused naming it, and nothing written.
+  const fs::path state = out / ".checkpoint" / "s.state";
+  const std::string bytes = read_text(state);
+  write_text(state, bytes.substr(0, bytes.size() / 2));
+  const auto corrupt = run("batch " + q(dir / "a.toml") + " --out " + q(out) + " --resume");
+  CHECK(corrupt.status == 2);
+  CHECK(corrupt.output.find("s.state") != std::string::npos);
+  CHECK_FALSE(fs::exists(out / "s.vtp"));
+
+  // --restart starts afresh over it.
+  const auto restart = run("batch " + q(dir / "a.toml") + " --out " + q(out) + " --restart --quiet");
+  INFO(restart.output);
+  CHECK(restart.status == 0);
+  CHECK(fs::exists(out / "s.vtp"));
+}
+
+TEST_CASE("batch: a surface that fails is reported and the others are built", "[batch]") {
+  TempDir dir("batch-fail");
+  write_text(dir / "job.toml",
+             "[job]\nfield = \"double-gyre\"\n[defaults]\nedge = 0.05\nt0 = 0.0\nt1 = 2.0\n"
+             "[[surface]]\nname = \"outside\"\nseed = \"line:5,5,0:6,6,0\"\n"
+             "[[surface]]\nname = \"inside\"\nseed = \"line:0.3,0.2,0:0.3,0.8,0\"\n");
+  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out"));
+  INFO(r.output);
+  CHECK(r.status == 2);
+  CHECK(r.output.find("1 of 2 surfaces failed") != std::string::npos);
+  const auto s = summary(dir / "out");
+  CHECK(s["surfaces"][0]["status"] == "failed");
+  CHECK(s["surfaces"][0]["message"].get<std::string>().find("outside the domain") !=
+        std::string::npos);
+  CHECK(s["surfaces"][1]["status"] == "done");
+  CHECK(fs::exists(dir / "out" / "inside.vtp"));
+  CHECK_FALSE(fs::exists(dir / "out" / "outside.vtp"));
+}
+
+TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]") {
+  TempDir dir("batch-errors");
+  const auto refused = [&](const std::string& file, const std::string& text) {
+    write_text(dir / file, text);
+    const auto r = run("batch " + q(dir / file) + " --out " + q(dir / "out"));
+    CHECK(r.status == 2);
+    CHECK_FALSE(fs::exists(dir / "out" / "summary.json"));
+    return r.output;
+  };
+  std::string m = refused("typo.toml", "[job]\nfield = \"saddle3d\"\n\n[[surface]]\nname = \"a\"\n"
+                                       "seed = \"line:0,0,0:1,0,0\"\nedgee = 0.1\n");
+  CHECK(m.find("typo.toml:7: surface[0].edgee: unknown key") != std::string::npos);
+  m = refused("type.toml", "[defaults]\nedge = \"fine\"\n");
+  CHECK(m.find("type.toml:2: defaults.edge: must be a number") != std::string::npos);
+  m = refused("negative.toml", "[job]\nfield = \"saddle3d\"\n[[rake]]\nname = \"r\"\n"
+                               "seed = \"line:0,0,0:1,0,0\"\ncount = -2\noffset = [0, 1]\n");
+  CHECK(m.find("negative.toml:6: rake[0].count: must lie in [1, 100000]") != std::string::npos);
+  m = refused("syntax.toml", "[job]\nfield = \"saddle3d\n");
+  CHECK(m.find("syntax.toml:2: not valid TOML") != std::string::npos);
+  m = refused("noseed.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": \"a\"}]}");
+  CHECK(m.find("surface[0]: needs a seed") != std::string::npos);
+  m = refused("bad.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": }]}");
+  CHECK(m.find("bad.json:2: not valid JSON") != std::string::npos);
+  m = refused("twice.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
+                            "\"line:0,0,0:1,0,0\"\n[[surface]]\nname = \"a\"\nseed = "
+                            "\"line:0,0,0:1,0,0\"\n");
+  CHECK(m.find("two surfaces are named 'a'") != std::string::npos);
+  m = refused("missing.toml.nothere", "");
+  CHECK(m.find("expected .toml or .json") != std::string::npos);
+}
