@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   orthofront::cli::add_bench_command(app);
   orthofront::cli::add_path_command(app);
   orthofront::cli::add_batch_command(app);
+  orthofront::cli::add_bench_batch_command(app);
   orthofront::cli::add_streak_command(app);
   orthofront::cli::add_bench_path_command(app);
   orthofront::cli::add_bench_streak_command(app);

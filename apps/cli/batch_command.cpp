@@ -7,11 +7,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include "cli/batch_checkpoint.h"
 #include "cli/batch_job.h"
@@ -21,6 +24,7 @@
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "cli/surface_job.h"
+#include "cli/work_sharing.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/error.h"
@@ -46,6 +50,13 @@ struct BatchArgs {
   double checkpoint_every = -1;  // < 0: the job file's
   int fail_after_steps = -1;     // tests: stop as if killed after this many front steps
 };
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 std::filesystem::path output_path(const BatchJob& job, const SurfaceSpec& s) {
   return job.out / (s.name + "." + s.format);
@@ -254,15 +265,59 @@ class BatchRun {
 
   void run() {
     const auto start = Clock::now();
+    const std::unique_ptr<WorkSharing> sharing = start_work_sharing();
+    const bool lead = sharing->rank() == 0;
     std::error_code ec;
     std::filesystem::create_directories(job_.out, ec);
-    if (ec)
-      throw io::IoError("cannot create the output folder '" + job_.out.string() + "': " +
-                        ec.message());
-    const io::OutputLock lock(job_.out / "summary.json");
-    prepare_checkpoints();
+    // Rank 0 checks and prepares the folder; the others wait for its word.
+    std::optional<io::OutputLock> lock;
+    std::string error;
+    if (lead) {
+      try {
+        if (ec)
+          throw io::IoError("cannot create the output folder '" + job_.out.string() + "': " +
+                            ec.message());
+        lock.emplace(job_.out / "summary.json");
+        prepare_checkpoints();
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    }
+    error = sharing->broadcast(error);
+    if (!error.empty()) {
+      if (lead) throw InvalidArgument(error);
+      return;  // rank 0 says why
+    }
     last_checkpoint_ = Clock::now();
-    for (const Group& g : group_surfaces(job_)) run_group(g);
+    // Work items: whole groups for one process (one pass over each data set); under MPI each
+    // group in up to 2 K pieces, handed out as ranks free up.
+    const std::vector<Group> items = work_items(sharing->size());
+    try {
+      for (long item; (item = sharing->next(static_cast<long>(items.size()))) >= 0;)
+        run_group(items[static_cast<std::size_t>(item)]);
+    } catch (const std::exception& e) {
+      if (sharing->size() == 1) throw;
+      std::fprintf(stderr, "orthofront: error (rank %d): %s\n", sharing->rank(), e.what());
+      sharing->abort(2);
+    }
+    if (sharing->size() > 1) {
+      // Each rank's passes, for rank 0's summary; every row is in its .done record.
+      io::write_json(passes_, checkpoints_.folder() /
+                                  ("passes-" + std::to_string(sharing->rank()) + ".json"));
+      sharing->barrier();
+      if (!lead) return;
+      passes_ = json::array();
+      for (int r = 0; r < sharing->size(); ++r) {
+        const auto file = checkpoints_.folder() / ("passes-" + std::to_string(r) + ".json");
+        for (json& p : json::parse(read_text(file))) {
+          p["rank"] = r;
+          passes_.push_back(std::move(p));
+        }
+        std::filesystem::remove(file, ec);
+      }
+      for (std::size_t i = 0; i < job_.surfaces.size(); ++i)
+        if (auto row = checkpoints_.load_done(job_.surfaces[i].name)) rows_[i] = *row;
+    }
     // Every surface has its row: the job is finished, the checkpoint holds only .done records.
     checkpoints_.start();
     json summary = {{"job", job_.file.string()},
@@ -270,6 +325,8 @@ class BatchRun {
                     {"surfaces", rows_},
                     {"seconds", seconds_since(start)},
                     {"resumed", args_.resume},
+                    {"ranks", sharing->size()},
+                    {"checkpoints_written", checkpoints_written_},
                     {"passes", passes_},
                     {"peak_rss_bytes", peak_rss_bytes()}};
     std::size_t failed = 0, incomplete = 0;
@@ -297,6 +354,21 @@ class BatchRun {
   }
 
  private:
+  std::vector<Group> work_items(int ranks) const {
+    std::vector<Group> items;
+    for (const Group& g : group_surfaces(job_)) {
+      const std::size_t n = g.members.size();
+      const std::size_t pieces = ranks == 1 ? 1 : std::min<std::size_t>(n, 2 * static_cast<std::size_t>(ranks));
+      for (std::size_t p = 0; p < pieces; ++p) {
+        Group piece = g;
+        piece.members.assign(g.members.begin() + static_cast<std::ptrdiff_t>(n * p / pieces),
+                             g.members.begin() + static_cast<std::ptrdiff_t>(n * (p + 1) / pieces));
+        items.push_back(std::move(piece));
+      }
+    }
+    return items;
+  }
+
   void prepare_checkpoints() {
     if (checkpoints_.exists()) {
       if (args_.resume) {
@@ -381,57 +453,73 @@ class BatchRun {
     // The pass, in rounds: the surfaces whose fronts lie within one front step of the one
     // furthest behind step once (in parallel), the others wait; streamed surfaces share one band,
     // pinned for all of them before each round, so each brick is read once for the whole group.
-    std::vector<char> finished(tasks.size(), 0);
-    std::vector<std::size_t> round;
+    // Where the band of all of them does not fit the budget, half of them are set aside (their
+    // state kept) for a later pass over the data; a surface whose band alone does not fit fails.
+    std::vector<char> finished(tasks.size(), 0), waiting(tasks.size(), 0);
+    std::vector<std::size_t> round, active;
     std::vector<spacetime::FrontSample> samples;
+    int data_passes = 1;
+    std::size_t set_aside = 0;
     while (true) {
       round.clear();
+      active.clear();
       double least = 0, span = 0;
-      bool any = false;
       for (std::size_t k = 0; k < tasks.size(); ++k) {
-        if (finished[k]) continue;
+        if (finished[k] || waiting[k]) continue;
         if (!tasks[k]->ready()) {  // stopped: write it now
           complete(*tasks[k], index[k]);
           finished[k] = 1;
           continue;
         }
         const double key = tasks[k]->lag_key();
-        if (!any || key < least) least = key;
+        if (active.empty() || key < least) least = key;
         span = std::max(span, tasks[k]->step_span());
-        any = true;
+        active.push_back(k);
       }
-      if (!any) break;
+      if (active.empty()) {
+        // This pass is over: the surfaces set aside go on in the next one.
+        std::size_t resumed = 0;
+        for (std::size_t k = 0; k < tasks.size(); ++k)
+          if (waiting[k]) waiting[k] = 0, ++resumed;
+        if (resumed == 0) break;
+        ++data_passes;
+        continue;
+      }
       maybe_checkpoint(tasks, finished);
-      for (std::size_t k = 0; k < tasks.size(); ++k)
-        if (!finished[k] && tasks[k]->lag_key() <= least + span) round.push_back(k);
       if (shared) {
         samples.clear();
         spacetime::BandPrediction prediction;
         prediction.time_scale = std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < tasks.size(); ++k) {
-          if (finished[k]) continue;
+        for (std::size_t k : active) {
           tasks[k]->front_samples(samples);
           const spacetime::BandPrediction p = tasks[k]->prediction();
-          // The widest reach of any surface: the largest ℓ, the slowest lift c.
+          // The widest reach of any surface: the largest ℓ (each sample carries its own c).
           prediction.edge = std::max(prediction.edge, p.edge);
           prediction.time_scale = std::min(prediction.time_scale, p.time_scale);
           prediction.back_time = std::max(prediction.back_time, p.back_time);
         }
         try {
           shared->update_front(samples, prediction);
-        } catch (const std::exception& e) {
-          // The band of all surfaces does not fit the budget: none of them can go on.
+        } catch (const InvalidArgument& e) {  // the band does not fit the budget
+          if (active.size() > 1) {
+            for (std::size_t j = active.size() / 2; j < active.size(); ++j) waiting[active[j]] = 1;
+            set_aside += active.size() - active.size() / 2;
+            continue;
+          }
+          fail(tasks[active[0]]->spec(), index[active[0]], e.what());
+          finished[active[0]] = 1;
+          continue;
+        } catch (const std::exception& e) {  // a read error: no surface of this data can go on
           for (std::size_t k = 0; k < tasks.size(); ++k)
             if (!finished[k]) {
-              fail(tasks[k]->spec(), index[k], std::string(e.what()) +
-                                                   " (the band of all " +
-                                                   std::to_string(tasks.size()) +
-                                                   " surfaces of this series)");
+              fail(tasks[k]->spec(), index[k], e.what());
               finished[k] = 1;
             }
           break;
         }
       }
+      for (std::size_t k : active)
+        if (tasks[k]->lag_key() <= least + span) round.push_back(k);
       std::vector<std::string> errors(round.size());
       tbb::parallel_for(std::size_t{0}, round.size(), [&](std::size_t r) {
         try {
@@ -447,7 +535,9 @@ class BatchRun {
         }
       steps_taken_ += static_cast<long long>(round.size());
     }
-    json pass = {{"field", g.field}, {"kind", to_string(g.kind)}, {"surfaces", tasks.size()}};
+    json pass = {{"field", g.field},          {"kind", to_string(g.kind)},
+                 {"surfaces", tasks.size()},   {"data_passes", data_passes},
+                 {"set_aside", set_aside}};
     if (cache) pass["cache"] = spacetime::to_json(cache->statistics());
     passes_.push_back(pass);
   }

@@ -19,5 +19,6 @@ void add_convert_command(CLI::App& app);
 void add_bench_grid_command(CLI::App& app);
 void add_bench_gpu_command(CLI::App& app);
 void add_batch_command(CLI::App& app);
+void add_bench_batch_command(CLI::App& app);
 
 }  // namespace orthofront::cli

@@ -297,7 +297,12 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       FrontSample sample;
       for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i + static_cast<std::size_t>(a)];
       sample.t = f.positions[i + N - 1] / c_;
-      if (!run_.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
+      sample.time_scale = c_;
+      // Where the band of another surface replaced this one's, read the velocity (a slow-path
+      // pin): a vertex taken for still would be given the reach of a whole front step in time.
+      if (!run_.streamed->resident_velocity(sample.x, sample.t, sample.v) &&
+          run_.streamed->velocity(sample.x, sample.t, sample.v) != FieldStatus::inside)
+        sample.v.setZero();
       out.push_back(sample);
     }
   }

@@ -319,7 +319,8 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
     ++stamp_epoch_;
     for (const FrontSample& f : front) {
       if (!f.x.allFinite() || !std::isfinite(f.t)) continue;
-      const double lifted_speed = std::hypot(f.v.norm(), p.time_scale);
+      const double c = f.time_scale > 0 ? f.time_scale : p.time_scale;
+      const double lifted_speed = std::hypot(f.v.norm(), c);
       // Pinned units must cover the next steps for sure; prefetched ones are a guess, and a
       // guess too far ahead reads bricks the front never samples.
       const double reach = (horizon <= p.pinned_steps ? 1.5 : 1.0) * p.edge * horizon;
@@ -335,7 +336,7 @@ BandUpdate StreamedField::update_front(std::span<const FrontSample> front,
             std::min(point_below(a, x1) + 1, grid_.size[static_cast<std::size_t>(a)] - 1);
       }
       const std::size_t k0 = step_of(f.t - p.back_time);
-      const std::size_t k1 = std::min(step_of(t_ahead + margin / p.time_scale) + 1, last_step);
+      const std::size_t k1 = std::min(step_of(t_ahead + margin / c) + 1, last_step);
       collect(lo, hi, k0, k1, out);
     }
   };

@@ -26,6 +26,9 @@ struct FrontSample {
   Vec3 x = Vec3::Zero();
   double t = 0;
   Vec3 v = Vec3::Zero();
+  /// c of the surface the vertex belongs to, where one band serves several surfaces with their
+  /// own lifts (0: the prediction's time_scale).
+  double time_scale = 0;
 };
 
 /// How far ahead of the front the band reaches.
