@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "cli/batch_checkpoint.h"
 #include "cli/batch_job.h"
@@ -23,15 +24,18 @@
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
+#include "cli/streak_report.h"
 #include "cli/surface_job.h"
 #include "cli/work_sharing.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
+#include "orthofront/io/mesh_series.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/spacetime/path_surface.h"
+#include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
 
@@ -327,6 +331,7 @@ class BatchRun {
                     {"resumed", args_.resume},
                     {"ranks", sharing->size()},
                     {"checkpoints_written", checkpoints_written_},
+                    {"checkpoint_seconds", checkpoint_seconds_},
                     {"passes", passes_},
                     {"peak_rss_bytes", peak_rss_bytes()}};
     std::size_t failed = 0, incomplete = 0;
@@ -407,6 +412,14 @@ class BatchRun {
       todo.push_back(i);
     }
     if (todo.empty()) return;
+    if (g.kind == SurfaceKind::streak) {
+      // Streak surfaces read their data one step interval at a time for all their particles
+      // (each step once); they run one after another and are not checkpointed between frames:
+      // one cut short runs again from its release on --resume.
+      for (std::size_t i : todo) run_streak(job_.surfaces[i], i);
+      passes_.push_back({{"field", g.field}, {"kind", "streak"}, {"surfaces", todo.size()}});
+      return;
+    }
     try {
       if (g.kind == SurfaceKind::stream) {
         steady = open_field(g.field);
@@ -542,6 +555,73 @@ class BatchRun {
     passes_.push_back(pass);
   }
 
+  void run_streak(const SurfaceSpec& s, std::size_t i) {
+    const auto t0 = Clock::now();
+    try {
+      const std::filesystem::path pvd = output_path(job_, s);
+      io::MeshSeriesWriter writer(pvd);
+      spacetime::StreakOptions o;
+      std::tie(o.release_begin, o.release_end) = parse_streak_release(s.release);
+      o.frames = parse_streak_frames(s.frames);
+      o.edge = s.options.edge;
+      o.split = s.split;
+      o.merge = s.merge;
+      o.release_step = s.release_step;
+      o.seed_count = s.seed_count;
+      o.insertion = s.insertion == "interpolate" ? spacetime::ParticleInsertion::interpolate
+                                                 : spacetime::ParticleInsertion::exact;
+      o.max_vertices = s.options.max_vertices;
+      o.seed_name = s.seed;
+      o.field_name = s.field;
+      o.progress = [](const spacetime::StreakProgress&) { return !interrupted(); };
+      const auto sink = [&](const spacetime::StreakFrame& frame) {
+        writer.add_frame(frame.mesh, frame.time);
+      };
+      const SeedCurve seed = parse_seed(s.seed).translated(s.offset);
+      spacetime::StreakReport result;
+      if (is_unsteady_field_name(s.field)) {
+        result = spacetime::build_streak_surface(*make_unsteady_field(s.field), seed, o, sink);
+      } else {
+        const auto series = open_time_series(s.field, "streak surfaces");
+        spacetime::CacheOptions co;
+        co.budget_bytes = job_.cache_budget.empty() ? cache_budget_for(available_memory_bytes())
+                                                    : spacetime::parse_bytes(job_.cache_budget);
+        spacetime::BrickCache cache(*series, co);
+        result = spacetime::build_streak_surface(cache, seed, o, sink);
+      }
+      if (interrupted())
+        throw Error("interrupted during streak surface '" + s.name +
+                    "' (it runs again from its release on --resume)");
+      json report = streak_report_json(result);
+      report["name"] = s.name;
+      report["field"] = s.field;
+      report["seed"] = s.seed;
+      report["seed_offset"] = {s.offset.x(), s.offset.y(), s.offset.z()};
+      report["output"] = pvd.string();
+      report["frames_written"] = writer.frames();
+      io::write_json(report, job_.out / (s.name + ".json"));
+      json row = summary_row(s, result.complete ? "done" : "incomplete", json(),
+                             result.total_seconds, result.complete ? "" : result.message,
+                             pvd.string());
+      if (!result.frames.empty()) {
+        const auto& f = result.frames.back();
+        row["vertices"] = f.vertices;
+        row["faces"] = f.faces;
+        row["steps"] = result.intervals;
+        row["frames"] = result.frames.size();
+        row["quad_share"] = f.quality.quad_share;
+        row["quad_angles_within_10"] = f.quality.quad_angles_within_10;
+        row["folds"] = f.quality.folds;
+        row["degenerate_faces"] = f.quality.degenerate_faces;
+      }
+      rows_[i] = row;
+    } catch (const std::exception& e) {
+      if (interrupted()) throw;
+      rows_[i] = summary_row(s, "failed", json(), seconds_since(t0), e.what(), "");
+    }
+    checkpoints_.save_done(s.name, rows_[i]);
+  }
+
   void fail(const SurfaceSpec& s, std::size_t i, const std::string& message) {
     rows_[i] = summary_row(s, "failed", json(), 0, message, "");
     checkpoints_.save_done(s.name, rows_[i]);
@@ -555,9 +635,11 @@ class BatchRun {
                      seconds_since(last_checkpoint_) >= job_.checkpoint_every;
     if (!due && !interrupted() && !killed) return;
     if (killed) std::_Exit(9);  // as kill -9: nothing saved since the last checkpoint
+    const auto t0 = Clock::now();
     for (std::size_t k = 0; k < tasks.size(); ++k)
       if (!finished[k]) checkpoints_.save_state(tasks[k]->spec().name, tasks[k]->state());
     last_checkpoint_ = Clock::now();
+    checkpoint_seconds_ += seconds_since(t0);
     ++checkpoints_written_;
     if (interrupted())
       throw Error("interrupted: the unfinished surfaces were checkpointed in '" +
@@ -601,6 +683,7 @@ class BatchRun {
   Clock::time_point last_checkpoint_;
   long long steps_taken_ = 0;
   std::size_t checkpoints_written_ = 0;
+  double checkpoint_seconds_ = 0;  // writing checkpoints (the overhead they add)
 };
 
 }  // namespace

@@ -12,13 +12,24 @@
 
 #include "cli/field_source.h"
 #include "cli/process_memory.h"
+#include "cli/streak_report.h"
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
 #include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::cli {
 
-const char* to_string(SurfaceKind kind) { return kind == SurfaceKind::stream ? "stream" : "path"; }
+const char* to_string(SurfaceKind kind) {
+  switch (kind) {
+    case SurfaceKind::stream:
+      return "stream";
+    case SurfaceKind::path:
+      return "path";
+    case SurfaceKind::streak:
+      return "streak";
+  }
+  return "?";
+}
 
 namespace {
 
@@ -138,7 +149,8 @@ const std::set<std::string>& surface_keys() {
   static const std::set<std::string> keys{
       "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
       "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
-      "tolerance", "integrator", "insertion", "format"};
+      "tolerance", "integrator", "insertion", "format",  "release", "frames", "split",
+      "merge",    "release_step"};
   return keys;
 }
 
@@ -169,13 +181,15 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       const std::string k = text(d, v, at);
       if (k == "stream") spec.kind = SurfaceKind::stream;
       else if (k == "path") spec.kind = SurfaceKind::path;
-      else d.fail(at, "must be \"stream\" or \"path\", got " + v.dump());
+      else if (k == "streak") spec.kind = SurfaceKind::streak;
+      else d.fail(at, "must be \"stream\", \"path\" or \"streak\", got " + v.dump());
     } else if (key == "field") {
       spec.field = text(d, v, at);
     } else if (key == "seed") {
       spec.seed = text(d, v, at);
     } else if (key == "seed_count") {
       spec.seed_count = static_cast<int>(integer(d, v, at, 2, 10'000'000));
+      spec.seed_count_given = true;
     } else if (key == "edge") {
       o.edge = positive(d, v, at);
     } else if (key == "steps") {
@@ -205,11 +219,28 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       else if (k == "rk4") o.integrator = IntegratorKind::rk4;
       else d.fail(at, "must be \"dopri5\" or \"rk4\", got " + v.dump());
     } else if (key == "insertion") {
-      const std::string k = text(d, v, at);
-      if (k == "streamline") o.insertion = Insertion::streamline;
-      else if (k == "cubic") o.insertion = Insertion::cubic;
-      else if (k == "linear") o.insertion = Insertion::linear;
-      else d.fail(at, "must be \"streamline\", \"cubic\" or \"linear\", got " + v.dump());
+      spec.insertion = text(d, v, at);  // checked with the kind (check_spec)
+    } else if (key == "release") {
+      spec.release = text(d, v, at);
+      try {
+        (void)parse_streak_release(spec.release);
+      } catch (const std::exception& e) {
+        d.fail(at, e.what());
+      }
+    } else if (key == "frames") {
+      spec.frames = text(d, v, at);
+      try {
+        (void)parse_streak_frames(spec.frames);
+      } catch (const std::exception& e) {
+        d.fail(at, e.what());
+      }
+    } else if (key == "split") {
+      spec.split = positive(d, v, at);
+    } else if (key == "merge") {
+      spec.merge = positive(d, v, at);
+    } else if (key == "release_step") {
+      spec.release_step = number(d, v, at);
+      if (spec.release_step < 0) d.fail(at, "must be >= 0 (0: derived), got " + v.dump());
     } else if (key == "format") {
       spec.format = text(d, v, at);
       if (spec.format != "vtp" && spec.format != "ply" && spec.format != "obj")
@@ -219,7 +250,28 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
 }
 
 // Checks a finished spec (after defaults and the family's own keys).
-void check_spec(const Document& d, const std::string& path, const SurfaceSpec& s) {
+void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
+  if (!s.insertion.empty()) {
+    const std::string at = path + ".insertion";
+    if (s.kind == SurfaceKind::streak) {
+      if (s.insertion != "exact" && s.insertion != "interpolate")
+        d.fail(at, "a streak surface's insertion is \"exact\" or \"interpolate\", got \"" +
+                       s.insertion + "\"");
+    } else if (s.insertion == "streamline") {
+      s.options.insertion = Insertion::streamline;
+    } else if (s.insertion == "cubic") {
+      s.options.insertion = Insertion::cubic;
+    } else if (s.insertion == "linear") {
+      s.options.insertion = Insertion::linear;
+    } else {
+      d.fail(at, "must be \"streamline\", \"cubic\" or \"linear\", got \"" + s.insertion + "\"");
+    }
+  }
+  if (s.kind == SurfaceKind::streak) {
+    if (s.release.empty()) d.fail(path, "a streak surface needs release (\"T0:T1\")");
+    if (s.frames.empty()) d.fail(path, "a streak surface needs frames (\"START:END:COUNT\")");
+    s.format = "pvd";
+  }
   if (s.name.empty()) d.fail(path, "needs a name");
   if (s.field.empty()) d.fail(path, "needs a field (here or as job.field)");
   if (s.seed.empty()) d.fail(path, "needs a seed");
@@ -299,6 +351,7 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
   const auto add = [&](SurfaceSpec s, const std::string& path) {
     // As the commands: `stream` takes 100 steps, `path` runs until its path lines reach t1.
     if (!s.steps_given) s.options.max_steps = s.kind == SurfaceKind::path ? 1'000'000 : 100;
+    if (!s.seed_count_given && s.kind == SurfaceKind::streak) s.seed_count = 0;
     check_spec(d, path, s);
     s.line = d.line_of(path);
     job.surfaces.push_back(std::move(s));
@@ -387,7 +440,8 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
                         s.time_scale, s.max_band, o.edge, o.max_steps,
                         s.max_vertices_given ? o.max_vertices : 0, o.damping,
                         o.tolerance, static_cast<int>(o.integrator), static_cast<int>(o.insertion),
-                        s.format});
+                        s.format, s.release, s.frames, s.split, s.merge, s.release_step,
+                        s.insertion});
   }
   job.digest = fnv1a(expanded.dump() + "|" + job.cache_budget);
   return job;

@@ -12,7 +12,7 @@
 
 namespace orthofront::cli {
 
-enum class SurfaceKind { stream, path };
+enum class SurfaceKind { stream, path, streak };
 
 /// One surface of a job, with every default applied and every family expanded.
 struct SurfaceSpec {
@@ -25,8 +25,14 @@ struct SurfaceSpec {
   double t0 = 0, t1 = 1;            ///< path
   double time_scale = 0, max_band = 0;
   StreamSurfaceOptions options;
-  std::string format = "vtp";       ///< vtp, ply or obj
+  std::string format = "vtp";       ///< vtp, ply or obj (streak surfaces: a .pvd animation)
+  // Streak surfaces, as `streak` takes them.
+  std::string release;              ///< "T0:T1"
+  std::string frames;               ///< "START:END:COUNT" or "t1,t2,..."
+  double split = 1.5, merge = 0.5, release_step = 0;
+  std::string insertion;            ///< as given (stream/path: streamline|cubic|linear; streak: exact|interpolate)
   bool steps_given = false;
+  bool seed_count_given = false;    ///< else 20 (stream, path) or derived from ℓ (streak), as the commands
   bool max_vertices_given = false;  ///< else the memory available decides (not part of the digest)         ///< else stream surfaces take `stream`'s 100, path ones run to t1
   int line = 0;                     ///< where the job file defines it (0: unknown)
 };

@@ -12,6 +12,7 @@
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
+#include "cli/streak_report.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -226,6 +227,14 @@ void run_spacetime_route(const StreakArgs& args) {
 }
 
 }  // namespace
+
+std::pair<double, double> parse_streak_release(const std::string& text) {
+  return parse_release(text);
+}
+std::vector<double> parse_streak_frames(const std::string& text) { return parse_frames(text); }
+nlohmann::json streak_report_json(const spacetime::StreakReport& report) {
+  return report_json(report);
+}
 
 void add_streak_command(CLI::App& app) {
   auto args = std::make_shared<StreakArgs>();

@@ -311,3 +311,32 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
 }
+
+TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte for byte",
+          "[batch]") {
+  TempDir dir("batch-streak");
+  write_text(dir / "job.toml",
+             "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
+             "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"
+             "edge = 0.03\n");
+  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out") + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  fs::create_directories(dir / "alone");
+  const auto alone = run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
+                         "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --out " +
+                         q(dir / "alone" / "dye.pvd"));
+  INFO(alone.output);
+  REQUIRE(alone.status == 0);
+  CHECK(read_text(dir / "out" / "dye.pvd") == read_text(dir / "alone" / "dye.pvd"));
+  std::size_t frames = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "alone" / "dye")) {
+    INFO(entry.path());
+    CHECK(read_text(dir / "out" / "dye" / entry.path().filename()) == read_text(entry.path()));
+    ++frames;
+  }
+  CHECK(frames == 4);
+  const nlohmann::json s = summary(dir / "out");
+  CHECK(s["surfaces"][0]["status"] == "done");
+  CHECK(s["surfaces"][0]["frames"] == 4);
+}
