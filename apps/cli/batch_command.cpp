@@ -3,6 +3,7 @@
 // them through one cache; unfinished surfaces are checkpointed and a killed job resumes.
 #include <unistd.h>
 
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -53,6 +54,7 @@ struct BatchArgs {
   bool resume = false, restart = false, quiet = false;
   double checkpoint_every = -1;  // < 0: the job file's
   int fail_after_steps = -1;     // tests: stop as if killed after this many front steps
+  int threads = 0;               // 0: every core
 };
 
 std::string read_text(const std::filesystem::path& path) {
@@ -708,10 +710,18 @@ void add_batch_command(CLI::App& app) {
   c->add_option("--fail-after-steps", args->fail_after_steps,
                 "Testing: exit at once, as if killed with SIGKILL, after this many front steps")
       ->group("");
+  c->add_option("--threads", args->threads,
+                "Threads of this process (0: every core; under MPI, per rank)")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
   c->add_flag("--quiet", args->quiet, "No table on stdout");
   c->callback([args]() {
     if (args->resume && args->restart)
       throw InvalidArgument("--resume and --restart exclude each other");
+    std::optional<tbb::global_control> threads;
+    if (args->threads > 0)
+      threads.emplace(tbb::global_control::max_allowed_parallelism,
+                      static_cast<std::size_t>(args->threads));
     BatchJob job = read_batch_job(args->job);
     if (!args->out.empty()) job.out = args->out;
     BatchRun(std::move(job), *args).run();

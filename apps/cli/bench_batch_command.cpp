@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include "cli/commands.h"
 #include "cli/process_memory.h"
@@ -54,9 +55,10 @@ struct Child {
   std::string log;
 };
 
-// Runs this binary with `args`, stdout and stderr into `log`.
-Child run_self(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  std::vector<std::string> argv{"/proc/self/exe"};
+// Runs `program` (searched on PATH) with `args`, stdout and stderr into `log`.
+Child run_program(const std::string& program, const std::vector<std::string>& args,
+                  const std::filesystem::path& log) {
+  std::vector<std::string> argv{program};
   argv.insert(argv.end(), args.begin(), args.end());
   std::vector<char*> cargv;
   for (auto& a : argv) cargv.push_back(a.data());
@@ -67,8 +69,8 @@ Child run_self(const std::vector<std::string>& args, const std::filesystem::path
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
   pid_t pid = 0;
   const auto t0 = Clock::now();
-  if (posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, cargv.data(), environ) != 0)
-    throw Error("bench-batch: cannot start a child process");
+  if (posix_spawnp(&pid, program.c_str(), &actions, nullptr, cargv.data(), environ) != 0)
+    throw Error("bench-batch: cannot start " + program);
   posix_spawn_file_actions_destroy(&actions);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -77,6 +79,11 @@ Child run_self(const std::vector<std::string>& args, const std::filesystem::path
   c.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   c.log = read_file(log);
   return c;
+}
+
+// Runs this binary with `args`.
+Child run_self(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  return run_program("/proc/self/exe", args, log);
 }
 
 void require_ok(const Child& c, const std::string& what) {
@@ -254,53 +261,51 @@ void add_bench_batch_command(CLI::App& app) {
       std::fflush(stdout);
     }
 
-    // 3. MPI: the same job over 2 ranks of this machine (rank 0 hands out pieces of the rake).
+    // 3. MPI: the same job over 2 ranks of this machine (rank 0 hands out pieces of the rake),
+    // and, to see how ranks scale where the work is CPU-bound, 1 and 2 ranks of one thread each.
+    double mpi_one_thread[2] = {0, 0};
     if (have_mpi()) {
-      const fs::path out = work / "shared-mpi";
-      fs::remove_all(out);
       const std::string self = fs::read_symlink("/proc/self/exe").string();
-      // mpirun as root needs these two; oversubscribe: 2 ranks on any core count.
+      // mpirun as root needs these two; oversubscribe: any rank count on any core count.
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 0);
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 0);
-      std::vector<std::string> argv{mpi_launcher(), "-np", "2", "--oversubscribe", self, "batch",
-                                    (work / "job.toml").string(), "--out", out.string(),
-                                    "--checkpoint-every", "0", "--quiet"};
-      std::vector<char*> cargv;
-      for (auto& x : argv) cargv.push_back(x.data());
-      cargv.push_back(nullptr);
-      const fs::path log = work / "shared-mpi.log";
-      posix_spawn_file_actions_t actions;
-      posix_spawn_file_actions_init(&actions);
-      posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      posix_spawn_file_actions_adddup2(&actions, 1, 2);
-      pid_t pid = 0;
-      const auto t0 = Clock::now();
-      if (posix_spawnp(&pid, argv[0].c_str(), &actions, nullptr, cargv.data(), environ) != 0)
-        throw Error("bench-batch: cannot start " + argv[0]);
-      posix_spawn_file_actions_destroy(&actions);
-      int status = 0;
-      waitpid(pid, &status, 0);
-      Row r{"MPI, 2 ranks (shared pass each)"};
-      r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        throw Error("bench-batch: the MPI run failed: " + read_file(log));
-      const json sm = json::parse(read_file(out / "summary.json"));
-      for (const json& p : sm["passes"])
-        if (p.contains("cache")) {
-          r.data_passes += p.value("data_passes", 0);
-          r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
-          r.max_reads = std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
+      for (const auto& [way, ranks, threads] : std::vector<std::tuple<std::string, int, int>>{
+               {"MPI, 2 ranks", 2, 0},
+               {"MPI, 1 rank of 1 thread", 1, 1},
+               {"MPI, 2 ranks of 1 thread", 2, 1}}) {
+        const fs::path out = work / ("mpi-" + std::to_string(ranks) + "-" + std::to_string(threads));
+        fs::remove_all(out);
+        const Child ch = run_program(
+            mpi_launcher(),
+            {"-np", std::to_string(ranks), "--oversubscribe", self, "batch",
+             (work / "job.toml").string(), "--out", out.string(), "--checkpoint-every", "0",
+             "--threads", std::to_string(threads), "--quiet"},
+            out.string() + ".log");
+        require_ok(ch, way);
+        Row r{way};
+        r.seconds = ch.seconds;
+        const json sm = json::parse(read_file(out / "summary.json"));
+        for (const json& p : sm["passes"])
+          if (p.contains("cache")) {
+            r.data_passes += p.value("data_passes", 0);
+            r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
+            r.max_reads =
+                std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
+          }
+        r.peak_rss = sm.value("peak_rss_bytes", std::size_t{0});  // rank 0's
+        const int width = static_cast<int>(std::to_string(a->surfaces - 1).size());
+        for (int k = 0; k < a->surfaces; ++k) {
+          char member[64];
+          std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
+          if (read_file(out / member) ==
+              read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
+            ++r.identical;
         }
-      r.peak_rss = sm.value("peak_rss_bytes", std::size_t{0});  // rank 0's
-      const int width = static_cast<int>(std::to_string(a->surfaces - 1).size());
-      for (int k = 0; k < a->surfaces; ++k) {
-        char member[64];
-        std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
-        if (read_file(out / member) == read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
-          ++r.identical;
+        if (threads == 1) mpi_one_thread[ranks - 1] = r.seconds;
+        rows.push_back(r);
+        std::printf("  %s: %.2f s\n", r.way.c_str(), r.seconds);
+        std::fflush(stdout);
       }
-      rows.push_back(r);
-      std::printf("  %s: %.2f s\n", r.way.c_str(), r.seconds);
     }
 
     std::printf("\n%-38s %10s %12s %10s %10s %7s %7s %10s %10s\n", "way", "seconds", "read",
@@ -332,11 +337,17 @@ void add_bench_batch_command(CLI::App& app) {
                 100 * overhead10, rows[2].checkpoints, 100 * overhead1, rows[3].checkpoints,
                 100 * rows[2].checkpoint_seconds / std::max(rows[2].run_seconds, 1e-9),
                 100 * rows[3].checkpoint_seconds / std::max(rows[3].run_seconds, 1e-9));
+    if (rows[3].checkpoints > 0)
+      std::printf("one checkpoint of the %d surfaces takes %.3f s: %.2f%% of the time at one "
+                  "every 10 s\n",
+                  a->surfaces, rows[3].checkpoint_seconds / rows[3].checkpoints,
+                  10.0 * rows[3].checkpoint_seconds / rows[3].checkpoints);
     if (have_mpi())
-      std::printf("MPI 2 ranks / 1 process: %.2fx faster (goal >= 1.8 on CPU-bound jobs; this "
-                  "machine has %u cores, and one process already steps its surfaces in "
-                  "parallel)\n",
-                  shared_seconds / rows.back().seconds, std::thread::hardware_concurrency());
+      std::printf("MPI: 2 ranks vs one process of every core: %.2fx; 2 ranks vs 1 rank, one "
+                  "thread each: %.2fx (goal >= 1.8 on CPU-bound jobs; this machine has %u "
+                  "cores)\n",
+                  shared_seconds / rows[4].seconds, mpi_one_thread[0] / mpi_one_thread[1],
+                  std::thread::hardware_concurrency());
     else
       std::printf("MPI: this build has no MPI (install libopenmpi-dev and reconfigure)\n");
     if (!a->json_out.empty())

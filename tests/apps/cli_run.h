@@ -15,10 +15,10 @@ struct Run {
   std::string output;  // stdout and stderr together
 };
 
-/// Runs the binary with `arguments` (a shell fragment).
-inline Run run(const std::string& arguments) {
+/// Runs a shell command line (stderr joins stdout).
+inline Run run_shell(const std::string& command_line) {
   Run r;
-  const std::string command = std::string("'") + ORTHOFRONT_BINARY + "' " + arguments + " 2>&1";
+  const std::string command = command_line + " 2>&1";
   FILE* pipe = ::popen(command.c_str(), "r");
   REQUIRE(pipe != nullptr);
   char buffer[4096];
@@ -26,6 +26,11 @@ inline Run run(const std::string& arguments) {
   const int status = ::pclose(pipe);
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+/// Runs the binary with `arguments` (a shell fragment).
+inline Run run(const std::string& arguments) {
+  return run_shell(std::string("'") + ORTHOFRONT_BINARY + "' " + arguments);
 }
 
 /// Starts the binary with `args` in the background, its stdout and stderr in `log` and no stdin;

@@ -29,17 +29,8 @@ std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 // mpirun with two ranks on this machine, whatever its core count, as root too (CI).
 cli_test::Run mpirun(const std::string& args) {
-  const std::string command = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                              "OMPI_MCA_rmaps_base_oversubscribe=1 '" ORTHOFRONT_MPIEXEC
-                              "' -np 2 --oversubscribe '" ORTHOFRONT_BINARY "' " + args + " 2>&1";
-  cli_test::Run r;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) r.output += buffer;
-  const int status = ::pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return cli_test::run_shell("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 '" ORTHOFRONT_MPIEXEC
+                             "' -np 2 --oversubscribe '" ORTHOFRONT_BINARY "' " + args);
 }
 
 const char* kJob = R"([job]

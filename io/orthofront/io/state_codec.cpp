@@ -17,32 +17,6 @@ void ByteReader::take(void* out, std::size_t size) {
   at_ += size;
 }
 
-std::uint8_t ByteReader::u8() {
-  std::uint8_t v = 0;
-  take(&v, sizeof v);
-  return v;
-}
-std::uint32_t ByteReader::u32() {
-  std::uint32_t v = 0;
-  take(&v, sizeof v);
-  return v;
-}
-std::uint64_t ByteReader::u64() {
-  std::uint64_t v = 0;
-  take(&v, sizeof v);
-  return v;
-}
-std::int32_t ByteReader::i32() {
-  std::int32_t v = 0;
-  take(&v, sizeof v);
-  return v;
-}
-double ByteReader::f64() {
-  double v = 0;
-  take(&v, sizeof v);
-  return v;
-}
-
 std::uint64_t ByteReader::count(std::size_t item_bytes) {
   const std::uint64_t n = u64();
   if (item_bytes > 0 && n > left() / item_bytes)

@@ -44,11 +44,11 @@ class ByteReader {
  public:
   ByteReader(std::string_view bytes, std::string source)
       : bytes_(bytes), source_(std::move(source)) {}
-  std::uint8_t u8();
-  std::uint32_t u32();
-  std::uint64_t u64();
-  std::int32_t i32();
-  double f64();
+  std::uint8_t u8() { return scalar<std::uint8_t>(); }
+  std::uint32_t u32() { return scalar<std::uint32_t>(); }
+  std::uint64_t u64() { return scalar<std::uint64_t>(); }
+  std::int32_t i32() { return scalar<std::int32_t>(); }
+  double f64() { return scalar<double>(); }
   std::string text();
   template <typename T>
   std::vector<T> array() {
@@ -63,6 +63,12 @@ class ByteReader {
   [[noreturn]] void fail(const std::string& what) const;
 
  private:
+  template <typename T>
+  T scalar() {
+    T value{};
+    take(&value, sizeof value);
+    return value;
+  }
   void take(void* out, std::size_t size);
   std::string_view bytes_;
   std::size_t at_ = 0;
