@@ -1,5 +1,6 @@
 #include "cli/work_sharing.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -89,12 +90,19 @@ class Mpi final : public WorkSharing {
     return taken_ < count ? taken_++ : -1;
   }
   // Answers every request; each rank asks until it gets -1, so size - 1 such answers end it.
+  // Polls (a blocking receive spins a core in most MPI libraries: one the work needs).
   void serve(long count) {
     int finished = 0;
     while (finished < size_ - 1) {
       int ask = 0;
       MPI_Status status;
-      MPI_Recv(&ask, 1, MPI_INT, MPI_ANY_SOURCE, kAsk, MPI_COMM_WORLD, &status);
+      MPI_Request request;
+      MPI_Irecv(&ask, 1, MPI_INT, MPI_ANY_SOURCE, kAsk, MPI_COMM_WORLD, &request);
+      for (int arrived = 0;;) {
+        MPI_Test(&request, &arrived, &status);
+        if (arrived) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
       const long item = take(count);
       MPI_Send(&item, 1, MPI_LONG, status.MPI_SOURCE, kGive, MPI_COMM_WORLD);
       if (item < 0) ++finished;

@@ -224,6 +224,47 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
   }
 }
 
+TEST_CASE("batch: SIGTERM checkpoints the unfinished surfaces; --resume never rebuilds the finished",
+          "[batch]") {
+  TempDir dir("batch-term");
+  // Two stream surfaces in one pass: a quick one, and a slow one still running when the quick
+  // one's file appears. Checkpoints only on the signal.
+  write_text(dir / "job.toml",
+             "[job]\nfield = \"abc\"\ncheckpoint_every = 0\n[defaults]\nkind = \"stream\"\n"
+             "seed = \"line:0,0,0:0,1,1\"\n[[surface]]\nname = \"quick\"\nedge = 0.2\n"
+             "steps = 10\n[[surface]]\nname = \"slow\"\nedge = 0.05\nsteps = 1200\n");
+  const std::string job = q(dir / "job.toml");
+  REQUIRE(run("batch " + job + " --out " + q(dir / "reference") + " --quiet").status == 0);
+  const fs::path out = dir / "out";
+  const pid_t pid = cli_test::start({"batch", (dir / "job.toml").string(), "--out", out.string(),
+                                     "--quiet"},
+                                    (dir / "log.txt").string());
+  for (int waited = 0; !fs::exists(out / "quick.vtp") && waited < 20000; waited += 5)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  INFO(read_text(dir / "log.txt"));
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 2);
+  CHECK(read_text(dir / "log.txt").find("continue with --resume") != std::string::npos);
+  REQUIRE(fs::exists(out / ".checkpoint" / "slow.state"));
+  CHECK_FALSE(fs::exists(out / "slow.vtp"));
+  const auto quick_time = fs::last_write_time(out / "quick.vtp");
+
+  const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+  INFO(resumed.output);
+  REQUIRE(resumed.status == 0);
+  CHECK(fs::last_write_time(out / "quick.vtp") == quick_time);  // not rewritten
+  for (const char* name : {"quick.vtp", "slow.vtp"}) {
+    INFO(name);
+    CHECK(read_text(out / name) == read_text(dir / "reference" / name));
+  }
+  const nlohmann::json s = summary(out);
+  CHECK(s["surfaces"][0]["resumed"] == "finished before");
+  CHECK(s["surfaces"][1]["resumed_at_step"].get<int>() > 0);
+}
+
 TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are refused by name",
           "[batch]") {
   TempDir dir("batch-owner");
