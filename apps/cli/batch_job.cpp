@@ -35,8 +35,7 @@ namespace {
 
 using json = nlohmann::json;
 
-/// The parsed file as JSON, with the line of every key path ("surface[2].edge") where the
-/// format tells it (TOML; JSON tells lines of syntax errors only).
+/// The parsed file as JSON, with the line of every key path ("surface[2].edge").
 struct Document {
   std::string file;
   json root;
@@ -76,6 +75,54 @@ json from_toml(const toml::node& node, const std::string& path, std::map<std::st
   return json();  // dates and times: refused where a value is read
 }
 
+// The line of every key path of a JSON text that parsed (so its strings and brackets are well
+// formed): nlohmann's parser tells positions of syntax errors only.
+void index_json_lines(const std::string& text, std::map<std::string, int>& lines) {
+  struct Frame {
+    bool array = false;
+    std::size_t index = 0;
+    std::string path, key;
+  };
+  std::vector<Frame> stack;
+  int line = 1;
+  bool expect_key = false;
+  const auto value_path = [&]() -> std::string {
+    if (stack.empty()) return "";
+    const Frame& f = stack.back();
+    if (f.array) return f.path + "[" + std::to_string(f.index) + "]";
+    return f.path.empty() ? f.key : f.path + "." + f.key;
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+    } else if (c == '"') {
+      std::string value;
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
+        if (text[i] == '\\' && i + 1 < text.size()) ++i;  // an escape: the next one is literal
+        value += text[i];
+      }
+      if (expect_key && !stack.empty() && !stack.back().array) {
+        stack.back().key = value;
+        lines[value_path()] = line;
+        expect_key = false;
+      }
+    } else if (c == '{' || c == '[') {
+      const std::string path = value_path();
+      if (!path.empty() && !lines.count(path)) lines[path] = line;
+      stack.push_back({c == '[', 0, path, ""});
+      expect_key = c == '{';
+    } else if (c == '}' || c == ']') {
+      if (!stack.empty()) stack.pop_back();
+    } else if (c == ',' && !stack.empty()) {
+      if (stack.back().array)
+        ++stack.back().index;
+      else
+        expect_key = true;
+    }
+  }
+}
+
 Document parse(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw io::IoError("cannot open job file '" + file.string() + "'");
@@ -88,6 +135,7 @@ Document parse(const std::filesystem::path& file) {
   if (ext == ".json") {
     try {
       doc.root = json::parse(text, nullptr, true, true);
+      index_json_lines(text, doc.lines);
     } catch (const json::parse_error& e) {
       int line = 1;
       for (std::size_t i = 0; i < std::min<std::size_t>(e.byte, text.size()); ++i)

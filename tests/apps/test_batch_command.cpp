@@ -342,7 +342,10 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   m = refused("syntax.toml", "[job]\nfield = \"saddle3d\n");
   CHECK(m.find("syntax.toml:2: not valid TOML") != std::string::npos);
   m = refused("noseed.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": \"a\"}]}");
-  CHECK(m.find("surface[0]: needs a seed") != std::string::npos);
+  CHECK(m.find("noseed.json:2: surface[0]: needs a seed") != std::string::npos);
+  m = refused("range.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [\n  {\"name\": \"a\", "
+                            "\"seed\": \"line:0,0,0:1,0,0\"},\n  {\"name\": \"b\",\n   \"edge\": -1}]}");
+  CHECK(m.find("range.json:5: surface[1].edge: must be a number > 0") != std::string::npos);
   m = refused("bad.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": }]}");
   CHECK(m.find("bad.json:2: not valid JSON") != std::string::npos);
   m = refused("twice.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
