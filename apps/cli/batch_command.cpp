@@ -442,8 +442,13 @@ class BatchRun {
       return;
     }
     std::vector<std::size_t> index;  // job index of each task
+    // The surfaces of a pass grow together: where the job does not set max_vertices, they share
+    // the vertex cap one surface alone would have (half the memory available at ~300 B a vertex).
+    const std::size_t vertex_share =
+        std::max<std::size_t>(default_vertex_budget() / todo.size(), 1000);
     for (std::size_t i : todo) {
-      const SurfaceSpec& s = job_.surfaces[i];
+      SurfaceSpec s = job_.surfaces[i];
+      if (!s.max_vertices_given) s.options.max_vertices = vertex_share;
       try {
         std::optional<SurfaceState> saved = checkpoints_.load_state(s.name);
         std::unique_ptr<SurfaceTask> task;
