@@ -64,7 +64,7 @@ done | sort -u | grep -v -E '/(libc|libm|libdl|librt|libpthread|libgcc_s|libstdc
   done >>"$list"
 
 # CMake package files and the HDF5 compiler wrapper FindHDF5 asks for its flags.
-for d in /usr/lib/x86_64-linux-gnu/cmake/{TBB,Imath,OpenEXR,OpenVDB} \
+for d in /usr/lib/x86_64-linux-gnu/cmake/{TBB,Imath,OpenEXR,OpenVDB,tomlplusplus} \
          /usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0 /usr/lib/x86_64-linux-gnu/cmake/boost_*-1.74.0 \
          /usr/lib/x86_64-linux-gnu/cmake/BoostDetectToolset-1.74.0.cmake \
          /usr/lib/cmake/Catch2 /usr/share/cmake/CLI11 /usr/share/cmake/nlohmann_json \
