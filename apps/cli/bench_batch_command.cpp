@@ -37,7 +37,7 @@ struct BenchBatchArgs {
   int steps = 301;
   double t1 = 30, edge = 0.05;
   double max_band = 1.0;  // the fronts of 64 surfaces then share a band a budget can hold
-  std::string budget;  // empty: the series' raw size / 16
+  std::string budget;     // empty: the series' raw size / 16
   std::string work, json_out;
   bool keep = false;
 };
@@ -105,6 +105,31 @@ struct Row {
   double run_seconds = 0;         // the run's own total
 };
 
+/// Fills r from a batch run's OUT/summary.json (passes, bytes, reads, peak RSS; the run's own
+/// timers) and counts the members r-K.vtp equal to the one-by-one run's in `alone_dir`.
+void read_batch_summary(Row& r, const std::filesystem::path& out,
+                        const std::filesystem::path& alone_dir, int surfaces) {
+  const json s = json::parse(read_file(out / "summary.json"));
+  r.checkpoints = s.value("checkpoints_written", std::size_t{0});
+  r.checkpoint_seconds = s.value("checkpoint_seconds", 0.0);
+  r.run_seconds = s.value("seconds", 0.0);
+  r.peak_rss = s.value("peak_rss_bytes", std::size_t{0});  // rank 0's under MPI
+  for (const json& p : s["passes"])
+    if (p.contains("cache")) {
+      r.data_passes += p.value("data_passes", 0);
+      r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
+      r.max_reads = std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
+    }
+  // Members are named r-K with K zero-padded to the width of the last index.
+  const int width = static_cast<int>(std::to_string(surfaces - 1).size());
+  for (int k = 0; k < surfaces; ++k) {
+    char member[64];
+    std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
+    if (read_file(out / member) == read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
+      ++r.identical;
+  }
+}
+
 }  // namespace
 
 void add_bench_batch_command(CLI::App& app) {
@@ -118,7 +143,8 @@ void add_bench_batch_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--resolution", a->resolution, "Grid of the double-gyre-3d series NX,NY,NZ")
       ->capture_default_str();
-  c->add_option("--steps", a->steps, "Time steps of the series")->check(CLI::Range(2, 100000))
+  c->add_option("--steps", a->steps, "Time steps of the series")
+      ->check(CLI::Range(2, 100000))
       ->capture_default_str();
   c->add_option("--t1", a->t1, "Last time of the series (surfaces run from 0 to t1 / 2)")
       ->capture_default_str();
@@ -131,14 +157,16 @@ void add_bench_batch_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--cache-budget", a->budget,
                 "Cache budget of every run (default: the series' decoded size / 16)");
-  c->add_option("--work", a->work, "Folder for the series and the outputs (default: a temporary one)");
+  c->add_option("--work", a->work,
+                "Folder for the series and the outputs (default: a temporary one)");
   c->add_flag("--keep", a->keep, "Keep the work folder");
   c->add_option("--json", a->json_out, "Write the results as JSON here");
   c->callback([a]() {
     namespace fs = std::filesystem;
-    const fs::path work = a->work.empty() ? fs::temp_directory_path() /
-                                                ("orthofront-bench-batch-" + std::to_string(getpid()))
-                                          : fs::path(a->work);
+    const fs::path work =
+        a->work.empty()
+            ? fs::temp_directory_path() / ("orthofront-bench-batch-" + std::to_string(getpid()))
+            : fs::path(a->work);
     fs::create_directories(work);
     const fs::path series = work / "gyre3d.h5";
     std::printf("bench-batch: double-gyre-3d %s x %d steps into %s\n", a->resolution.c_str(),
@@ -146,8 +174,7 @@ void add_bench_batch_command(CLI::App& app) {
     std::fflush(stdout);
     require_ok(run_self({"generate", "--field", "double-gyre-3d", "--resolution", a->resolution,
                          "--steps", std::to_string(a->steps), "--t1", std::to_string(a->t1),
-                         "--brick", "16",
-                         "--out", series.string(), "--quiet"},
+                         "--brick", "16", "--out", series.string(), "--quiet"},
                         work / "generate.log"),
                "generating the series");
     // Decoded size: points x 3 components x 4 bytes x steps.
@@ -170,13 +197,14 @@ void add_bench_batch_command(CLI::App& app) {
       std::snprintf(text, sizeof text, "line:%.17g,0.1,0.5:%.17g,0.9,0.5", x, x);
       return std::string(text);
     };
-    std::printf("series: %s decoded (%s on disk), cache budget %s (%.1fx smaller), %d path "
-                "surfaces from t = 0 to %g, edge %g, max band %g\n",
-                spacetime::format_bytes(series_bytes).c_str(),
-                spacetime::format_bytes(fs::file_size(series)).c_str(),
-                spacetime::format_bytes(budget).c_str(),
-                static_cast<double>(series_bytes) / static_cast<double>(budget), a->surfaces,
-                t_end, a->edge, a->max_band);
+    std::printf(
+        "series: %s decoded (%s on disk), cache budget %s (%.1fx smaller), %d path "
+        "surfaces from t = 0 to %g, edge %g, max band %g\n",
+        spacetime::format_bytes(series_bytes).c_str(),
+        spacetime::format_bytes(fs::file_size(series)).c_str(),
+        spacetime::format_bytes(budget).c_str(),
+        static_cast<double>(series_bytes) / static_cast<double>(budget), a->surfaces, t_end,
+        a->edge, a->max_band);
     std::fflush(stdout);
 
     std::vector<Row> rows;
@@ -186,20 +214,35 @@ void add_bench_batch_command(CLI::App& app) {
     fs::create_directories(alone_dir);
     for (int k = 0; k < a->surfaces; ++k) {
       const std::string name = "r-" + std::to_string(k);
-      const Child ch = run_self({"path", "--field", series.string(), "--seed", seed_of(k),
-                                 "--t0", "0", "--t1", std::to_string(t_end), "--edge",
-                                 std::to_string(a->edge), "--cache-budget", budget_text,
-                                 "--max-band", std::to_string(a->max_band),
-                                 "--quiet", "--out", (alone_dir / (name + ".vtp")).string(),
-                                 "--report", (alone_dir / (name + ".json")).string()},
+      const Child ch = run_self({"path",
+                                 "--field",
+                                 series.string(),
+                                 "--seed",
+                                 seed_of(k),
+                                 "--t0",
+                                 "0",
+                                 "--t1",
+                                 std::to_string(t_end),
+                                 "--edge",
+                                 std::to_string(a->edge),
+                                 "--cache-budget",
+                                 budget_text,
+                                 "--max-band",
+                                 std::to_string(a->max_band),
+                                 "--quiet",
+                                 "--out",
+                                 (alone_dir / (name + ".vtp")).string(),
+                                 "--report",
+                                 (alone_dir / (name + ".json")).string()},
                                 alone_dir / (name + ".log"));
       alone.seconds += ch.seconds;
       if (!fs::exists(alone_dir / (name + ".json"))) require_ok(ch, "path surface " + name);
       const json report = json::parse(read_file(alone_dir / (name + ".json")));
       alone.bytes_read += report["path"]["cache"].value("bytes_read", std::size_t{0});
-      alone.max_reads = std::max(alone.max_reads,
-                                 report["path"]["cache"].value("max_reads_of_a_unit", std::size_t{0}));
-      alone.peak_rss = std::max(alone.peak_rss, report["process"].value("peak_rss_bytes", std::size_t{0}));
+      alone.max_reads = std::max(
+          alone.max_reads, report["path"]["cache"].value("max_reads_of_a_unit", std::size_t{0}));
+      alone.peak_rss =
+          std::max(alone.peak_rss, report["process"].value("peak_rss_bytes", std::size_t{0}));
       alone.identical += 1;
     }
     rows.push_back(alone);
@@ -210,7 +253,8 @@ void add_bench_batch_command(CLI::App& app) {
     char job[1024];
     std::snprintf(job, sizeof job,
                   "[job]\nfield = \"%s\"\ncache_budget = \"%zu\"\n[defaults]\nedge = %.17g\n"
-                  "max_band = %.17g\nt0 = 0.0\nt1 = %.17g\n[[rake]]\nname = \"r\"\nseed = \"%s\"\ncount = %d\n"
+                  "max_band = %.17g\nt0 = 0.0\nt1 = %.17g\n[[rake]]\nname = \"r\"\nseed = "
+                  "\"%s\"\ncount = %d\n"
                   "offset = [%.17g, 0.0, 0.0]\n",
                   series.string().c_str(), budget, a->edge, a->max_band, t_end, seed_of(0).c_str(),
                   a->surfaces, step_x);
@@ -239,27 +283,9 @@ void add_bench_batch_command(CLI::App& app) {
     for (std::size_t w = 0; w < ways.size(); ++w) {
       const auto& [way, every] = ways[w];
       const fs::path out = work / ("shared-" + every);
-      const json s = json::parse(read_file(out / "summary.json"));
       Row r{way};
       r.seconds = best[w];
-      r.checkpoints = s.value("checkpoints_written", std::size_t{0});
-      r.checkpoint_seconds = s.value("checkpoint_seconds", 0.0);
-      r.run_seconds = s.value("seconds", 0.0);
-      r.peak_rss = s.value("peak_rss_bytes", std::size_t{0});
-      for (const json& p : s["passes"])
-        if (p.contains("cache")) {
-          r.data_passes += p.value("data_passes", 0);
-          r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
-          r.max_reads = std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
-        }
-      // Members are named r-K with K zero-padded to the width of the last index.
-      const int width = static_cast<int>(std::to_string(a->surfaces - 1).size());
-      for (int k = 0; k < a->surfaces; ++k) {
-        char member[64];
-        std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
-        if (read_file(out / member) == read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
-          ++r.identical;
-      }
+      read_batch_summary(r, out, alone_dir, a->surfaces);
       if (every == "0") shared_seconds = r.seconds;
       rows.push_back(r);
       std::printf("  %s: %.2f s\n", way.c_str(), r.seconds);
@@ -274,38 +300,23 @@ void add_bench_batch_command(CLI::App& app) {
       // mpirun as root needs these two; oversubscribe: any rank count on any core count.
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 0);
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 0);
-      for (const auto& [way, ranks, threads] : std::vector<std::tuple<std::string, int, int>>{
-               {"MPI, 2 ranks", 2, 0},
-               {"MPI, 1 rank of 1 thread", 1, 1},
-               {"MPI, 2 ranks of 1 thread", 2, 1}}) {
-        const fs::path out = work / ("mpi-" + std::to_string(ranks) + "-" + std::to_string(threads));
+      for (const auto& [way, ranks, threads] :
+           std::vector<std::tuple<std::string, int, int>>{{"MPI, 2 ranks", 2, 0},
+                                                          {"MPI, 1 rank of 1 thread", 1, 1},
+                                                          {"MPI, 2 ranks of 1 thread", 2, 1}}) {
+        const fs::path out =
+            work / ("mpi-" + std::to_string(ranks) + "-" + std::to_string(threads));
         fs::remove_all(out);
-        const Child ch = run_program(
-            mpi_launcher(),
-            {"-np", std::to_string(ranks), "--oversubscribe", self, "batch",
-             (work / "job.toml").string(), "--out", out.string(), "--checkpoint-every", "0",
-             "--threads", std::to_string(threads), "--quiet"},
-            out.string() + ".log");
+        const Child ch =
+            run_program(mpi_launcher(),
+                        {"-np", std::to_string(ranks), "--oversubscribe", self, "batch",
+                         (work / "job.toml").string(), "--out", out.string(), "--checkpoint-every",
+                         "0", "--threads", std::to_string(threads), "--quiet"},
+                        out.string() + ".log");
         require_ok(ch, way);
         Row r{way};
         r.seconds = ch.seconds;
-        const json sm = json::parse(read_file(out / "summary.json"));
-        for (const json& p : sm["passes"])
-          if (p.contains("cache")) {
-            r.data_passes += p.value("data_passes", 0);
-            r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
-            r.max_reads =
-                std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
-          }
-        r.peak_rss = sm.value("peak_rss_bytes", std::size_t{0});  // rank 0's
-        const int width = static_cast<int>(std::to_string(a->surfaces - 1).size());
-        for (int k = 0; k < a->surfaces; ++k) {
-          char member[64];
-          std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
-          if (read_file(out / member) ==
-              read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
-            ++r.identical;
-        }
+        read_batch_summary(r, out, alone_dir, a->surfaces);
         if (threads == 1) mpi_one_thread[ranks - 1] = r.seconds;
         rows.push_back(r);
         std::printf("  %s: %.2f s\n", r.way.c_str(), r.seconds);
@@ -320,11 +331,13 @@ void add_bench_batch_command(CLI::App& app) {
     for (const Row& r : rows) {
       std::printf("%-38s %10.2f %12s %10.2f %10zu %7d %7zu %10s %7zu/%d\n", r.way.c_str(),
                   r.seconds, spacetime::format_bytes(r.bytes_read).c_str(),
-                  static_cast<double>(r.bytes_read) / one_surface_bytes, r.max_reads,
-                  r.data_passes, r.checkpoints, format_memory(r.peak_rss).c_str(), r.identical,
-                  a->surfaces);
-      out_rows.push_back({{"way", r.way}, {"seconds", r.seconds}, {"bytes_read", r.bytes_read},
-                          {"max_reads_of_a_brick", r.max_reads}, {"data_passes", r.data_passes},
+                  static_cast<double>(r.bytes_read) / one_surface_bytes, r.max_reads, r.data_passes,
+                  r.checkpoints, format_memory(r.peak_rss).c_str(), r.identical, a->surfaces);
+      out_rows.push_back({{"way", r.way},
+                          {"seconds", r.seconds},
+                          {"bytes_read", r.bytes_read},
+                          {"max_reads_of_a_brick", r.max_reads},
+                          {"data_passes", r.data_passes},
                           {"checkpoints_written", r.checkpoints},
                           {"peak_rss_bytes", r.peak_rss},
                           {"identical_meshes", r.identical}});
@@ -332,33 +345,40 @@ void add_bench_batch_command(CLI::App& app) {
     const double ratio = shared_seconds / alone.seconds;
     const double overhead10 = rows[2].seconds / shared_seconds - 1;
     const double overhead1 = rows[3].seconds / shared_seconds - 1;
-    std::printf("\nshared pass / one by one: time %.3f (goal <= 0.25), bytes read %.2fx one "
-                "surface's pass (goal <= 1.1; the series holds %.2fx)\n",
-                ratio, static_cast<double>(rows[1].bytes_read) / one_surface_bytes,
-                static_cast<double>(series_bytes) / one_surface_bytes);
-    std::printf("checkpoint overhead: wall clock (least of 3 runs each, runs vary by ~10%%) "
-                "%+.1f%% every 10 s (%zu written), %+.1f%% every 1 s (%zu written); time spent "
-                "writing them: %.2f%% and %.2f%% of the run (goal <= 3%%)\n",
-                100 * overhead10, rows[2].checkpoints, 100 * overhead1, rows[3].checkpoints,
-                100 * rows[2].checkpoint_seconds / std::max(rows[2].run_seconds, 1e-9),
-                100 * rows[3].checkpoint_seconds / std::max(rows[3].run_seconds, 1e-9));
+    std::printf(
+        "\nshared pass / one by one: time %.3f (goal <= 0.25), bytes read %.2fx one "
+        "surface's pass (goal <= 1.1; the series holds %.2fx)\n",
+        ratio, static_cast<double>(rows[1].bytes_read) / one_surface_bytes,
+        static_cast<double>(series_bytes) / one_surface_bytes);
+    std::printf(
+        "checkpoint overhead: wall clock (least of 3 runs each, runs vary by ~10%%) "
+        "%+.1f%% every 10 s (%zu written), %+.1f%% every 1 s (%zu written); time spent "
+        "writing them: %.2f%% and %.2f%% of the run (goal <= 3%%)\n",
+        100 * overhead10, rows[2].checkpoints, 100 * overhead1, rows[3].checkpoints,
+        100 * rows[2].checkpoint_seconds / std::max(rows[2].run_seconds, 1e-9),
+        100 * rows[3].checkpoint_seconds / std::max(rows[3].run_seconds, 1e-9));
     if (rows[3].checkpoints > 0)
-      std::printf("one checkpoint of the %d surfaces takes %.3f s: %.2f%% of the time at one "
-                  "every 10 s\n",
-                  a->surfaces, rows[3].checkpoint_seconds / rows[3].checkpoints,
-                  10.0 * rows[3].checkpoint_seconds / rows[3].checkpoints);
+      std::printf(
+          "one checkpoint of the %d surfaces takes %.3f s: %.2f%% of the time at one "
+          "every 10 s\n",
+          a->surfaces, rows[3].checkpoint_seconds / rows[3].checkpoints,
+          10.0 * rows[3].checkpoint_seconds / rows[3].checkpoints);
     if (have_mpi())
-      std::printf("MPI: 2 ranks vs one process of every core: %.2fx; 2 ranks vs 1 rank, one "
-                  "thread each: %.2fx (goal >= 1.8 on CPU-bound jobs; this machine has %u "
-                  "cores)\n",
-                  shared_seconds / rows[4].seconds, mpi_one_thread[0] / mpi_one_thread[1],
-                  std::thread::hardware_concurrency());
+      std::printf(
+          "MPI: 2 ranks vs one process of every core: %.2fx; 2 ranks vs 1 rank, one "
+          "thread each: %.2fx (goal >= 1.8 on CPU-bound jobs; this machine has %u "
+          "cores)\n",
+          shared_seconds / rows[4].seconds, mpi_one_thread[0] / mpi_one_thread[1],
+          std::thread::hardware_concurrency());
     else
       std::printf("MPI: this build has no MPI (install libopenmpi-dev and reconfigure)\n");
     if (!a->json_out.empty())
-      io::write_json({{"surfaces", a->surfaces}, {"resolution", a->resolution},
-                      {"steps", a->steps}, {"series_bytes", series_bytes},
-                      {"cache_budget_bytes", budget}, {"rows", out_rows},
+      io::write_json({{"surfaces", a->surfaces},
+                      {"resolution", a->resolution},
+                      {"steps", a->steps},
+                      {"series_bytes", series_bytes},
+                      {"cache_budget_bytes", budget},
+                      {"rows", out_rows},
                       {"shared_over_one_by_one", ratio},
                       {"checkpoint_overhead_10s", overhead10},
                       {"checkpoint_overhead_1s", overhead1},

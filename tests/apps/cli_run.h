@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,11 @@ struct Run {
   int status = -1;
   std::string output;  // stdout and stderr together
 };
+
+/// `p` in single quotes, as one shell word (test paths hold no quote).
+inline std::string quoted(const std::filesystem::path& p) {
+  return "'" + p.string() + "'";
+}
 
 /// Runs a shell command line (stderr joins stdout).
 inline Run run_shell(const std::string& command_line) {
@@ -34,8 +40,7 @@ inline Run run(const std::string& arguments) {
 }
 
 /// Starts the binary with `args` in the background, its stdout and stderr in `log` and no stdin;
-/// returns its
-/// pid (for tests that signal it).
+/// returns its pid (for tests that signal it).
 inline pid_t start(const std::vector<std::string>& args, const std::string& log) {
   const pid_t pid = ::fork();
   if (pid == 0) {

@@ -2,6 +2,7 @@
 // file or value at fault, the exit status is 2 (README: bad input; 3 is for internal errors), and
 // what is left on disk is checked (no output file, a partial mesh marked incomplete, or a
 // temporary that the next run removes).
+#include <hdf5.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -16,8 +17,6 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include <hdf5.h>
-
 #include "apps/cli_run.h"
 #include "io/grid_test_support.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -25,13 +24,12 @@
 #include "orthofront/io/vdb_grid.h"
 
 using Catch::Matchers::Contains;
+using cli_test::quoted;
 using cli_test::Run;
 using orthofront::VectorGrid;
 using namespace grid_test;
 
 namespace {
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 std::string lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
@@ -40,7 +38,9 @@ std::string lower(std::string text) {
 }
 
 /// `orthofront ARGS` with stdin closed (no terminal: no progress bar).
-Run run(const std::string& args) { return cli_test::run(args + " < /dev/null"); }
+Run run(const std::string& args) {
+  return cli_test::run(args + " < /dev/null");
+}
 
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
@@ -88,7 +88,8 @@ void write_am(const fs::path& path, const VectorGrid& g, const std::string& clai
                        "\n\nParameters {\n    BoundingBox 0 " + std::to_string(n[0] - 1) + " 0 " +
                        std::to_string(n[1] - 1) + " 0 " + std::to_string(n[2] - 1) +
                        ",\n    CoordType \"uniform\"\n}\n\nLattice { float[3] Velocity } @1\n\n"
-                       "# Data section follows\n@1\n" + float_bytes(g.values, true) + "\n");
+                       "# Data section follows\n@1\n" +
+                       float_bytes(g.values, true) + "\n");
 }
 
 std::string nrrd_header(const VectorGrid& g, const std::string& claimed) {
@@ -110,29 +111,32 @@ void write_nhdr(const fs::path& path, const VectorGrid& g, const std::string& cl
 
 void write_vti(const fs::path& path, const VectorGrid& g, const std::string& claimed = {}) {
   const auto& n = g.geometry.size;
-  const std::string extent = claimed.empty() ? "0 " + std::to_string(n[0] - 1) + " 0 " +
-                                                   std::to_string(n[1] - 1) + " 0 " +
-                                                   std::to_string(n[2] - 1)
-                                             : claimed;
+  const std::string extent = claimed.empty()
+                                 ? "0 " + std::to_string(n[0] - 1) + " 0 " +
+                                       std::to_string(n[1] - 1) + " 0 " + std::to_string(n[2] - 1)
+                                 : claimed;
   const std::string data = float_bytes(g.values, true);
   std::string size;
   put(size, static_cast<std::uint32_t>(data.size()), true);
-  write_file(path, "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\" "
-                   "byte_order=\"LittleEndian\" header_type=\"UInt32\">\n  <ImageData WholeExtent=\"" +
-                       extent + "\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n    <Piece Extent=\"" +
-                       extent + "\">\n      <PointData Vectors=\"velocity\">\n        <DataArray "
-                       "type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" "
-                       "format=\"appended\" offset=\"0\"/>\n      </PointData>\n    </Piece>\n  "
-                       "</ImageData>\n  <AppendedData encoding=\"raw\">\n   _" +
-                       size + data + "\n  </AppendedData>\n</VTKFile>\n");
+  write_file(path,
+             "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\" "
+             "byte_order=\"LittleEndian\" header_type=\"UInt32\">\n  <ImageData WholeExtent=\"" +
+                 extent + "\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n    <Piece Extent=\"" + extent +
+                 "\">\n      <PointData Vectors=\"velocity\">\n        <DataArray "
+                 "type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" "
+                 "format=\"appended\" offset=\"0\"/>\n      </PointData>\n    </Piece>\n  "
+                 "</ImageData>\n  <AppendedData encoding=\"raw\">\n   _" +
+                 size + data + "\n  </AppendedData>\n</VTKFile>\n");
 }
 
 void write_vtk(const fs::path& path, const VectorGrid& g, const std::string& claimed = {}) {
-  write_file(path, "# vtk DataFile Version 3.0\nbad-input test\nBINARY\nDATASET STRUCTURED_POINTS\n"
-                   "DIMENSIONS " + (claimed.empty() ? sizes(g, " ") : claimed) +
-                       "\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA " +
-                       std::to_string(g.geometry.point_count()) + "\nVECTORS velocity float\n" +
-                       float_bytes(g.values, false) + "\n");
+  write_file(path,
+             "# vtk DataFile Version 3.0\nbad-input test\nBINARY\nDATASET STRUCTURED_POINTS\n"
+             "DIMENSIONS " +
+                 (claimed.empty() ? sizes(g, " ") : claimed) +
+                 "\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA " +
+                 std::to_string(g.geometry.point_count()) + "\nVECTORS velocity float\n" +
+                 float_bytes(g.values, false) + "\n");
 }
 
 void write_vdb(const fs::path& path, const VectorGrid& g, const std::string& = {}) {
@@ -173,16 +177,21 @@ fs::path data_file_of(const fs::path& path) {
 }
 
 void truncate_to(const fs::path& path, double share) {
-  fs::resize_file(path, static_cast<std::uintmax_t>(static_cast<double>(fs::file_size(path)) * share));
+  fs::resize_file(path,
+                  static_cast<std::uintmax_t>(static_cast<double>(fs::file_size(path)) * share));
 }
 
 /// A tmpfs mounted at `at` for the scope (needs root); `mounted` says whether mount succeeded.
 struct Tmpfs {
   Tmpfs(const fs::path& where, const std::string& options) : at(where) {
-    mounted = std::system(("mount -t tmpfs -o " + options + " tmpfs " + q(at) + " 2>/dev/null").c_str()) == 0;
+    mounted =
+        std::system(
+            ("mount -t tmpfs -o " + options + " tmpfs " + quoted(at) + " 2>/dev/null").c_str()) ==
+        0;
   }
   ~Tmpfs() {
-    if (mounted && std::system(("umount " + q(at)).c_str()) != 0) WARN("could not unmount " << at);
+    if (mounted && std::system(("umount " + quoted(at)).c_str()) != 0)
+      WARN("could not unmount " << at);
   }
   Tmpfs(const Tmpfs&) = delete;
   Tmpfs& operator=(const Tmpfs&) = delete;
@@ -194,8 +203,8 @@ const std::string kSeed = " --seed line:1,1,2.5:4,1,2.5 --seed-count 8 --edge 0.
 
 /// `stream` on `field`, writing into the empty folder `out`.
 Run stream_into(const fs::path& field, const fs::path& out) {
-  return run("stream --field " + q(field) + kSeed + " --out " + q(out / "s.vtp") + " --report " +
-             q(out / "s.json"));
+  return run("stream --field " + quoted(field) + kSeed + " --out " + quoted(out / "s.vtp") +
+             " --report " + quoted(out / "s.json"));
 }
 
 /// The words a truncated OpenVDB file's refusal has. OpenVDB's Blosc reader sizes a buffer from a
@@ -282,15 +291,15 @@ TEST_CASE("bad input: missing, empty and truncated time series for `path`", "[ap
   TempDir dir("bad-input-series");
   TempDir out("bad-input-out");
   const auto path_into = [&](const fs::path& field) {
-    return run("path --field " + q(field) +
+    return run("path --field " + quoted(field) +
                " --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 2 --edge 0.05 --out " +
-               q(out / "p.vtp") + " --report " + q(out / "p.json"));
+               quoted(out / "p.vtp") + " --report " + quoted(out / "p.json"));
   };
   const Run g = run("generate --field double-gyre --resolution 41,21 --steps 21 --t1 2 --out " +
-                    q(dir / "gyre.h5"));
+                    quoted(dir / "gyre.h5"));
   INFO(g.output);
   REQUIRE(g.status == 0);
-  const Run c = run("convert " + q(dir / "gyre.h5") + " --out " + q(dir / "gyre.vdb"));
+  const Run c = run("convert " + quoted(dir / "gyre.h5") + " --out " + quoted(dir / "gyre.vdb"));
   INFO(c.output);
   REQUIRE(c.status == 0);
   for (const char* ext : {".h5", ".vdb"}) {
@@ -426,7 +435,8 @@ TEST_CASE("bad input: header dimensions that do not match the data", "[apps][bad
       {"dims.nrrd", write_nrrd, "6 6 7", "sizes 3 6 6 7 of float need 3024"},
       {"dims.nhdr", write_nhdr, "6 6 7", "sizes 3 6 6 7 of float need 3024"},
       // ... and one claiming fewer (raw data without skips must be the samples alone).
-      {"fewer.nrrd", write_nrrd, "6 6 5", "holds 2592 data bytes but sizes 3 6 6 5 of float need 2160"},
+      {"fewer.nrrd", write_nrrd, "6 6 5",
+       "holds 2592 data bytes but sizes 3 6 6 5 of float need 2160"},
       {"fewer.nhdr", write_nhdr, "6 6 5", "fewer.nhdr.raw holds 2592 data bytes but sizes 3 6 6 5"},
       {"dims.vti", write_vti, "0 5 0 5 0 4", "the extent needs 540"},
       {"dims.vtk", write_vtk, "6 6 5", "point_data 216 does not match dimensions 6 x 6 x 5"},
@@ -487,8 +497,9 @@ TEST_CASE("bad input: NaN regions and fill values are no data", "[apps][bad-inpu
   orthofront::io::write_hdf5_grid(grid, dir / "fill.h5", o);
   for (const char* file : {"nan.vec", "fill.h5"}) {
     INFO(file);
-    const std::string field = " --field " + q(dir / file);
-    const std::string outputs = " --out " + q(out / "s.vtp") + " --report " + q(out / "s.json");
+    const std::string field = " --field " + quoted(dir / file);
+    const std::string outputs =
+        " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
     {
       INFO("a seed wholly in the region without data is refused");
       const Run r = run("stream" + field + " --seed line:1,8,5:9,8,5" + outputs);
@@ -524,7 +535,7 @@ TEST_CASE("bad input: NaN regions and fill values are no data", "[apps][bad-inpu
 TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow",
           "[apps][bad-input]") {
   TempDir out("bad-input-out");
-  const std::string outputs = " --out " + q(out / "s.vtp");
+  const std::string outputs = " --out " + quoted(out / "s.vtp");
   const std::string stream = "stream --field saddle3d --steps 20 --seed ";
   const std::string path = "path --field double-gyre --t1 1 --edge 0.05 --seed ";
   struct Refused {
@@ -555,8 +566,7 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
     check_refused(run(c.args + outputs), c.named, c.words, out);
   }
   // Half outside: the surface grows from the part inside (stream and path).
-  for (const std::string& args :
-       {stream + "line:0,2,0.1:8,2,0.1", path + "line:1,0.5,0:3,0.5,0"}) {
+  for (const std::string& args : {stream + "line:0,2,0.1:8,2,0.1", path + "line:1,0.5,0:3,0.5,0"}) {
     INFO(args);
     const Run r = run(args + outputs);
     INFO(r.output);
@@ -567,8 +577,10 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
     fs::remove(out / "s.vtp");
   }
   // A path surface in still flow is the seed curve carried through time: a valid surface.
-  const Run still = run("path --field double-gyre:A=0 --seed line:0.2,0.5,0:0.8,0.5,0 --t1 1"
-                        " --spacetime-out" + outputs);
+  const Run still =
+      run("path --field double-gyre:A=0 --seed line:0.2,0.5,0:0.8,0.5,0 --t1 1"
+          " --spacetime-out" +
+          outputs);
   INFO(still.output);
   CHECK(still.status == 0);
   const orthofront::Mesh mesh = orthofront::io::read_mesh(out / "s.vtp");
@@ -578,18 +590,23 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
 
 TEST_CASE("bad input: vertex budgets too small", "[apps][bad-input]") {
   TempDir out("bad-input-out");
-  const std::string outputs = " --out " + q(out / "s.vtp") + " --report " + q(out / "s.json");
+  const std::string outputs =
+      " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
   // Refused up front: the seed alone exceeds the budget.
   check_refused(run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 50 "
-                    "--max-vertices 10" + outputs),
+                    "--max-vertices 10" +
+                    outputs),
                 "--seed-count 50", "exceeds the vertex budget of 10", out);
   check_refused(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 50 "
-                    "--max-vertices 10" + outputs),
+                    "--max-vertices 10" +
+                    outputs),
                 "--seed-count 50", "exceeds the vertex budget of 10", out);
   {
     // Reached by a path surface before t1: the surface so far, marked incomplete, and status 2.
-    const Run r = run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --t1 4 "
-                      "--edge 0.05 --max-vertices 300" + outputs);
+    const Run r =
+        run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --t1 4 "
+            "--edge 0.05 --max-vertices 300" +
+            outputs);
     INFO(r.output);
     CHECK(r.status == 2);
     CHECK_THAT(r.output, Contains("orthofront: error: stopped at t = ") &&
@@ -621,12 +638,12 @@ TEST_CASE("bad input: output folders that cannot be written", "[apps][bad-input]
   const Case cases[] = {
       {stream + " --out /nonexistent/dir/s.vtp", "/nonexistent/dir", "does not exist"},
       {path + " --out /nonexistent/dir/s.vtp", "/nonexistent/dir", "does not exist"},
-      {stream + " --out " + q(dir / "folder.vtp"), "folder.vtp", "it is a directory"},
-      {stream + " --out " + q(dir / "plain" / "s.vtp"), "plain", "is not a directory"},
+      {stream + " --out " + quoted(dir / "folder.vtp"), "folder.vtp", "it is a directory"},
+      {stream + " --out " + quoted(dir / "plain" / "s.vtp"), "plain", "is not a directory"},
       // The report's folder is checked before the surface is built: no mesh without its report.
-      {stream + " --out " + q(dir / "s.vtp") + " --report /nonexistent/dir/s.json",
+      {stream + " --out " + quoted(dir / "s.vtp") + " --report /nonexistent/dir/s.json",
        "/nonexistent/dir/s.json", "does not exist"},
-      {path + " --out " + q(dir / "s.vtp") + " --report /nonexistent/dir/s.json",
+      {path + " --out " + quoted(dir / "s.vtp") + " --report /nonexistent/dir/s.json",
        "/nonexistent/dir/s.json", "does not exist"},
   };
   for (const Case& c : cases) {
@@ -652,7 +669,7 @@ TEST_CASE("bad input: output folders that cannot be written", "[apps][bad-input]
     fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
   }
   for (const std::string& command : {stream, path}) {
-    const Run r = run(command + " --out " + q(locked / "s.vtp"));
+    const Run r = run(command + " --out " + quoted(locked / "s.vtp"));
     INFO(command << "\n" << r.output);
     CHECK(r.status == 2);
     CHECK_THAT(r.output, Contains("cannot write " + (locked / "s.vtp").string()) &&
@@ -670,7 +687,8 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
   fs::create_directories(small);
   const auto entries = [&] {
     std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(small)) names.push_back(e.path().filename().string());
+    for (const auto& e : fs::directory_iterator(small))
+      names.push_back(e.path().filename().string());
     return names;
   };
   {
@@ -681,8 +699,10 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
       WARN("SKIPPED: cannot mount a small tmpfs here (needs root): disk-full cases not run");
       return;
     }
-    const Run r = run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 40 "
-                      "--steps 200 --out " + q(small / "s.vtp") + " --report " + q(small / "s.json"));
+    const Run r =
+        run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 40 "
+            "--steps 200 --out " +
+            quoted(small / "s.vtp") + " --report " + quoted(small / "s.json"));
     INFO(r.output);
     CHECK(r.status == 2);
     CHECK_THAT(r.output, Contains("cannot write " + (small / "s.vtp").string()) &&
@@ -693,9 +713,10 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
     // The mesh fits, its report does not: sizes measured on a roomy disk first. The two are
     // replaced as a pair: neither is, and the message gives the cause. Once with no earlier
     // outputs, once over an earlier mesh and report of the same names.
-    const std::string args = "stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 4 "
-                             "--steps 3 --out ";
-    const Run roomy = run(args + q(dir / "s.ply") + " --report " + q(dir / "s.json"));
+    const std::string args =
+        "stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 4 "
+        "--steps 3 --out ";
+    const Run roomy = run(args + quoted(dir / "s.ply") + " --report " + quoted(dir / "s.json"));
     REQUIRE(roomy.status == 0);
     const std::uintmax_t page = 4096;
     const std::uintmax_t mesh_pages = (fs::file_size(dir / "s.ply") + page - 1) / page;
@@ -709,7 +730,7 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
         std::ofstream(small / "s.ply") << "earlier mesh";
         std::ofstream(small / "s.json") << "earlier report";
       }
-      const Run r = run(args + q(small / "s.ply") + " --report " + q(small / "s.json"));
+      const Run r = run(args + quoted(small / "s.ply") + " --report " + quoted(small / "s.json"));
       INFO(r.output);
       CHECK(r.status == 2);
       CHECK_THAT(r.output, Contains("cannot write " + (small / "s.json").string()) &&
@@ -730,11 +751,24 @@ TEST_CASE("bad input: a full disk leaves no temporary, and no mesh or report cut
 namespace {
 
 /// The Lorenz band to 10^6 steps: runs far longer than any test waits.
-std::vector<std::string> long_stream(const TempDir& dir, const std::vector<std::string>& extra = {}) {
-  std::vector<std::string> args{"stream", "--field", "lorenz:reverse=1", "--seed",
-                                "circle:0,0,0:1.283,1,0:1", "--seed-count", "10", "--edge", "0.5",
-                                "--steps", "1000000", "--max-vertices", "100000000",
-                                "--out", (dir / "s.vtp").string(), "--report",
+std::vector<std::string> long_stream(const TempDir& dir,
+                                     const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args{"stream",
+                                "--field",
+                                "lorenz:reverse=1",
+                                "--seed",
+                                "circle:0,0,0:1.283,1,0:1",
+                                "--seed-count",
+                                "10",
+                                "--edge",
+                                "0.5",
+                                "--steps",
+                                "1000000",
+                                "--max-vertices",
+                                "100000000",
+                                "--out",
+                                (dir / "s.vtp").string(),
+                                "--report",
                                 (dir / "s.json").string()};
   args.insert(args.end(), extra.begin(), extra.end());
   return args;
@@ -759,7 +793,8 @@ TEST_CASE("bad input: SIGKILL leaves no finished-looking file, and a rerun remov
   {
     INFO("killed while writing the mesh: only its temporary is left");
     // A time budget stops the run by itself after 0.5 s; the mesh (tens of MB) is then written.
-    const pid_t pid = cli_test::start(long_stream(dir, {"--time-budget", "0.5"}), (logs / "log.txt").string());
+    const pid_t pid =
+        cli_test::start(long_stream(dir, {"--time-budget", "0.5"}), (logs / "log.txt").string());
     std::string temporary;
     int status = 0;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
@@ -781,8 +816,9 @@ TEST_CASE("bad input: SIGKILL leaves no finished-looking file, and a rerun remov
   }
   {
     INFO("a rerun writing the same outputs removes the dead process's temporary");
-    const Run r = run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --steps 5 --quiet --out " +
-                      q(dir / "s.vtp") + " --report " + q(dir / "s.json"));
+    const Run r =
+        run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --steps 5 --quiet --out " +
+            quoted(dir / "s.vtp") + " --report " + quoted(dir / "s.json"));
     INFO(r.output);
     CHECK(r.status == 0);
     CHECK(dir.entries() == std::vector<std::string>{"s.json", "s.vtp"});
@@ -794,10 +830,11 @@ TEST_CASE("bad input: SIGINT stops `path` with the surface so far, marked incomp
           "[apps][bad-input][signals]") {
   TempDir dir("bad-input-sigint-path");
   TempDir logs("bad-input-log");
-  const pid_t pid = cli_test::start({"path", "--field", "double-gyre", "--seed", "line:0.1,0.5,0:0.6,0.5,0",
-                           "--t1", "1000000", "--edge", "0.01", "--max-vertices", "100000000",
-                           "--out", (dir / "p.vtp").string(), "--report", (dir / "p.json").string()},
-                          (logs / "log.txt").string());
+  const pid_t pid =
+      cli_test::start({"path", "--field", "double-gyre", "--seed", "line:0.1,0.5,0:0.6,0.5,0",
+                       "--t1", "1000000", "--edge", "0.01", "--max-vertices", "100000000", "--out",
+                       (dir / "p.vtp").string(), "--report", (dir / "p.json").string()},
+                      (logs / "log.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
   ::kill(pid, SIGINT);
   int status = 0;

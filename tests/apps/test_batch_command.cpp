@@ -19,30 +19,25 @@
 #include "temp_dir.h"
 
 namespace fs = std::filesystem;
+using cli_test::quoted;
 using cli_test::run;
+using test_support::read_text;
 using test_support::TempDir;
 
 namespace {
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 void write_text(const fs::path& p, const std::string& text) {
   std::ofstream out(p, std::ios::binary);
   out << text;
 }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
 // A small double-gyre series: 64 x 32 points, 41 steps over [0, 8], bricks of 16 points.
 fs::path make_series(const TempDir& dir) {
   const fs::path file = dir / "gyre.h5";
-  const auto r = run("generate --field double-gyre --resolution 64,32 --steps 41 --t1 8 --brick 16 "
-                     "--out " + q(file) + " --quiet");
+  const auto r =
+      run("generate --field double-gyre --resolution 64,32 --steps 41 --t1 8 --brick 16 "
+          "--out " +
+          quoted(file) + " --quiet");
   REQUIRE(r.status == 0);
   return file;
 }
@@ -73,7 +68,8 @@ seed = "line:0.3,0.2,0:0.3,0.8,0"
 
 [[surface]]
 name = "streamed"
-field = ")" + series.string() + R"("
+field = ")" +
+         series.string() + R"("
 seed = "line:1.2,0.2,0:1.2,0.8,0"
 t0 = 1.0
 t1 = 5.0
@@ -83,11 +79,17 @@ t1 = 5.0
 // The same surfaces through the single-surface commands.
 void separate_runs(const fs::path& series, const TempDir& dir) {
   REQUIRE(run("stream --field saddle3d --seed line:-3,1,1:-3,1,3 --seed-count 12 --edge 0.1 "
-              "--steps 60 --quiet --out " + q(dir / "saddle.vtp")).status == 0);
+              "--steps 60 --quiet --out " +
+              quoted(dir / "saddle.vtp"))
+              .status == 0);
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.2,0:0.3,0.8,0 --seed-count 12 --edge "
-              "0.04 --t0 0 --t1 4 --quiet --out " + q(dir / "gyre.vtp")).status == 0);
-  REQUIRE(run("path --field " + q(series) + " --cache-budget 8MiB --seed line:1.2,0.2,0:1.2,0.8,0 "
-              "--seed-count 12 --edge 0.04 --t0 1 --t1 5 --quiet --out " + q(dir / "streamed.vtp"))
+              "0.04 --t0 0 --t1 4 --quiet --out " +
+              quoted(dir / "gyre.vtp"))
+              .status == 0);
+  REQUIRE(run("path --field " + quoted(series) +
+              " --cache-budget 8MiB --seed line:1.2,0.2,0:1.2,0.8,0 "
+              "--seed-count 12 --edge 0.04 --t0 1 --t1 5 --quiet --out " +
+              quoted(dir / "streamed.vtp"))
               .status == 0);
 }
 
@@ -112,7 +114,7 @@ TEST_CASE("batch: a job of three surfaces writes the meshes of three separate ru
   TempDir expected("batch-expected");
   separate_runs(series, expected);
   write_text(dir / "job.toml", three_surface_job(series));
-  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out"));
+  const auto r = run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out"));
   INFO(r.output);
   REQUIRE(r.status == 0);
   require_same_meshes(expected, dir / "out");
@@ -136,7 +138,8 @@ TEST_CASE("batch: the surfaces of one series share one pass that reads each bric
                                     "seed_count = 12\nt0 = 0.0\nt1 = 6.0\n[[rake]]\nname = \"r\"\n"
                                     "seed = \"line:0.2,0.2,0:0.2,0.8,0\"\ncount = 4\n"
                                     "offset = [0.45, 0.0]\n");
-  const auto r = run("batch " + q(dir / "rake.toml") + " --out " + q(dir / "out") + " --quiet");
+  const auto r =
+      run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "out") + " --quiet");
   INFO(r.output);
   REQUIRE(r.status == 0);
   const auto s = summary(dir / "out");
@@ -149,8 +152,8 @@ TEST_CASE("batch: the surfaces of one series share one pass that reads each bric
     const double x = 0.2 + 0.45 * k;
     const std::string seed = "line:" + std::to_string(x) + ",0.2,0:" + std::to_string(x) + ",0.8,0";
     const fs::path alone = dir / ("alone-" + std::to_string(k) + ".vtp");
-    REQUIRE(run("path --field " + q(series) + " --seed " + seed +
-                " --seed-count 12 --edge 0.04 --t0 0 --t1 6 --quiet --out " + q(alone))
+    REQUIRE(run("path --field " + quoted(series) + " --seed " + seed +
+                " --seed-count 12 --edge 0.04 --t0 0 --t1 6 --quiet --out " + quoted(alone))
                 .status == 0);
     INFO(k);
     CHECK(read_text(alone) == read_text(dir / "out" / ("r-" + std::to_string(k) + ".vtp")));
@@ -164,19 +167,19 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
   TempDir expected("batch-kill-expected");
   separate_runs(series, expected);
   write_text(dir / "job.toml", three_surface_job(series));
-  const std::string job = q(dir / "job.toml");
+  const std::string job = quoted(dir / "job.toml");
 
   SECTION("at chosen front steps: inside the first surface, between surfaces, inside the pass") {
     // The stream surface takes its steps first (its own pass); the two path surfaces follow.
     for (const int steps : {5, 23, 25, 60, 90, 110}) {
       const fs::path out = dir / ("out-" + std::to_string(steps));
-      const auto killed = run("batch " + job + " --out " + q(out) +
-                              " --checkpoint-every 0.000001 --quiet --fail-after-steps " +
-                              std::to_string(steps));
+      const auto killed =
+          run("batch " + job + " --out " + quoted(out) +
+              " --checkpoint-every 0.000001 --quiet --fail-after-steps " + std::to_string(steps));
       INFO("killed after " << steps << " steps: " << killed.output);
       REQUIRE(killed.status == 9);
       REQUIRE_FALSE(fs::exists(out / "summary.json"));
-      const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+      const auto resumed = run("batch " + job + " --out " + quoted(out) + " --resume --quiet");
       INFO(resumed.output);
       REQUIRE(resumed.status == 0);
       require_same_meshes(expected, out);
@@ -195,8 +198,9 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
     std::uniform_int_distribution<int> delay_ms(5, 120);
     int kills = 0;
     for (int attempt = 0; attempt < 40; ++attempt) {
-      std::vector<std::string> args{"batch", (dir / "job.toml").string(), "--out", out.string(),
-                                    "--checkpoint-every", "0.000001", "--quiet"};
+      std::vector<std::string> args{"batch",      (dir / "job.toml").string(), "--out",
+                                    out.string(), "--checkpoint-every",        "0.000001",
+                                    "--quiet"};
       if (attempt > 0) args.push_back("--resume");
       const pid_t pid = cli_test::start(args, (dir / "log.txt").string());
       std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(random)));
@@ -217,15 +221,16 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
         }
     }
     CHECK(kills > 0);
-    const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+    const auto resumed = run("batch " + job + " --out " + quoted(out) + " --resume --quiet");
     INFO(resumed.output);
     REQUIRE(resumed.status == 0);
     require_same_meshes(expected, out);
   }
 }
 
-TEST_CASE("batch: SIGTERM checkpoints the unfinished surfaces; --resume never rebuilds the finished",
-          "[batch]") {
+TEST_CASE(
+    "batch: SIGTERM checkpoints the unfinished surfaces; --resume never rebuilds the finished",
+    "[batch]") {
   TempDir dir("batch-term");
   // Two stream surfaces in one pass: a quick one, and a slow one still running when the quick
   // one's file appears. Checkpoints only on the signal.
@@ -233,12 +238,12 @@ TEST_CASE("batch: SIGTERM checkpoints the unfinished surfaces; --resume never re
              "[job]\nfield = \"abc\"\ncheckpoint_every = 0\n[defaults]\nkind = \"stream\"\n"
              "seed = \"line:0,0,0:0,1,1\"\n[[surface]]\nname = \"quick\"\nedge = 0.2\n"
              "steps = 10\n[[surface]]\nname = \"slow\"\nedge = 0.05\nsteps = 1200\n");
-  const std::string job = q(dir / "job.toml");
-  REQUIRE(run("batch " + job + " --out " + q(dir / "reference") + " --quiet").status == 0);
+  const std::string job = quoted(dir / "job.toml");
+  REQUIRE(run("batch " + job + " --out " + quoted(dir / "reference") + " --quiet").status == 0);
   const fs::path out = dir / "out";
-  const pid_t pid = cli_test::start({"batch", (dir / "job.toml").string(), "--out", out.string(),
-                                     "--quiet"},
-                                    (dir / "log.txt").string());
+  const pid_t pid =
+      cli_test::start({"batch", (dir / "job.toml").string(), "--out", out.string(), "--quiet"},
+                      (dir / "log.txt").string());
   for (int waited = 0; !fs::exists(out / "quick.vtp") && waited < 20000; waited += 5)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   ::kill(pid, SIGTERM);
@@ -252,7 +257,7 @@ TEST_CASE("batch: SIGTERM checkpoints the unfinished surfaces; --resume never re
   CHECK_FALSE(fs::exists(out / "slow.vtp"));
   const auto quick_time = fs::last_write_time(out / "quick.vtp");
 
-  const auto resumed = run("batch " + job + " --out " + q(out) + " --resume --quiet");
+  const auto resumed = run("batch " + job + " --out " + quoted(out) + " --resume --quiet");
   INFO(resumed.output);
   REQUIRE(resumed.status == 0);
   CHECK(fs::last_write_time(out / "quick.vtp") == quick_time);  // not rewritten
@@ -268,22 +273,25 @@ TEST_CASE("batch: SIGTERM checkpoints the unfinished surfaces; --resume never re
 TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are refused by name",
           "[batch]") {
   TempDir dir("batch-owner");
-  write_text(dir / "a.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
-                             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
-                             "edge = 0.02\n");
-  write_text(dir / "b.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
-                             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
-                             "edge = 0.03\n");
+  write_text(dir / "a.toml",
+             "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
+             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
+             "edge = 0.02\n");
+  write_text(dir / "b.toml",
+             "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"s\"\nkind = "
+             "\"stream\"\nseed = \"line:-3,1,1:-3,1,3\"\nsteps = 400\n"
+             "edge = 0.03\n");
   const fs::path out = dir / "out";
-  REQUIRE(run("batch " + q(dir / "a.toml") + " --out " + q(out) +
-              " --checkpoint-every 0.000001 --quiet --fail-after-steps 10").status == 9);
+  REQUIRE(run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out) +
+              " --checkpoint-every 0.000001 --quiet --fail-after-steps 10")
+              .status == 9);
   REQUIRE(fs::exists(out / ".checkpoint" / "s.state"));
 
-  const auto other = run("batch " + q(dir / "b.toml") + " --out " + q(out) + " --resume");
+  const auto other = run("batch " + quoted(dir / "b.toml") + " --out " + quoted(out) + " --resume");
   CHECK(other.status == 2);
   CHECK(other.output.find("belongs to another job") != std::string::npos);
 
-  const auto fresh = run("batch " + q(dir / "a.toml") + " --out " + q(out));
+  const auto fresh = run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out));
   CHECK(fresh.status == 2);
   CHECK(fresh.output.find("--resume") != std::string::npos);
 
@@ -291,13 +299,15 @@ TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are re
   const fs::path state = out / ".checkpoint" / "s.state";
   const std::string bytes = read_text(state);
   write_text(state, bytes.substr(0, bytes.size() / 2));
-  const auto corrupt = run("batch " + q(dir / "a.toml") + " --out " + q(out) + " --resume");
+  const auto corrupt =
+      run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out) + " --resume");
   CHECK(corrupt.status == 2);
   CHECK(corrupt.output.find("s.state") != std::string::npos);
   CHECK_FALSE(fs::exists(out / "s.vtp"));
 
   // --restart starts afresh over it.
-  const auto restart = run("batch " + q(dir / "a.toml") + " --out " + q(out) + " --restart --quiet");
+  const auto restart =
+      run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out) + " --restart --quiet");
   INFO(restart.output);
   CHECK(restart.status == 0);
   CHECK(fs::exists(out / "s.vtp"));
@@ -309,7 +319,7 @@ TEST_CASE("batch: a surface that fails is reported and the others are built", "[
              "[job]\nfield = \"double-gyre\"\n[defaults]\nedge = 0.05\nt0 = 0.0\nt1 = 2.0\n"
              "[[surface]]\nname = \"outside\"\nseed = \"line:5,5,0:6,6,0\"\n"
              "[[surface]]\nname = \"inside\"\nseed = \"line:0.3,0.2,0:0.3,0.8,0\"\n");
-  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out"));
+  const auto r = run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out"));
   INFO(r.output);
   CHECK(r.status == 2);
   CHECK(r.output.find("1 of 2 surfaces failed") != std::string::npos);
@@ -326,31 +336,36 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   TempDir dir("batch-errors");
   const auto refused = [&](const std::string& file, const std::string& text) {
     write_text(dir / file, text);
-    const auto r = run("batch " + q(dir / file) + " --out " + q(dir / "out"));
+    const auto r = run("batch " + quoted(dir / file) + " --out " + quoted(dir / "out"));
     CHECK(r.status == 2);
     CHECK_FALSE(fs::exists(dir / "out" / "summary.json"));
     return r.output;
   };
-  std::string m = refused("typo.toml", "[job]\nfield = \"saddle3d\"\n\n[[surface]]\nname = \"a\"\n"
-                                       "seed = \"line:0,0,0:1,0,0\"\nedgee = 0.1\n");
+  std::string m = refused("typo.toml",
+                          "[job]\nfield = \"saddle3d\"\n\n[[surface]]\nname = \"a\"\n"
+                          "seed = \"line:0,0,0:1,0,0\"\nedgee = 0.1\n");
   CHECK(m.find("typo.toml:7: surface[0].edgee: unknown key") != std::string::npos);
   m = refused("type.toml", "[defaults]\nedge = \"fine\"\n");
   CHECK(m.find("type.toml:2: defaults.edge: must be a number") != std::string::npos);
-  m = refused("negative.toml", "[job]\nfield = \"saddle3d\"\n[[rake]]\nname = \"r\"\n"
-                               "seed = \"line:0,0,0:1,0,0\"\ncount = -2\noffset = [0, 1]\n");
+  m = refused("negative.toml",
+              "[job]\nfield = \"saddle3d\"\n[[rake]]\nname = \"r\"\n"
+              "seed = \"line:0,0,0:1,0,0\"\ncount = -2\noffset = [0, 1]\n");
   CHECK(m.find("negative.toml:6: rake[0].count: must lie in [1, 100000]") != std::string::npos);
   m = refused("syntax.toml", "[job]\nfield = \"saddle3d\n");
   CHECK(m.find("syntax.toml:2: not valid TOML") != std::string::npos);
-  m = refused("noseed.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": \"a\"}]}");
+  m = refused("noseed.json",
+              "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": \"a\"}]}");
   CHECK(m.find("noseed.json:2: surface[0]: needs a seed") != std::string::npos);
-  m = refused("range.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [\n  {\"name\": \"a\", "
-                            "\"seed\": \"line:0,0,0:1,0,0\"},\n  {\"name\": \"b\",\n   \"edge\": -1}]}");
+  m = refused("range.json",
+              "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [\n  {\"name\": \"a\", "
+              "\"seed\": \"line:0,0,0:1,0,0\"},\n  {\"name\": \"b\",\n   \"edge\": -1}]}");
   CHECK(m.find("range.json:5: surface[1].edge: must be a number > 0") != std::string::npos);
   m = refused("bad.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": }]}");
   CHECK(m.find("bad.json:2: not valid JSON") != std::string::npos);
-  m = refused("twice.toml", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
-                            "\"line:0,0,0:1,0,0\"\n[[surface]]\nname = \"a\"\nseed = "
-                            "\"line:0,0,0:1,0,0\"\n");
+  m = refused("twice.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
+              "\"line:0,0,0:1,0,0\"\n[[surface]]\nname = \"a\"\nseed = "
+              "\"line:0,0,0:1,0,0\"\n");
   CHECK(m.find("two surfaces are named 'a'") != std::string::npos);
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
@@ -363,13 +378,15 @@ TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte 
              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
              "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"
              "edge = 0.03\n");
-  const auto r = run("batch " + q(dir / "job.toml") + " --out " + q(dir / "out") + " --quiet");
+  const auto r =
+      run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out") + " --quiet");
   INFO(r.output);
   REQUIRE(r.status == 0);
   fs::create_directories(dir / "alone");
-  const auto alone = run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
-                         "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --out " +
-                         q(dir / "alone" / "dye.pvd"));
+  const auto alone =
+      run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
+          "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --out " +
+          quoted(dir / "alone" / "dye.pvd"));
   INFO(alone.output);
   REQUIRE(alone.status == 0);
   CHECK(read_text(dir / "out" / "dye.pvd") == read_text(dir / "alone" / "dye.pvd"));

@@ -14,23 +14,18 @@
 #include "temp_dir.h"
 
 namespace fs = std::filesystem;
+using cli_test::quoted;
+using test_support::read_text;
 using test_support::TempDir;
 
 namespace {
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
 // mpirun with two ranks on this machine, whatever its core count, as root too (CI).
 cli_test::Run mpirun(const std::string& args) {
-  return cli_test::run_shell("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 '" ORTHOFRONT_MPIEXEC
-                             "' -np 2 --oversubscribe '" ORTHOFRONT_BINARY "' " + args);
+  return cli_test::run_shell(
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 '" ORTHOFRONT_MPIEXEC
+      "' -np 2 --oversubscribe '" ORTHOFRONT_BINARY "' " +
+      args);
 }
 
 const char* kJob = R"([job]
@@ -62,11 +57,11 @@ TEST_CASE("batch under MPI: two ranks write the serial run's files", "[batch][mp
     std::ofstream out(dir / "job.toml");
     out << kJob;
   }
-  const auto serial = cli_test::run("batch " + q(dir / "job.toml") + " --out " +
-                                    q(dir / "serial") + " --quiet");
+  const auto serial = cli_test::run("batch " + quoted(dir / "job.toml") + " --out " +
+                                    quoted(dir / "serial") + " --quiet");
   REQUIRE(serial.status == 0);
-  const auto parallel = mpirun("batch " + q(dir / "job.toml") + " --out " + q(dir / "mpi") +
-                               " --quiet");
+  const auto parallel =
+      mpirun("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "mpi") + " --quiet");
   INFO(parallel.output);
   REQUIRE(parallel.status == 0);
   const nlohmann::json s = nlohmann::json::parse(read_text(dir / "mpi" / "summary.json"));
@@ -82,12 +77,13 @@ TEST_CASE("batch under MPI: two ranks write the serial run's files", "[batch][mp
   }
 
   // Killed (one rank exits as if by SIGKILL; mpirun stops the other) and resumed under MPI.
-  const auto killed = mpirun("batch " + q(dir / "job.toml") + " --out " + q(dir / "killed") +
-                             " --quiet --checkpoint-every 0.000001 --fail-after-steps 20");
+  const auto killed =
+      mpirun("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "killed") +
+             " --quiet --checkpoint-every 0.000001 --fail-after-steps 20");
   CHECK(killed.status != 0);
   CHECK_FALSE(fs::exists(dir / "killed" / "summary.json"));
-  const auto resumed = mpirun("batch " + q(dir / "job.toml") + " --out " + q(dir / "killed") +
-                              " --quiet --resume");
+  const auto resumed = mpirun("batch " + quoted(dir / "job.toml") + " --out " +
+                              quoted(dir / "killed") + " --quiet --resume");
   INFO(resumed.output);
   REQUIRE(resumed.status == 0);
   const nlohmann::json r = nlohmann::json::parse(read_text(dir / "killed" / "summary.json"));

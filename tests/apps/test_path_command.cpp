@@ -1,5 +1,6 @@
-#include <catch2/catch.hpp>
+#include <hdf5.h>
 
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -9,14 +10,14 @@
 #include <sstream>
 #include <string>
 
-#include <hdf5.h>
-
 #include "orthofront/field/unsteady.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/spacetime/sampled_series.h"
+#include "temp_dir.h"
 
 namespace fs = std::filesystem;
+using test_support::read_text;
 using namespace orthofront;
 
 namespace {
@@ -34,18 +35,12 @@ int run(const std::string& args, const fs::path& log) {
   return WEXITSTATUS(std::system(command.c_str()));
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // A double-gyre time series on disk, in the project's HDF5 layout.
 fs::path write_gyre(const fs::path& dir, std::size_t steps) {
   const auto flow = make_unsteady_field("double-gyre");
-  spacetime::SampledTimeSeries series(*flow, spacetime::uniform_grid(flow->domain(), 2, 81),
-                                      spacetime::uniform_times(0, 0.1 * static_cast<double>(steps - 1), steps - 1));
+  spacetime::SampledTimeSeries series(
+      *flow, spacetime::uniform_grid(flow->domain(), 2, 81),
+      spacetime::uniform_times(0, 0.1 * static_cast<double>(steps - 1), steps - 1));
   const fs::path file = dir / "gyre.h5";
   io::Hdf5WriteOptions o;
   o.gzip_level = 1;
@@ -68,14 +63,15 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   const fs::path dir = fresh_dir();
   const fs::path out = dir / "gyre.vtp", report = dir / "gyre.json";
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 0 "
-              "--t1 4 --edge 0.05 --spacetime-out --out " + out.string() + " --report " +
-                  report.string(),
+              "--t1 4 --edge 0.05 --spacetime-out --out " +
+                  out.string() + " --report " + report.string(),
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
   CHECK(j["complete"] == true);
   // The summary gives the quality figures of the report.
   char quads[64];
-  std::snprintf(quads, sizeof quads, "%.1f%% quads", 100.0 * j["quality"]["quad_share"].get<double>());
+  std::snprintf(quads, sizeof quads, "%.1f%% quads",
+                100.0 * j["quality"]["quad_share"].get<double>());
   const std::string summary = read_text(dir / "log");
   CHECK(summary.find(quads) != std::string::npos);
   CHECK(summary.find(std::to_string(j["quality"]["folds"].get<std::size_t>()) + " folds") !=
@@ -95,8 +91,8 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   CHECK(zmax <= 4.0 + 1e-9);
   // --time-scale overrides and is reported.
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 1 "
-              "--edge 0.05 --time-scale 0.5 --out " + out.string() + " --report " +
-                  report.string(),
+              "--edge 0.05 --time-scale 0.5 --out " +
+                  out.string() + " --report " + report.string(),
               dir / "log") == 0);
   CHECK(nlohmann::json::parse(read_text(report))["path"]["time_scale"] == 0.5);
   fs::remove_all(dir);
@@ -110,7 +106,8 @@ TEST_CASE("path command: HDF5 series through the cache, and errors that leave no
   const fs::path out = dir / "s.ply", report = dir / "s.json";
   REQUIRE(run("path --field " + h5.string() +
                   " --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 3 --edge 0.05 "
-                  "--cache-budget 2MiB --out " + out.string() + " --report " + report.string(),
+                  "--cache-budget 2MiB --out " +
+                  out.string() + " --report " + report.string(),
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
   CHECK(j["path"]["streamed"] == true);
@@ -139,7 +136,8 @@ TEST_CASE("path command: a step deleted from a per-step series keeps the surface
   const fs::path h5 = dir / "gyre.h5", out = dir / "gyre.vtp", report = dir / "gyre.json",
                  log = dir / "log.txt";
   REQUIRE(run("generate --field double-gyre --resolution 41,21 --steps 80 --t1 8 --layout per-step "
-              "--out " + h5.string(),
+              "--out " +
+                  h5.string(),
               log) == 0);
   {
     const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
@@ -149,7 +147,8 @@ TEST_CASE("path command: a step deleted from a per-step series keeps the surface
   }
   const int status = run("path --field " + h5.string() +
                              " --seed line:0.3,0.25,0:0.9,0.7,0 --t0 0 --t1 6 --edge 0.05"
-                             " --out " + out.string() + " --report " + report.string(),
+                             " --out " +
+                             out.string() + " --report " + report.string(),
                          log);
   const std::string text = read_text(log);
   INFO(text);

@@ -1,17 +1,16 @@
-#include <catch2/catch.hpp>
-
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
-#include <vector>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "apps/cli_run.h"
 #include "orthofront/io/mesh_io.h"
@@ -19,15 +18,9 @@
 
 namespace fs = std::filesystem;
 using orthofront::Mesh;
+using test_support::read_text;
 
 namespace {
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -41,9 +34,10 @@ TEST_CASE("streak command: an analytic field as a .pvd animation with its report
           "[apps][streak]") {
   test_support::TempDir dir;
   const fs::path pvd = dir.path() / "gyre.pvd", report = dir.path() / "gyre.json";
-  const auto r = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
-                               "--release 0:3 --frames 1:4:4 --edge 0.03 --out " + pvd.string() +
-                               " --report " + report.string());
+  const auto r = cli_test::run(
+      "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+      "--release 0:3 --frames 1:4:4 --edge 0.03 --out " +
+      pvd.string() + " --report " + report.string());
   INFO(r.output);
   REQUIRE(r.status == 0);
   CHECK(r.output.find("4 of 4 frames") != std::string::npos);
@@ -67,7 +61,8 @@ TEST_CASE("streak command: bad input exits 2 naming the value and leaves no coll
           "[apps][streak]") {
   test_support::TempDir dir;
   const fs::path pvd = dir.path() / "bad.pvd";
-  const std::string common = "streak --seed line:0.3,0.3,0:0.3,0.45,0 --edge 0.03 --out " + pvd.string();
+  const std::string common =
+      "streak --seed line:0.3,0.3,0:0.3,0.45,0 --edge 0.03 --out " + pvd.string();
   struct Case {
     std::string args, message;
   };
@@ -87,12 +82,16 @@ TEST_CASE("streak command: bad input exits 2 naming the value and leaves no coll
     CHECK(!fs::exists(pvd));
     CHECK(!fs::exists(dir.path() / "bad"));
   }
-  const auto r = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
-                               "--release 0:1 --frames 1 --out " + (dir.path() / "no" / "a.pvd").string());
+  const auto r = cli_test::run(
+      "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+      "--release 0:1 --frames 1 --out " +
+      (dir.path() / "no" / "a.pvd").string());
   CHECK(r.status == 2);
   CHECK(r.output.find("does not exist") != std::string::npos);
-  const auto wrong = cli_test::run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
-                                   "--release 0:1 --frames 1 --out " + (dir.path() / "a.vtp").string());
+  const auto wrong = cli_test::run(
+      "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+      "--release 0:1 --frames 1 --out " +
+      (dir.path() / "a.vtp").string());
   CHECK(wrong.status == 2);
   CHECK(wrong.output.find(".pvd") != std::string::npos);
 }
@@ -101,8 +100,10 @@ TEST_CASE("streak command: an HDF5 series streamed under a small budget, each st
           "[apps][streak]") {
   test_support::TempDir dir;
   const fs::path h5 = dir.path() / "gyre.h5";
-  const auto g = cli_test::run("generate --field double-gyre --resolution 101,51 --steps 41 "
-                               "--t1 4 --brick 16 --out " + h5.string() + " --quiet");
+  const auto g = cli_test::run(
+      "generate --field double-gyre --resolution 101,51 --steps 41 "
+      "--t1 4 --brick 16 --out " +
+      h5.string() + " --quiet");
   REQUIRE(g.status == 0);
   const fs::path pvd = dir.path() / "s.pvd", report = dir.path() / "s.json";
   const auto r = cli_test::run("streak --field " + h5.string() +
@@ -119,7 +120,8 @@ TEST_CASE("streak command: an HDF5 series streamed under a small budget, each st
   CHECK(count(read_text(pvd), "<DataSet ") == 3);
   // The same series as an OpenVDB file (timed grids, read leaf-wise) gives the same frames.
   const fs::path vdb = dir.path() / "gyre.vdb";
-  REQUIRE(cli_test::run("convert " + h5.string() + " --out " + vdb.string() + " --quiet").status == 0);
+  REQUIRE(cli_test::run("convert " + h5.string() + " --out " + vdb.string() + " --quiet").status ==
+          0);
   const fs::path vpvd = dir.path() / "v.pvd";
   const auto v = cli_test::run("streak --field " + vdb.string() +
                                " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
@@ -131,7 +133,8 @@ TEST_CASE("streak command: an HDF5 series streamed under a small budget, each st
   // Past the series' last time: refused before anything is written.
   const auto late = cli_test::run("streak --field " + h5.string() +
                                   " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 5 "
-                                  "--out " + (dir.path() / "late.pvd").string());
+                                  "--out " +
+                                  (dir.path() / "late.pvd").string());
   CHECK(late.status == 2);
   CHECK(late.output.find("[0, 4]") != std::string::npos);
   CHECK(!fs::exists(dir.path() / "late.pvd"));
@@ -144,9 +147,9 @@ TEST_CASE("streak command: SIGINT keeps the frames written, and the .pvd lists e
   const fs::path log = dir.path() / "log.txt";
   // A long run: a seed across the gyres' boundary stretches exponentially; 200 frames.
   const std::vector<std::string> args{
-      "streak", "--field", "double-gyre", "--seed", "line:0.9,0.2,0:0.9,0.8,0", "--release",
-      "0:10", "--frames", "0.05:10:200", "--edge", "0.01", "--out", pvd.string(), "--report",
-      report.string()};
+      "streak",    "--field", "double-gyre", "--seed",      "line:0.9,0.2,0:0.9,0.8,0",
+      "--release", "0:10",    "--frames",    "0.05:10:200", "--edge",
+      "0.01",      "--out",   pvd.string(),  "--report",    report.string()};
   const pid_t pid = cli_test::start(args, log.string());
   ::usleep(2'000'000);
   ::kill(pid, SIGINT);
@@ -173,38 +176,49 @@ TEST_CASE("streak command: SIGINT keeps the frames written, and the .pvd lists e
   CHECK(orthofront::io::read_mesh(dir.path() / "long" / last).face_count() > 0);
 }
 
-TEST_CASE("streak command: the space-time route writes one surface in (x, y, t)", "[apps][streak]") {
+TEST_CASE("streak command: the space-time route writes one surface in (x, y, t)",
+          "[apps][streak]") {
   test_support::TempDir dir;
   const fs::path out = dir.path() / "st.vtp";
-  const auto r = cli_test::run("streak --route spacetime --field double-gyre --point 0.3,0.375 "
-                               "--release 0:3 --frames 5 --edge 0.02 --out " + out.string());
+  const auto r = cli_test::run(
+      "streak --route spacetime --field double-gyre --point 0.3,0.375 "
+      "--release 0:3 --frames 5 --edge 0.02 --out " +
+      out.string());
   INFO(r.output);
   REQUIRE(r.status == 0);
   const Mesh mesh = orthofront::io::read_mesh(out);
   REQUIRE(mesh.face_count() > 100);
   double t_min = 1e9, t_max = -1e9;
-  for (const auto& p : mesh.positions) t_min = std::min(t_min, p.z()), t_max = std::max(t_max, p.z());
+  for (const auto& p : mesh.positions)
+    t_min = std::min(t_min, p.z()), t_max = std::max(t_max, p.z());
   CHECK(t_min >= 0);
   CHECK(t_min < 0.01);
   CHECK(t_max <= 5 + 1e-9);
   CHECK(t_max > 4.9);
-  const auto pvd = cli_test::run("streak --route spacetime --field double-gyre --point 0.3,0.375 "
-                                 "--release 0:3 --frames 5 --out " + (dir.path() / "a.pvd").string());
+  const auto pvd = cli_test::run(
+      "streak --route spacetime --field double-gyre --point 0.3,0.375 "
+      "--release 0:3 --frames 5 --out " +
+      (dir.path() / "a.pvd").string());
   CHECK(pvd.status == 2);
   CHECK(pvd.output.find(".vtp, .ply or .obj") != std::string::npos);
-  const auto three_d = cli_test::run("streak --route spacetime --field unsteady-abc --point 1,1 "
-                                     "--release 0:3 --frames 5 --out " + out.string());
+  const auto three_d = cli_test::run(
+      "streak --route spacetime --field unsteady-abc --point 1,1 "
+      "--release 0:3 --frames 5 --out " +
+      out.string());
   CHECK(three_d.status == 2);
   CHECK(three_d.output.find("needs a 2D flow") != std::string::npos);
 }
 
-TEST_CASE("streak command: --device moves particles by bulk advection, the same frames under any "
-          "budget, and names what it cannot do",
-          "[apps][streak][advect]") {
+TEST_CASE(
+    "streak command: --device moves particles by bulk advection, the same frames under any "
+    "budget, and names what it cannot do",
+    "[apps][streak][advect]") {
   test_support::TempDir dir;
   const fs::path h5 = dir.path() / "gyre.h5";
   REQUIRE(cli_test::run("generate --field double-gyre --resolution 101,51 --steps 41 --t1 4 "
-                        "--brick 16 --out " + h5.string() + " --quiet").status == 0);
+                        "--brick 16 --out " +
+                        h5.string() + " --quiet")
+              .status == 0);
   const auto streak = [&](const std::string& name, const std::string& extra) {
     return cli_test::run("streak --field " + h5.string() +
                          " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
@@ -229,7 +243,8 @@ TEST_CASE("streak command: --device moves particles by bulk advection, the same 
   // An analytic field has no grid to move through.
   const auto analytic = cli_test::run(
       "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
-      "--device cpu --out " + (dir.path() / "a.pvd").string());
+      "--device cpu --out " +
+      (dir.path() / "a.pvd").string());
   CHECK(analytic.status == 2);
   CHECK(analytic.output.find("--device") != std::string::npos);
   CHECK(!fs::exists(dir.path() / "a.pvd"));

@@ -20,13 +20,13 @@
 #include <vector>
 
 #include "io/hostile_file.h"
-#include "temp_dir.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/base64.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/mesh/mesh.h"
+#include "temp_dir.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -38,6 +38,7 @@ using orthofront::io::FormatError;
 using orthofront::io::IoError;
 using orthofront::io::read_mesh;
 using orthofront::io::write_mesh;
+using test_support::read_text;
 
 namespace {
 
@@ -46,13 +47,6 @@ using test_support::TempDir;
 void write_text(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 /// The message of the E that `f` throws; fails the test when it throws nothing.
@@ -311,12 +305,12 @@ TEST_CASE("a tiny PLY file claiming 2e9 vertices is refused before allocating fo
   const fs::path path = dir / "huge.ply";
   for (const std::string format : {"binary_little_endian", "ascii"}) {
     INFO(format);
-    write_text(path, "ply\nformat " + format +
-                         " 1.0\nelement vertex 2000000000\nproperty float x\nproperty float y\n"
-                         "property float z\nelement face 2000000000\n"
-                         "property list uchar int vertex_indices\nend_header\n" +
-                         (format == "ascii" ? std::string("0 0 0\n1 0 0\n")
-                                            : std::string(24, '\0')));
+    write_text(path,
+               "ply\nformat " + format +
+                   " 1.0\nelement vertex 2000000000\nproperty float x\nproperty float y\n"
+                   "property float z\nelement face 2000000000\n"
+                   "property list uchar int vertex_indices\nend_header\n" +
+                   (format == "ascii" ? std::string("0 0 0\n1 0 0\n") : std::string(24, '\0')));
     std::string message;
     const test_support::Footprint f =
         test_support::footprint([&] { message = thrown<FormatError>([&] { read_mesh(path); }); });
@@ -326,10 +320,11 @@ TEST_CASE("a tiny PLY file claiming 2e9 vertices is refused before allocating fo
     CHECK(f.peak_growth_kib < test_support::kHostileGrowthKib);
   }
   // An element without properties takes no bytes whatever its count: it is not iterated.
-  write_text(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                   "property float y\nproperty float z\nelement nothing 18446744073709551615\n"
-                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                   "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  write_text(path,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+             "property float y\nproperty float z\nelement nothing 18446744073709551615\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   Mesh mesh;
   const test_support::Footprint f = test_support::footprint([&] { mesh = read_mesh(path); });
   CHECK(mesh.positions.size() == 3);

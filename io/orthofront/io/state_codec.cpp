@@ -48,16 +48,43 @@ std::vector<Vec3> read_vec3s(ByteReader& in) {
   return values;
 }
 
+// The report's counters, stage times and per-step figures, in the order they are stored: one
+// list for writing and reading alike.
+constexpr std::size_t SurfaceReport::*kReportCounts[] = {
+    &SurfaceReport::vertices,
+    &SurfaceReport::faces,
+    &SurfaceReport::quads,
+    &SurfaceReport::triangles,
+    &SurfaceReport::vertex_steps,
+    &SurfaceReport::rips,
+    &SurfaceReport::negative_alpha,
+    &SurfaceReport::clamped_alpha,
+    &SurfaceReport::lag_raised_alpha,
+    &SurfaceReport::splits,
+    &SurfaceReport::merges,
+    &SurfaceReport::streamline_insertions,
+    &SurfaceReport::insertion_fallbacks,
+    &SurfaceReport::skipped_vertex_steps,
+    &SurfaceReport::domain_exits,
+    &SurfaceReport::no_data_hits,
+    &SurfaceReport::zero_velocity_cuts,
+    &SurfaceReport::fronts_created,
+    &SurfaceReport::fronts_dropped_short,
+    &SurfaceReport::fronts_stalled,
+    &SurfaceReport::infeasible_damping_steps,
+    &SurfaceReport::field_evaluations,
+};
+constexpr double StageTimes::*kStageTimes[] = {
+    &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,
+    &StageTimes::stitch, &StageTimes::quality, &StageTimes::total};
+constexpr double StepRecord::*kStepFigures[] = {&StepRecord::h_min, &StepRecord::h_max,
+                                                &StepRecord::orthogonality_mean,
+                                                &StepRecord::orthogonality_max};
+
 void write_report(ByteWriter& out, const SurfaceReport& r) {
   out.u8(static_cast<std::uint8_t>(r.stop_reason));
   out.i32(r.steps);
-  for (const std::size_t count :
-       {r.vertices, r.faces, r.quads, r.triangles, r.vertex_steps, r.rips, r.negative_alpha,
-        r.clamped_alpha, r.lag_raised_alpha, r.splits, r.merges, r.streamline_insertions,
-        r.insertion_fallbacks, r.skipped_vertex_steps, r.domain_exits, r.no_data_hits,
-        r.zero_velocity_cuts, r.fronts_created, r.fronts_dropped_short, r.fronts_stalled,
-        r.infeasible_damping_steps, r.field_evaluations})
-    out.u64(count);
+  for (const auto count : kReportCounts) out.u64(r.*count);
   out.f64(r.timeline_step);
   out.u8(r.closed_seed);
   out.u8(r.closed_front_opened);
@@ -67,10 +94,9 @@ void write_report(ByteWriter& out, const SurfaceReport& r) {
     out.i32(s.step);
     out.u64(s.fronts);
     out.u64(s.front_vertices);
-    for (double v : {s.h_min, s.h_max, s.orthogonality_mean, s.orthogonality_max}) out.f64(v);
+    for (const auto figure : kStepFigures) out.f64(s.*figure);
   }
-  const StageTimes& t = r.times;
-  for (double v : {t.alpha, t.rip, t.advance, t.adapt, t.stitch, t.quality, t.total}) out.f64(v);
+  for (const auto time : kStageTimes) out.f64(r.times.*time);
   out.u8(r.complete);
   out.text(r.message);
 }
@@ -82,13 +108,7 @@ SurfaceReport read_report(ByteReader& in) {
     in.fail("stop reason " + std::to_string(reason) + " is not one this version knows");
   r.stop_reason = static_cast<StopReason>(reason);
   r.steps = in.i32();
-  for (std::size_t* count :
-       {&r.vertices, &r.faces, &r.quads, &r.triangles, &r.vertex_steps, &r.rips, &r.negative_alpha,
-        &r.clamped_alpha, &r.lag_raised_alpha, &r.splits, &r.merges, &r.streamline_insertions,
-        &r.insertion_fallbacks, &r.skipped_vertex_steps, &r.domain_exits, &r.no_data_hits,
-        &r.zero_velocity_cuts, &r.fronts_created, &r.fronts_dropped_short, &r.fronts_stalled,
-        &r.infeasible_damping_steps, &r.field_evaluations})
-    *count = in.u64();
+  for (const auto count : kReportCounts) r.*count = in.u64();
   r.timeline_step = in.f64();
   r.closed_seed = in.u8() != 0;
   r.closed_front_opened = in.u8() != 0;
@@ -99,12 +119,9 @@ SurfaceReport read_report(ByteReader& in) {
     s.step = in.i32();
     s.fronts = in.u64();
     s.front_vertices = in.u64();
-    for (double* v : {&s.h_min, &s.h_max, &s.orthogonality_mean, &s.orthogonality_max})
-      *v = in.f64();
+    for (const auto figure : kStepFigures) s.*figure = in.f64();
   }
-  StageTimes& t = r.times;
-  for (double* v : {&t.alpha, &t.rip, &t.advance, &t.adapt, &t.stitch, &t.quality, &t.total})
-    *v = in.f64();
+  for (const auto time : kStageTimes) r.times.*time = in.f64();
   r.complete = in.u8() != 0;
   r.message = in.text();
   return r;
@@ -143,8 +160,8 @@ Mesh read_mesh_state(ByteReader& in) {
     for (std::int32_t& v : f.v) v = in.i32();
     for (int k = 0; k < f.size; ++k)
       if (f.v[static_cast<std::size_t>(k)] < 0 || f.v[static_cast<std::size_t>(k)] >= vertices)
-        in.fail("a face names vertex " + std::to_string(f.v[static_cast<std::size_t>(k)]) +
-                " of " + std::to_string(vertices));
+        in.fail("a face names vertex " + std::to_string(f.v[static_cast<std::size_t>(k)]) + " of " +
+                std::to_string(vertices));
   }
   mesh.time = in.array<double>();
   mesh.alpha = in.array<double>();
@@ -159,8 +176,9 @@ Mesh read_mesh_state(ByteReader& in) {
   const auto n = mesh.positions.size();
   for (const std::size_t size : {mesh.time.size(), mesh.alpha.size(), mesh.s.size(),
                                  mesh.error.size(), mesh.front_id.size(), mesh.step.size()})
-    if (size != n) in.fail("a vertex attribute of " + std::to_string(size) + " values for " +
-                           std::to_string(n) + " vertices");
+    if (size != n)
+      in.fail("a vertex attribute of " + std::to_string(size) + " values for " + std::to_string(n) +
+              " vertices");
   return mesh;
 }
 
