@@ -16,13 +16,14 @@
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/spacetime/spacetime_streak.h"
+#include "orthofront/spacetime/streak_line_field.h"
 #include "orthofront/spacetime/streak_surface.h"
-#include "orthofront/io/mesh_io.h"
 
 namespace orthofront::cli {
 
@@ -76,18 +77,21 @@ std::vector<double> parse_frames(const std::string& text) {
   if (text.find(':') != std::string::npos) {
     const auto parts = split_on(text, ':');
     if (parts.size() != 3)
-      throw InvalidArgument("--frames '" + text + "': expected START:END:COUNT or a list t1,t2,...");
+      throw InvalidArgument("--frames '" + text +
+                            "': expected START:END:COUNT or a list t1,t2,...");
     const double a = parse_time(parts[0], "--frames"), b = parse_time(parts[1], "--frames");
     const double n = parse_time(parts[2], "--frames");
     if (!(n >= 1 && n <= 100000 && n == std::floor(n)))
-      throw InvalidArgument("--frames '" + text + "': COUNT must be a whole number from 1 to 100000");
+      throw InvalidArgument("--frames '" + text +
+                            "': COUNT must be a whole number from 1 to 100000");
     if (n == 1) return {b};
     const int count = static_cast<int>(n);
     for (int i = 0; i + 1 < count; ++i) frames.push_back(a + (b - a) * i / (n - 1));
     frames.push_back(b);  // exactly END, whatever the rounding
     return frames;
   }
-  for (const std::string& part : split_on(text, ',')) frames.push_back(parse_time(part, "--frames"));
+  for (const std::string& part : split_on(text, ','))
+    frames.push_back(parse_time(part, "--frames"));
   return frames;
 }
 
@@ -102,7 +106,9 @@ class StreakStatus {
     if (interrupted()) return false;
     if (!enabled_ || p.elapsed_seconds - last_ < 0.1) return true;
     last_ = p.elapsed_seconds;
-    std::fprintf(stderr, "\rstreak: t = %.4g of %.4g  %zu of %zu frames written  %zu particles in %zu rows  RSS %s   ",
+    std::fprintf(stderr,
+                 "\rstreak: t = %.4g of %.4g  %zu of %zu frames written  %zu particles in %zu rows "
+                 " RSS %s   ",
                  p.t, p.t_end, p.frames_written, p.frames, p.particles, p.rows,
                  format_memory(current_rss_bytes()).c_str());
     drawn_ = true;
@@ -121,59 +127,59 @@ class StreakStatus {
 
 nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
   const QualityReport& q = f.quality;
-  return {{"index", f.index},
-          {"time", f.time},
-          {"vertices", f.vertices},
-          {"faces", f.faces},
-          {"rows", f.rows},
-          {"stopped_particles", f.dead_particles},
-          {"max_edge", f.max_edge},
-          {"seconds", f.seconds},
-          {"quality", io::to_json(q)}};
+  return {{"index", f.index},       {"time", f.time},       {"vertices", f.vertices},
+          {"faces", f.faces},       {"rows", f.rows},       {"stopped_particles", f.dead_particles},
+          {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"quality", io::to_json(q)}};
 }
 
 nlohmann::json report_json(const spacetime::StreakReport& r) {
   nlohmann::json frames = nlohmann::json::array();
   for (const auto& f : r.frames) frames.push_back(frame_json(f));
-  return {{"dimension", r.dimension},
-          {"streamed", r.streamed},
-          {"complete", r.complete},
-          {"message", r.message},
-          {"insertion", spacetime::to_string(r.insertion)},
-          {"release", {{"begin", r.release_begin}, {"end", r.release_end}, {"step", r.release_step},
-                       {"rows", r.rows_released}, {"seed_count", r.seed_count}}},
-          {"time_reached", r.time_reached},
-          {"particle_steps", r.particle_steps},
-          {"evaluations", r.evaluations},
-          {"intervals", r.intervals},
-          {"refinement", {{"s_insertions", r.s_insertions},
-                          {"rows_inserted", r.rows_inserted},
-                          {"row_particles", r.row_particles},
-                          {"exact_insertions", r.exact_insertions},
-                          {"interpolated_insertions", r.interpolated_insertions},
-                          {"s_removals", r.s_removals},
-                          {"rows_removed", r.rows_removed}}},
-          {"particles", {{"max", r.max_particles},
-                         {"left_domain", r.left_domain},
-                         {"no_data", r.no_data}}},
-          {"frames", frames},
-          {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
-          {"slow_evaluations", r.slow_evaluations},
-          {"device", r.device.empty() ? nlohmann::json() : nlohmann::json({
-              {"backend", r.device},
-              {"slabs", r.bulk.slabs},
-              {"particle_steps", r.bulk.particle_steps},
-              {"compute_seconds", r.bulk.compute_seconds},
-              {"upload_seconds", r.bulk.upload_seconds},
-              {"bytes_uploaded", r.bulk.bytes_uploaded},
-              {"overlap_seconds", r.bulk.overlap_seconds}})},
-          {"seconds", {{"total", r.total_seconds},
-                       {"advect", r.advect_seconds},
-                       {"refine", r.refine_seconds},
-                       {"frames", r.frame_seconds},
-                       {"wait", r.wait_seconds},
-                       {"io", r.io_seconds},
-                       {"decode", r.decode_seconds}}}};
+  return {
+      {"dimension", r.dimension},
+      {"streamed", r.streamed},
+      {"complete", r.complete},
+      {"message", r.message},
+      {"insertion", spacetime::to_string(r.insertion)},
+      {"release",
+       {{"begin", r.release_begin},
+        {"end", r.release_end},
+        {"step", r.release_step},
+        {"rows", r.rows_released},
+        {"seed_count", r.seed_count}}},
+      {"time_reached", r.time_reached},
+      {"particle_steps", r.particle_steps},
+      {"evaluations", r.evaluations},
+      {"intervals", r.intervals},
+      {"refinement",
+       {{"s_insertions", r.s_insertions},
+        {"rows_inserted", r.rows_inserted},
+        {"row_particles", r.row_particles},
+        {"exact_insertions", r.exact_insertions},
+        {"interpolated_insertions", r.interpolated_insertions},
+        {"s_removals", r.s_removals},
+        {"rows_removed", r.rows_removed}}},
+      {"particles",
+       {{"max", r.max_particles}, {"left_domain", r.left_domain}, {"no_data", r.no_data}}},
+      {"frames", frames},
+      {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
+      {"slow_evaluations", r.slow_evaluations},
+      {"device", r.device.empty() ? nlohmann::json()
+                                  : nlohmann::json({{"backend", r.device},
+                                                    {"slabs", r.bulk.slabs},
+                                                    {"particle_steps", r.bulk.particle_steps},
+                                                    {"compute_seconds", r.bulk.compute_seconds},
+                                                    {"upload_seconds", r.bulk.upload_seconds},
+                                                    {"bytes_uploaded", r.bulk.bytes_uploaded},
+                                                    {"overlap_seconds", r.bulk.overlap_seconds}})},
+      {"seconds",
+       {{"total", r.total_seconds},
+        {"advect", r.advect_seconds},
+        {"refine", r.refine_seconds},
+        {"frames", r.frame_seconds},
+        {"wait", r.wait_seconds},
+        {"io", r.io_seconds},
+        {"decode", r.decode_seconds}}}};
 }
 
 // The flow-orthogonal route: one space-time surface from a point, written as one mesh.
@@ -215,15 +221,91 @@ void run_spacetime_route(const StreakArgs& args) {
   }
   outputs.commit();
   if (!args.quiet)
-    std::printf("Space-time streak surface of %s from (%g, %g), released over [%g, %g], to t = "
-                "%g: %zu vertices, %zu faces, c = %g; quality in (x, y, c t): %.1f%% quads, "
-                "%.1f%% of quad angles within 90±10°, edge spread %.3f, %zu folds. Time %.3f s.\n"
-                "Wrote %s (positions (x, y, t); its slice at time t is the streak line at t)\n",
-                args.field.c_str(), x, y, o.release_begin, o.release_end, o.t_end,
-                r.mesh.vertex_count(), r.mesh.face_count(), r.time_scale,
-                100 * r.report.quality.quad_share, 100 * r.report.quality.quad_angles_within_10,
-                r.report.quality.edge_spread_median, r.report.quality.folds,
-                r.report.times.total, args.out.c_str());
+    std::printf(
+        "Space-time streak surface of %s from (%g, %g), released over [%g, %g], to t = "
+        "%g: %zu vertices, %zu faces, c = %g; quality in (x, y, c t): %.1f%% quads, "
+        "%.1f%% of quad angles within 90±10°, edge spread %.3f, %zu folds. Time %.3f s.\n"
+        "Wrote %s (positions (x, y, t); its slice at time t is the streak line at t)\n",
+        args.field.c_str(), x, y, o.release_begin, o.release_end, o.t_end, r.mesh.vertex_count(),
+        r.mesh.face_count(), r.time_scale, 100 * r.report.quality.quad_share,
+        100 * r.report.quality.quad_angles_within_10, r.report.quality.edge_spread_median,
+        r.report.quality.folds, r.report.times.total, args.out.c_str());
+}
+
+// The paper's route for a seed curve: at each observation time, the stream surface of the
+// streak-line field over (x, y, age), written as one frame of a .pvd animation.
+void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
+  if (!is_unsteady_field_name(args.field))
+    throw InvalidArgument("--route streak-line takes an unsteady analytic 2D field, not '" +
+                          args.field + "'");
+  io::MeshSeriesWriter writer(args.out);  // checks the extension and the folder
+  if (!args.report.empty()) io::check_writable(args.report);
+  const auto flow = make_unsteady_field(args.field);
+  spacetime::StreakLineSurfaceOptions o;
+  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
+  o.seed_count = args.seed_count;
+  o.path.engine.edge = args.edge;
+  o.path.engine.max_steps = 10'000'000;
+  if (args.max_vertices > 0) o.path.engine.max_vertices = args.max_vertices;
+  o.path.seed_name = args.seed;
+  o.path.field_name = args.field;
+  o.path.progress = [](const spacetime::PathProgress&) { return !interrupted(); };
+  nlohmann::json frames = nlohmann::json::array();
+  std::size_t derived = 0, evaluations = 0;
+  double seconds = 0;
+  bool complete = true;
+  for (const double t : parse_frames(args.frames)) {
+    o.observation_time = t;
+    spacetime::StreakLineSurface w = spacetime::build_streak_line_surface(*flow, seed, o);
+    if (!w.path.complete) {
+      complete = false;
+      break;
+    }
+    // The surface the engine built, in (x, y, age); its projection is the planar streak surface.
+    w.mesh.positions = w.lifted;
+    writer.add_frame(w.mesh, t);
+    derived += w.derived_evaluations;
+    evaluations += w.flow_evaluations;
+    seconds += w.seconds;
+    nlohmann::json f = io::to_json(w.report);
+    f["time"] = t;
+    f["first_age"] = w.first_age;
+    f["time_scale"] = w.path.time_scale;
+    f["streak_line_field_values"] = w.derived_evaluations;
+    f["flow_evaluations"] = w.flow_evaluations;
+    f["seconds"] = w.seconds;
+    frames.push_back(std::move(f));
+    if (!args.quiet)
+      std::printf(
+          "t = %g: %zu vertices, %zu faces, %.1f%% quads, %.1f%% of quad angles within "
+          "90±10° in (x, y, c age), %zu folds; %zu values of the streak-line field, "
+          "%.3f s\n",
+          t, w.mesh.vertex_count(), w.mesh.face_count(), 100 * w.report.quality.quad_share,
+          100 * w.report.quality.quad_angles_within_10, w.report.quality.folds,
+          w.derived_evaluations, w.seconds);
+  }
+  if (!args.report.empty()) {
+    const nlohmann::json report = {{"route", "streak-line"},
+                                   {"field", args.field},
+                                   {"seed", args.seed},
+                                   {"output", args.out},
+                                   {"positions", "(x, y, age)"},
+                                   {"quality_space", "(x, y, c age)"},
+                                   {"frames_written", writer.frames()},
+                                   {"complete", complete},
+                                   {"streak_line_field_values", derived},
+                                   {"flow_evaluations", evaluations},
+                                   {"seconds", seconds},
+                                   {"frames", frames}};
+    io::write_atomically(args.report, [&](std::ofstream& out) { out << report.dump(2) << '\n'; });
+  }
+  if (!args.quiet)
+    std::printf("Wrote %s (%zu frames in %s, positions (x, y, age))%s%s\n", args.out.c_str(),
+                writer.frames(), writer.frame_folder().string().c_str(),
+                args.report.empty() ? "" : " and ", args.report.c_str());
+  if (!complete)
+    throw Error("interrupted: the " + std::to_string(writer.frames()) +
+                " frames written are listed in " + args.out);
 }
 
 }  // namespace
@@ -231,7 +313,9 @@ void run_spacetime_route(const StreakArgs& args) {
 std::pair<double, double> parse_streak_release(const std::string& text) {
   return parse_release(text);
 }
-std::vector<double> parse_streak_frames(const std::string& text) { return parse_frames(text); }
+std::vector<double> parse_streak_frames(const std::string& text) {
+  return parse_frames(text);
+}
 nlohmann::json streak_report_json(const spacetime::StreakReport& report) {
   return report_json(report);
 }
@@ -239,8 +323,9 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& report) {
 void add_streak_command(CLI::App& app) {
   auto args = std::make_shared<StreakArgs>();
   CLI::App* c = app.add_subcommand(
-      "streak", "Build a streak surface (dye released continuously from a seed curve) as a "
-                "ParaView animation");
+      "streak",
+      "Build a streak surface (dye released continuously from a seed curve) as a "
+      "ParaView animation");
   c->add_option("--field", args->field,
                 "Unsteady field NAME[:key=value,...] (see `orthofront fields`), an HDF5 time "
                 "series or an OpenVDB file of timed vector grids")
@@ -252,9 +337,12 @@ void add_streak_command(CLI::App& app) {
                 "--route spacetime, the last one ends the surface");
   c->add_option("--route", args->route,
                 "direct: release rows of particles and write one frame per observation time "
-                "(.pvd); spacetime: 2D analytic flows, the streak lines of --point at all times "
-                "as one surface in (x, y, t) built by the flow-orthogonal engine (.vtp, .ply, .obj)")
-      ->check(CLI::IsMember({"direct", "spacetime"}))
+                "(.pvd); streak-line: 2D analytic flows, at each observation time the stream "
+                "surface of the streak-line field (Weinkauf & Theisel) over (x, y, age) built by "
+                "the flow-orthogonal engine (.pvd, positions (x, y, age)); spacetime: 2D analytic "
+                "flows, the streak lines of --point at all times as one surface in (x, y, t) "
+                "(.vtp, .ply, .obj)")
+      ->check(CLI::IsMember({"direct", "streak-line", "spacetime"}))
       ->capture_default_str();
   c->add_option("--point", args->point, "--route spacetime: the release point x,y");
   c->add_option("--edge", args->edge, "Target edge length")->capture_default_str();
@@ -297,6 +385,10 @@ void add_streak_command(CLI::App& app) {
       return;
     }
     if (args->seed.empty()) throw InvalidArgument("--seed is required (the curve the dye leaves)");
+    if (args->route == "streak-line") {
+      run_streak_line_route(*args, parse_seed(args->seed));
+      return;
+    }
     StreamSurfaceOptions caps;
     if (c->count("--max-vertices") > 0) caps.max_vertices = args->max_vertices;
     apply_memory_flag(*c, args->limits, caps);
@@ -332,7 +424,8 @@ void add_streak_command(CLI::App& app) {
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_streak_surface(*flow, seed, o, sink);
     } else {
-      const std::unique_ptr<io::TimeSeries> series = open_time_series(args->field, "streak surfaces");
+      const std::unique_ptr<io::TimeSeries> series =
+          open_time_series(args->field, "streak surfaces");
       spacetime::CacheOptions co;
       co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
                                              : spacetime::parse_bytes(args->budget);
@@ -349,28 +442,31 @@ void add_streak_command(CLI::App& app) {
       report["frames_written"] = writer.frames();
       report["limits"] = args->limits.to_json();
       if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
-      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()}, {"rss_bytes", current_rss_bytes()}};
-      io::write_atomically(args->report, [&](std::ofstream& out) { out << report.dump(2) << '\n'; });
+      report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
+                           {"rss_bytes", current_rss_bytes()}};
+      io::write_atomically(args->report,
+                           [&](std::ofstream& out) { out << report.dump(2) << '\n'; });
     }
     if (!args->quiet) {
-      std::printf("Streak surface of %s from %s, released over [%g, %g] in %zu rows of %zu "
-                  "particles: %zu of %zu frames, t reached %g, %zu particle-steps, %zu exact and "
-                  "%zu interpolated insertions, %.3f s (advect %.3f, refine %.3f, frames %.3f).\n",
-                  args->field.c_str(), args->seed.c_str(), result.release_begin,
-                  result.release_end, result.rows_released, result.seed_count,
-                  result.frames.size(), o.frames.size(), result.time_reached,
-                  result.particle_steps, result.exact_insertions, result.interpolated_insertions,
-                  result.total_seconds, result.advect_seconds, result.refine_seconds,
-                  result.frame_seconds);
+      std::printf(
+          "Streak surface of %s from %s, released over [%g, %g] in %zu rows of %zu "
+          "particles: %zu of %zu frames, t reached %g, %zu particle-steps, %zu exact and "
+          "%zu interpolated insertions, %.3f s (advect %.3f, refine %.3f, frames %.3f).\n",
+          args->field.c_str(), args->seed.c_str(), result.release_begin, result.release_end,
+          result.rows_released, result.seed_count, result.frames.size(), o.frames.size(),
+          result.time_reached, result.particle_steps, result.exact_insertions,
+          result.interpolated_insertions, result.total_seconds, result.advect_seconds,
+          result.refine_seconds, result.frame_seconds);
       if (!result.frames.empty()) {
         const auto& f = result.frames.back();
-        std::printf("Last frame (t = %g): %zu vertices, %zu faces, %.1f%% quads, %.1f%% of quad "
-                    "angles within 90±10°, edge spread %.3f, max edge %.3g (%.2f edge lengths), "
-                    "%zu folds, %zu T-junctions, %zu degenerate faces, %zu non-manifold edges.\n",
-                    f.time, f.vertices, f.faces, 100 * f.quality.quad_share,
-                    100 * f.quality.quad_angles_within_10, f.quality.edge_spread_median,
-                    f.max_edge, f.max_edge / args->edge, f.quality.folds, f.quality.t_junctions,
-                    f.quality.degenerate_faces, f.quality.non_manifold_edges);
+        std::printf(
+            "Last frame (t = %g): %zu vertices, %zu faces, %.1f%% quads, %.1f%% of quad "
+            "angles within 90±10°, edge spread %.3f, max edge %.3g (%.2f edge lengths), "
+            "%zu folds, %zu T-junctions, %zu degenerate faces, %zu non-manifold edges.\n",
+            f.time, f.vertices, f.faces, 100 * f.quality.quad_share,
+            100 * f.quality.quad_angles_within_10, f.quality.edge_spread_median, f.max_edge,
+            f.max_edge / args->edge, f.quality.folds, f.quality.t_junctions,
+            f.quality.degenerate_faces, f.quality.non_manifold_edges);
       }
       if (result.streamed)
         std::printf("Cache: %s read (%.3fx needed), at most %zu reads of a unit, waited %.3f s.\n",

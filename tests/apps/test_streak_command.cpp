@@ -209,6 +209,54 @@ TEST_CASE("streak command: the space-time route writes one surface in (x, y, t)"
   CHECK(three_d.output.find("needs a 2D flow") != std::string::npos);
 }
 
+TEST_CASE("streak command: the streak-line route writes one surface in (x, y, age) per frame",
+          "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path pvd = dir.path() / "wt.pvd", report = dir.path() / "wt.json";
+  const auto r = cli_test::run(
+      "streak --route streak-line --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
+      "--release 0:3 --frames 2,4 --edge 0.03 --out " +
+      pvd.string() + " --report " + report.string());
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK(count(read_text(pvd), "<DataSet ") == 2);
+  const auto j = nlohmann::json::parse(read_text(report));
+  CHECK(j["route"] == "streak-line");
+  CHECK(j["complete"] == true);
+  REQUIRE(j["frames"].size() == 2);
+  for (int k = 0; k < 2; ++k) {
+    const double t = k == 0 ? 2.0 : 4.0;
+    const Mesh m =
+        orthofront::io::read_mesh(dir.path() / "wt" / ("wt_000" + std::to_string(k) + ".vtp"));
+    CHECK(j["frames"][k]["quality"]["vertices"] == m.vertex_count());
+    CHECK(j["frames"][k]["quality"]["folds"] == 0);
+    CHECK(j["frames"][k]["quality"]["t_junctions"] == 0);
+    REQUIRE(m.release_time.size() == m.vertex_count());
+    // z is the age: observation time minus release time, within the release interval.
+    for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+      REQUIRE(m.positions[i].z() == Approx(t - m.release_time[i]).margin(1e-12));
+      REQUIRE(m.release_time[i] >= -1e-9);
+      REQUIRE(m.release_time[i] <= std::min(t, 3.0) + 1e-9);
+    }
+  }
+  // Gridded series and 3D flows are refused, naming what was given.
+  const auto three_d = cli_test::run(
+      "streak --route streak-line --field unsteady-abc --seed line:1,1,1:1,2,1 --release 0:3 "
+      "--frames 2 --out " +
+      (dir.path() / "b.pvd").string());
+  CHECK(three_d.status == 2);
+  CHECK(three_d.output.find("needs a 2D flow") != std::string::npos);
+  const auto series = cli_test::run(
+      "streak --route streak-line --field nothing.h5 --seed line:1,1,1:1,2,1 --release 0:3 "
+      "--frames 2 --out " +
+      (dir.path() / "c.pvd").string());
+  CHECK(series.status == 2);
+  CHECK(series.output.find("takes an unsteady analytic 2D field, not 'nothing.h5'") !=
+        std::string::npos);
+  CHECK(!fs::exists(dir.path() / "b.pvd"));
+  CHECK(!fs::exists(dir.path() / "c.pvd"));
+}
+
 TEST_CASE(
     "streak command: --device moves particles by bulk advection, the same frames under any "
     "budget, and names what it cannot do",

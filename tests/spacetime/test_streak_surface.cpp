@@ -11,6 +11,7 @@
 #include "orthofront/error.h"
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/unsteady.h"
+#include "orthofront/quality/mesh_distance.h"
 #include "spacetime/reference_path.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
@@ -319,28 +320,6 @@ class Frozen final : public Field<3> {
   double t_;
 };
 
-double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  // Closest point on triangle (Ericson, Real-Time Collision Detection, 5.1.5).
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.norm();
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.norm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.norm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
-  const double denom = 1 / (va + vb + vc);
-  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
-}
-
 }  // namespace
 
 TEST_CASE("streak surface: in a steady flow it is the stream surface up to t - t_start",
@@ -366,20 +345,12 @@ TEST_CASE("streak surface: in a steady flow it is the stream surface up to t - t
   // time below the oldest particle's age lies on the streak surface. (The other way is not
   // asserted: the engine's front leaves a hole around s = 0.4 at times 2.5 to 3 on this flow, so
   // streak vertices there are 0.025 from the stream surface although they are exact.)
-  std::vector<std::array<Vec3, 3>> triangles;
-  for (const Face& f : streak.faces) {
-    const auto p = [&](int k) { return streak.positions[static_cast<std::size_t>(f.v[k])]; };
-    triangles.push_back({p(0), p(1), p(2)});
-    if (f.size == 4) triangles.push_back({p(0), p(2), p(3)});
-  }
+  const std::vector<Triangle> triangles = triangles_of(streak.positions, streak.faces);
   double farthest = 0;
   std::size_t compared = 0;
   for (std::size_t i = 0; i < stream.mesh.vertex_count(); ++i) {
     if (stream.mesh.time[i] > 2.9) continue;
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& t : triangles)
-      best = std::min(best, point_triangle_distance(stream.mesh.positions[i], t[0], t[1], t[2]));
-    farthest = std::max(farthest, best);
+    farthest = std::max(farthest, distance_to(stream.mesh.positions[i], triangles));
     ++compared;
   }
   INFO(compared << " stream-surface vertices (integration time <= 2.9) against a streak surface of "

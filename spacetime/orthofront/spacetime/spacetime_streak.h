@@ -5,9 +5,8 @@
 /// for a release time τ <= t, so it is swept by the path lines that leave x0: it is the stream
 /// surface of the lifted field (v, c) over (x, y, c t) from the release segment {x0} × [T0, T1],
 /// built here by the flow-orthogonal engine. Its slice at t = t_f is the streak line at t_f.
-/// (Weinkauf & Theisel derive a field whose tangent curves are the streak lines themselves; its
-/// stream surface from the path line of x0 is this same surface with fronts orthogonal to the
-/// streak lines instead of to the path lines, and needs the flow map's gradient everywhere.)
+/// (The streak surface of a seed curve at one time, as a stream surface of Weinkauf & Theisel's
+/// streak-line field: streak_line_field.h.)
 #include <algorithm>
 #include <vector>
 
