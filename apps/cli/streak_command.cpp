@@ -149,6 +149,7 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
         {"seed_count", r.seed_count}}},
       {"time_reached", r.time_reached},
       {"particle_steps", r.particle_steps},
+      {"particle_time", r.particle_time},
       {"evaluations", r.evaluations},
       {"intervals", r.intervals},
       {"refinement",

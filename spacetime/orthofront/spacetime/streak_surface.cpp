@@ -210,6 +210,7 @@ bool StreakBuilder::advance(double t_to) {
     if (status_[i] == ParticleStatus::no_data) ++report_.no_data;
   }
   report_.particle_steps += moving.size();
+  report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
   ++report_.intervals;
   t_ = t_to;
   report_.time_reached = t_;

@@ -91,6 +91,9 @@ struct StreakReport {
   double time_reached = 0;
   std::size_t seed_count = 0, rows_released = 0;
   std::size_t particle_steps = 0;   ///< particle advances over one time interval
+  /// Simulated time advanced, summed over particles (intervals differ between runs, so this is
+  /// the measure to compare their cost by).
+  double particle_time = 0;
   std::size_t evaluations = 0;      ///< field evaluations
   std::size_t intervals = 0;        ///< time intervals advanced
   // Refinement.
