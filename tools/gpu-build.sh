@@ -20,7 +20,7 @@ catch2=(-DCatch2_DIR=/opt/orthofront-deps/usr/lib/cmake/Catch2)
 generator=(); command -v ninja >/dev/null && generator=(-G Ninja)
 # The Boost that OpenVDB was built with, where the machine has another one (its config first).
 boost=(); [[ -d /usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0 ]] && boost=(-DBoost_DIR=/usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0)
-cmake -S . -B "$build" "${generator[@]}" "${boost[@]}" "${catch2[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON -DORTHOFRONT_MPI=OFF \
+cmake -S . -B "$build" "${generator[@]}" "${boost[@]}" "${catch2[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON -DORTHOFRONT_MPI=OFF -DORTHOFRONT_NETCDF=OFF \
   -DCMAKE_CUDA_ARCHITECTURES="${CUDA_ARCHITECTURES:-90}"
 cmake --build "$build" -j"$(nproc)" --target orthofront lib_test_cuda_advector lib_test_batch_advector
 "$build"/tests/lib_test_batch_advector

@@ -2,8 +2,6 @@
 // .vtk, .pvd, .vdb, .h5) into the project's HDF5 layout or OpenVDB. One steady input gives a
 // steady field; several inputs (or a glob, a .pvd, a VDB/HDF5 series) give a time series,
 // streamed one step at a time.
-#include <glob.h>
-
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -67,18 +65,14 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<std::string> files;
   for (const std::string& input : inputs) {
     const bool pattern = input.find_first_of("*?[") != std::string::npos;
-    if (!pattern || std::filesystem::exists(input)) {
+    // NetCDF specs stay whole: the reader expands them and applies the selector to every file.
+    const auto found = find_data_file(input);
+    if (!pattern || std::filesystem::exists(input) ||
+        (found && io::is_netcdf_path(found->first.path))) {
       files.push_back(input);
       continue;
     }
-    glob_t result{};
-    const int status = ::glob(input.c_str(), 0, nullptr, &result);
-    if (status != 0) {
-      ::globfree(&result);
-      throw InvalidArgument("input pattern '" + input + "' matches no file");
-    }
-    for (std::size_t i = 0; i < result.gl_pathc; ++i) files.emplace_back(result.gl_pathv[i]);
-    ::globfree(&result);
+    for (const auto& file : io::expand_file_pattern(input)) files.push_back(file.string());
   }
   return files;
 }
@@ -185,6 +179,12 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
   if (files.size() == 1) {
     const DataFileSpec spec = split_spec(files.front());
     const std::string ext = lower(spec.path.extension().string());
+    if (io::is_netcdf_path(spec.path)) {
+      input.series = open_netcdf_series(spec);
+      input.steady = input.series->step_count() == 1;
+      input.has_times = true;
+      return input;
+    }
     if (ext == ".pvd") {
       input.series = io::open_pvd(spec.path, spec.selector);
       input.steady = false;
@@ -218,6 +218,26 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
     }
     input.series = std::make_unique<io::SingleGridSeries>(
         io::read_vector_grid(spec.path, spec.selector), files.front());
+    return input;
+  }
+  // Several NetCDF files: one series over all of them (steps and times from the files).
+  if (std::all_of(files.begin(), files.end(), [](const std::string& f) {
+        const auto found = find_data_file(f);
+        return found && io::is_netcdf_path(found->first.path);
+      })) {
+    DataFileSpec all = split_spec(files.front());
+    std::string list;
+    for (const std::string& f : files) {
+      const DataFileSpec spec = split_spec(f);
+      if (spec.selector != all.selector)
+        throw InvalidArgument("inputs name different variables ('" + all.selector + "', '" +
+                              spec.selector + "'); a series reads the same ones from every file");
+      list += (list.empty() ? "" : ",") + spec.path.string();
+    }
+    all.path = list;
+    input.series = open_netcdf_series(all);
+    input.steady = false;
+    input.has_times = true;
     return input;
   }
   // Several files: one step each, the same array of each.

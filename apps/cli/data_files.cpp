@@ -8,6 +8,7 @@
 #include "orthofront/error.h"
 #include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/netcdf_series.h"
 
 namespace orthofront::cli {
 
@@ -75,7 +76,40 @@ DataFile open_hdf5(const DataFileSpec& spec) {
   return file;
 }
 
+DataFile open_netcdf(const DataFileSpec& spec) {
+  DataFile file;
+  file.series = open_netcdf_series(spec);
+  file.format = "NetCDF (CF)";
+  file.steady = file.series->step_count() == 1;
+  file.zero_is_no_data = false;  // no data is NaN, fill values and the valid range
+#ifdef ORTHOFRONT_HAVE_NETCDF
+  const io::NetcdfDescription& d = *io::netcdf_description(*file.series);
+  file.format = d.format + " (CF)";
+  std::string vars;
+  for (const std::string& v : d.variables) vars += (vars.empty() ? "" : ", ") + v;
+  file.details.emplace_back("files", std::to_string(d.files));
+  file.details.emplace_back("variables", vars + " (" + d.found_by + ")");
+  file.details.emplace_back("coordinates", d.coordinates);
+  file.details.emplace_back("time", d.time);
+  file.details.emplace_back("velocity units", d.velocity_units.empty() ? "-" : d.velocity_units);
+  if (d.lonlat) file.details.emplace_back("lon/lat", d.metric_note);
+  file.details.emplace_back("no data", d.fill);
+#endif
+  return file;
+}
+
 }  // namespace
+
+std::unique_ptr<io::TimeSeries> open_netcdf_series(const DataFileSpec& spec) {
+#ifdef ORTHOFRONT_HAVE_NETCDF
+  return io::open_netcdf_series(io::expand_file_pattern(spec.path.string()),
+                                io::parse_netcdf_selector(spec.selector));
+#else
+  throw InvalidArgument("'" + spec.path.string() +
+                        "': this build reads no NetCDF (install libnetcdf-dev and configure "
+                        "again)");
+#endif
+}
 
 const std::vector<DataFileFormat>& data_file_formats() {
   static const std::vector<DataFileFormat> formats = {
@@ -87,6 +121,7 @@ const std::vector<DataFileFormat>& data_file_formats() {
       {"legacy VTK", {".vtk"}, open_grid_file},
       {"ParaView collection", {".pvd"}, open_pvd_file},
       {"OpenVDB", {".vdb"}, open_vdb_file},
+      {"NetCDF (CF)", {".nc", ".nc4", ".cdf"}, open_netcdf},
   };
   return formats;
 }

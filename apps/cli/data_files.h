@@ -60,6 +60,11 @@ bool looks_like_file(const std::string& spec);
 /// reader otherwise.
 DataFile open_data_file(const std::string& spec);
 
+/// A NetCDF series: `spec.path` is a file, a glob or a comma-separated list of them; the selector
+/// names the variables and options (io::parse_netcdf_selector). Throws InvalidArgument when the
+/// build has no NetCDF.
+std::unique_ptr<io::TimeSeries> open_netcdf_series(const DataFileSpec& spec);
+
 /// A series of one grid held in memory (for formats whose readers produce a VectorGrid).
 std::unique_ptr<io::TimeSeries> single_grid_series(VectorGrid grid, std::string description);
 

@@ -8,6 +8,7 @@
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/grid_field.h"
 #include "orthofront/field/huge_pages.h"
+#include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/vdb_grid.h"
 
@@ -47,6 +48,9 @@ std::unique_ptr<Field3> open_field(const std::string& spec) {
 }
 
 std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const std::string& what) {
+  // NetCDF: a file, a glob or a list, streamed through the same cache as HDF5.
+  if (const auto found = find_data_file(spec); found && io::is_netcdf_path(found->first.path))
+    return open_netcdf_series(found->first);
   const std::filesystem::path file = spec;
   if (!std::filesystem::exists(file))
     throw InvalidArgument("--field '" + spec +
@@ -56,8 +60,9 @@ std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const 
     return io::open_vdb_file_series(file);  // grids with "time" metadata, read leaf-wise
   if (io::is_hdf5_file(file)) return io::open_hdf5_series(file);
   throw InvalidArgument("--field '" + spec + "': " + what +
-                        " read time series in the project's HDF5 layout (docs/hdf5-layout.md) or "
-                        "OpenVDB files of timed vector grids; this file is neither");
+                        " read time series in the project's HDF5 layout (docs/hdf5-layout.md), "
+                        "NetCDF files (a file, a glob or a list) or OpenVDB files of timed vector "
+                        "grids; this file is none of them");
 }
 
 }  // namespace orthofront::cli

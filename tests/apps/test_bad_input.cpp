@@ -320,7 +320,7 @@ TEST_CASE("bad input: missing, empty and truncated time series for `path`", "[ap
       const Run r = path_into(dir / (std::string("empty") + ext));
       const bool h5 = ext == std::string(".h5");
       check_refused(r, std::string("empty") + ext,
-                    h5 ? "this file is neither" : "not a readable openvdb file", out);
+                    h5 ? "this file is none of them" : "not a readable openvdb file", out);
     }
     {
       INFO("truncated to 60%");

@@ -1,5 +1,7 @@
 #include "orthofront/io/grid_series.h"
 
+#include <glob.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -189,6 +191,40 @@ bool natural_less(const std::string& a, const std::string& b) {
     }
   }
   return a.size() - i < b.size() - j;
+}
+
+bool is_netcdf_path(const std::filesystem::path& path) {
+  std::string e = path.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e == ".nc" || e == ".nc4" || e == ".cdf" || e == ".netcdf";
+}
+
+std::vector<std::filesystem::path> expand_file_pattern(const std::string& pattern) {
+  std::vector<std::filesystem::path> files;
+  std::size_t begin = 0;
+  for (;;) {
+    const std::size_t end = pattern.find(',', begin);
+    std::string item = pattern.substr(begin, end - begin);
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    if (item.find_first_of("*?[") == std::string::npos) {
+      files.emplace_back(item);
+    } else {
+      glob_t g{};
+      const int status = ::glob(item.c_str(), 0, nullptr, &g);
+      std::vector<std::string> found;
+      if (status == 0)
+        for (std::size_t i = 0; i < g.gl_pathc; ++i) found.emplace_back(g.gl_pathv[i]);
+      ::globfree(&g);
+      if (found.empty()) throw InvalidArgument("'" + item + "' matches no file");
+      std::sort(found.begin(), found.end(), natural_less);
+      files.insert(files.end(), found.begin(), found.end());
+    }
+    if (end == std::string::npos) break;
+    begin = end + 1;
+  }
+  return files;
 }
 
 }  // namespace orthofront::io

@@ -75,4 +75,12 @@ std::vector<double> evenly_spaced_times(std::size_t count, double t0, double dt)
 /// numbers, leading zeros ignored).
 bool natural_less(const std::string& a, const std::string& b);
 
+/// True for the NetCDF extensions (.nc, .nc4, .cdf; any case).
+bool is_netcdf_path(const std::filesystem::path& path);
+
+/// The files a pattern names: a comma-separated list of paths, each of which may hold the glob
+/// characters * ? [ ] (expanded and sorted in natural order: "d2" before "d10"). Throws
+/// InvalidArgument naming a pattern that matches nothing.
+std::vector<std::filesystem::path> expand_file_pattern(const std::string& pattern);
+
 }  // namespace orthofront::io

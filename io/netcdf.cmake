@@ -1,0 +1,21 @@
+# NetCDF (classic, 64-bit offset, CDF5, NetCDF-4) with CF conventions, through Debian's netCDF-C.
+# Optional: without it `.nc` files are refused with a message saying so (the GPU machine's build
+# leaves it out; CI and the README's install step have it).
+set(ORTHOFRONT_NETCDF AUTO CACHE STRING "Read NetCDF files: AUTO (when found), ON or OFF")
+set_property(CACHE ORTHOFRONT_NETCDF PROPERTY STRINGS AUTO ON OFF)
+set(ORTHOFRONT_HAVE_NETCDF OFF)
+if(NOT ORTHOFRONT_NETCDF STREQUAL "OFF")
+  if(ORTHOFRONT_NETCDF STREQUAL "ON")
+    find_package(netCDF REQUIRED CONFIG)
+  else()
+    find_package(netCDF QUIET CONFIG)
+  endif()
+  if(TARGET netCDF::netcdf)
+    set(ORTHOFRONT_HAVE_NETCDF ON)
+    target_sources(orthofront_io PRIVATE orthofront/io/netcdf_series.cpp)
+    target_link_libraries(orthofront_io PRIVATE netCDF::netcdf)
+    target_compile_definitions(orthofront_io PUBLIC ORTHOFRONT_HAVE_NETCDF)
+  endif()
+endif()
+set(ORTHOFRONT_HAVE_NETCDF ${ORTHOFRONT_HAVE_NETCDF} PARENT_SCOPE)
+message(STATUS "orthofront: NetCDF ${ORTHOFRONT_HAVE_NETCDF}")

@@ -1,0 +1,349 @@
+// NetCDF with CF conventions: daily files of 2D surface currents on a lon/lat grid (classic,
+// 64-bit offset and NetCDF-4 in one series), packed shorts with a fill value and land, times in
+// a noleap calendar with different units per file; and a NetCDF-4 file holding several steps on
+// a metric grid. The files are written here with netCDF-C itself.
+#include <netcdf.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "apps/cli_run.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/netcdf_series.h"
+#include "temp_dir.h"
+
+namespace fs = std::filesystem;
+using cli_test::quoted;
+using orthofront::Mesh;
+using test_support::read_text;
+using test_support::TempDir;
+
+namespace {
+
+constexpr double kR = 6371000.0;
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+constexpr double kEast = 0.5;  // m/s everywhere at sea
+
+void ok(int status) {
+  REQUIRE(status == NC_NOERR);
+}
+
+bool land(double lon, double lat) {
+  return lon >= 24 && lon <= 27 && lat >= -6 && lat <= -3;
+}
+
+// One day of currents: lon 10..30, lat 10..-10 (stored north to south), step 0.5°, u = 0.5 m/s
+// east at sea, land a block of _FillValue; u, v as shorts (scale 0.001); one step on an
+// unlimited time dimension, `time_value` in `time_units` (calendar noleap).
+void write_day(const fs::path& file, int format, double time_value, const std::string& time_units,
+               const std::string& velocity_units = "m s-1") {
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER | format, &nc));
+  int dt = 0, dy = 0, dx = 0, vt = 0, vy = 0, vx = 0, vu = 0, vv = 0;
+  ok(nc_def_dim(nc, "time", NC_UNLIMITED, &dt));
+  ok(nc_def_dim(nc, "lat", 41, &dy));
+  ok(nc_def_dim(nc, "lon", 41, &dx));
+  ok(nc_def_var(nc, "time", NC_DOUBLE, 1, &dt, &vt));
+  ok(nc_put_att_text(nc, vt, "units", time_units.size(), time_units.c_str()));
+  ok(nc_put_att_text(nc, vt, "calendar", 6, "noleap"));
+  ok(nc_def_var(nc, "lat", NC_FLOAT, 1, &dy, &vy));
+  ok(nc_put_att_text(nc, vy, "units", 13, "degrees_north"));
+  ok(nc_def_var(nc, "lon", NC_FLOAT, 1, &dx, &vx));
+  ok(nc_put_att_text(nc, vx, "units", 12, "degrees_east"));
+  const int dims[3] = {dt, dy, dx};
+  const short fill = -32767;
+  const double scale = 0.001;
+  for (const auto& [name, standard, id] :
+       {std::tuple<const char*, std::string, int*>{"uo", "eastward_sea_water_velocity", &vu},
+        {"vo", "northward_sea_water_velocity", &vv}}) {
+    ok(nc_def_var(nc, name, NC_SHORT, 3, dims, id));
+    ok(nc_put_att_text(nc, *id, "standard_name", standard.size(), standard.c_str()));
+    ok(nc_put_att_text(nc, *id, "units", velocity_units.size(), velocity_units.c_str()));
+    ok(nc_put_att_short(nc, *id, "_FillValue", NC_SHORT, 1, &fill));
+    ok(nc_put_att_double(nc, *id, "scale_factor", NC_DOUBLE, 1, &scale));
+  }
+  ok(nc_enddef(nc));
+  std::vector<float> lat(41), lon(41);
+  for (int i = 0; i < 41; ++i) {
+    lat[static_cast<std::size_t>(i)] = static_cast<float>(10 - 0.5 * i);
+    lon[static_cast<std::size_t>(i)] = static_cast<float>(10 + 0.5 * i);
+  }
+  ok(nc_put_var_float(nc, vy, lat.data()));
+  ok(nc_put_var_float(nc, vx, lon.data()));
+  std::vector<short> u(41 * 41), v(41 * 41, 0);
+  for (int j = 0; j < 41; ++j)
+    for (int i = 0; i < 41; ++i) {
+      const bool dry = land(lon[static_cast<std::size_t>(i)], lat[static_cast<std::size_t>(j)]);
+      u[static_cast<std::size_t>(j * 41 + i)] = dry ? fill : static_cast<short>(kEast / scale);
+      if (dry) v[static_cast<std::size_t>(j * 41 + i)] = fill;
+    }
+  const std::size_t start[3] = {0, 0, 0}, count[3] = {1, 41, 41};
+  ok(nc_put_vara_short(nc, vu, start, count, u.data()));
+  ok(nc_put_vara_short(nc, vv, start, count, v.data()));
+  const std::size_t t0 = 0, one = 1;
+  ok(nc_put_vara_double(nc, vt, &t0, &one, &time_value));
+  ok(nc_close(nc));
+}
+
+// Three days in three formats. Day 0 and 1 count days since 1950-01-01, day 2 hours since
+// 2023-12-31 (noleap: 73 years of 365 days + 364 days = 27,009 days after 1950-01-01).
+fs::path write_days(const TempDir& dir) {
+  const fs::path folder = dir / "days";
+  fs::create_directories(folder);
+  write_day(folder / "day1.nc", NC_CLASSIC_MODEL, 27010, "days since 1950-01-01");
+  write_day(folder / "day2.nc", NC_64BIT_OFFSET, 27011, "days since 1950-01-01 00:00:00");
+  write_day(folder / "day10.nc", NC_NETCDF4, 3 * 24, "hours since 2023-12-31");
+  return folder;
+}
+
+}  // namespace
+
+TEST_CASE("NetCDF: daily CF files on a lon/lat grid read as one series", "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path days = write_days(dir);
+  namespace io = orthofront::io;
+  const auto series = io::open_netcdf_series(io::expand_file_pattern((days / "day*.nc").string()));
+  const io::NetcdfDescription& d = *io::netcdf_description(*series);
+  CHECK(d.found_by == "CF standard_name");
+  CHECK(d.variables == std::vector<std::string>{"uo", "vo"});
+  CHECK(d.lonlat);
+  CHECK(d.files == 3);
+  // Natural order (day2 before day10); times in seconds since the first file's epoch.
+  REQUIRE(series->step_count() == 3);
+  CHECK(series->time(0) == 27010.0 * 86400);
+  CHECK(series->time(1) == 27011.0 * 86400);
+  CHECK(series->time(2) == 27012.0 * 86400);
+  // Latitude stored north to south comes out increasing.
+  const orthofront::GridGeometry& g = series->geometry();
+  CHECK(g.dimension == 2);
+  CHECK(g.size[0] == 41);
+  CHECK(g.size[1] == 41);
+  CHECK(g.origin.x() == Approx(10));
+  CHECK(g.origin.y() == Approx(-10));
+  CHECK(g.spacing.x() == Approx(0.5));
+  CHECK(g.spacing.y() == Approx(0.5));
+  std::vector<float> values(series->step_floats());
+  series->read(2, values);
+  std::size_t dry = 0;
+  for (std::int64_t j = 0; j < 41; ++j)
+    for (std::int64_t i = 0; i < 41; ++i) {
+      const double lon = 10 + 0.5 * static_cast<double>(i),
+                   lat = -10 + 0.5 * static_cast<double>(j);
+      const float* v = values.data() + 2 * g.index(i, j, 0);
+      if (land(lon, lat)) {
+        CHECK(std::isnan(v[0]));
+        CHECK(std::isnan(v[1]));
+        ++dry;
+        continue;
+      }
+      // Degrees per second on the sphere.
+      REQUIRE(v[0] == Approx(kEast * kDeg / (kR * std::cos(lat / kDeg))).epsilon(1e-6));
+      REQUIRE(v[1] == 0.0f);
+    }
+  CHECK(dry == 7 * 7);
+
+  // The metric choice: metres keeps m/s and reports its east-west error.
+  io::NetcdfOptions metres;
+  metres.lonlat = io::LonLatMetric::metres;
+  const auto m = io::open_netcdf_series({days / "day1.nc"}, metres);
+  const io::NetcdfDescription& md = *io::netcdf_description(*m);
+  CHECK(md.metric_error == Approx(1 / std::cos(10 / kDeg) - 1).epsilon(1e-9));
+  std::vector<float> mv(m->step_floats());
+  m->read(0, mv);
+  CHECK(mv[0] == Approx(kEast));
+  CHECK(m->geometry().spacing.y() == Approx(kR * 0.5 / kDeg));
+}
+
+TEST_CASE("NetCDF: path lines of a uniform eastward flow stay on their latitude",
+          "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path days = write_days(dir);
+  const fs::path out = dir / "p.vtp";
+  const auto r = cli_test::run("path --field " + quoted(days / "day*.nc") +
+                               " --seed line:12,2,0:12,6,0 --t0 2333664000 --t1 2333750400 "
+                               "--edge 0.05 --out " +
+                               quoted(out));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const Mesh mesh = orthofront::io::read_mesh(out);
+  REQUIRE(mesh.vertex_count() > 100);
+  REQUIRE(mesh.s.size() == mesh.vertex_count());
+  double worst_lat = 0, worst_lon = 0, longest = 0;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    const double lat0 = 2 + 4 * mesh.s[i];
+    const orthofront::Vec3& p = mesh.positions[i];
+    worst_lat = std::max(worst_lat, std::abs(p.y() - lat0));
+    const double elapsed = mesh.time[i] - 2333664000.0;
+    const double expected = 12 + kEast * elapsed * kDeg / (kR * std::cos(p.y() / kDeg));
+    worst_lon = std::max(worst_lon, std::abs(p.x() - expected));
+    longest = std::max(longest, p.x() - 12);
+  }
+  INFO("latitude drift " << worst_lat << "°, longitude error " << worst_lon << "°, farthest "
+                         << longest << "° east");
+  CHECK(longest > 0.35);  // one day at 0.5 m/s: 0.39° to 0.44° at these latitudes
+  CHECK(worst_lat < 1e-9);
+  CHECK(worst_lon < 1e-4);  // bilinear 1 / cos(lat) between grid rows
+}
+
+TEST_CASE("NetCDF: info and convert read the files directly", "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path days = write_days(dir);
+  const auto info = cli_test::run("info " + quoted(days / "day*.nc"));
+  INFO(info.output);
+  REQUIRE(info.status == 0);
+  CHECK(info.output.find("uo, vo (CF standard_name)") != std::string::npos);
+  CHECK(info.output.find("seconds since 1950-01-01 (calendar noleap") != std::string::npos);
+  CHECK(info.output.find("degrees per second on a sphere") != std::string::npos);
+  const fs::path h5 = dir / "days.h5";
+  const auto c = cli_test::run("convert " + quoted(days / "day*.nc") + " --out " + quoted(h5));
+  INFO(c.output);
+  REQUIRE(c.status == 0);
+  namespace io = orthofront::io;
+  const auto nc = io::open_netcdf_series(io::expand_file_pattern((days / "day*.nc").string()));
+  const auto back = io::open_hdf5_series(h5);
+  REQUIRE(back->step_count() == 3);
+  std::vector<float> a(nc->step_floats()), b(back->step_floats());
+  for (std::size_t s = 0; s < 3; ++s) {
+    CHECK(back->time(s) == nc->time(s));
+    nc->read(s, a);
+    back->read(s, b);
+    for (std::size_t k = 0; k < a.size(); ++k)
+      REQUIRE((a[k] == b[k] || (std::isnan(a[k]) && std::isnan(b[k]))));
+  }
+}
+
+TEST_CASE("NetCDF: a NetCDF-4 file of several steps on a metric grid, with missing values",
+          "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path file = dir / "flow.nc";
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER | NC_NETCDF4, &nc));
+  int dt = 0, dy = 0, dx = 0, vt = 0, vx = 0, vu = 0, vv = 0;
+  ok(nc_def_dim(nc, "t", 4, &dt));
+  ok(nc_def_dim(nc, "y", 5, &dy));
+  ok(nc_def_dim(nc, "x", 6, &dx));
+  ok(nc_def_var(nc, "t", NC_DOUBLE, 1, &dt, &vt));
+  ok(nc_put_att_text(nc, vt, "units", 29, "hours since 2000-01-01T00:00Z"));
+  ok(nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx));  // rectilinear, no units: not lon/lat
+  const int dims[3] = {dt, dy, dx};
+  const float missing = -999.f;
+  for (const auto& [name, id] : {std::pair<const char*, int*>{"u", &vu}, {"v", &vv}}) {
+    ok(nc_def_var(nc, name, NC_FLOAT, 3, dims, id));
+    ok(nc_put_att_float(nc, *id, "missing_value", NC_FLOAT, 1, &missing));
+  }
+  ok(nc_enddef(nc));
+  const double times[4] = {0, 1, 2, 4}, xs[6] = {0, 1, 2, 4, 8, 16};
+  ok(nc_put_var_double(nc, vt, times));
+  ok(nc_put_var_double(nc, vx, xs));
+  std::vector<float> u(4 * 5 * 6), v(4 * 5 * 6);
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    u[k] = static_cast<float>(k);
+    v[k] = k % 7 == 3 ? missing : -static_cast<float>(k);
+  }
+  ok(nc_put_var_float(nc, vu, u.data()));
+  ok(nc_put_var_float(nc, vv, v.data()));
+  ok(nc_close(nc));
+
+  namespace io = orthofront::io;
+  const auto s = io::open_netcdf_series({file});
+  const io::NetcdfDescription& d = *io::netcdf_description(*s);
+  CHECK(d.format == "NetCDF-4");
+  CHECK(d.found_by == "variable names");
+  CHECK(!d.lonlat);
+  REQUIRE(s->step_count() == 4);
+  CHECK(s->time(3) == 4 * 3600.0);
+  CHECK(s->geometry().rectilinear());
+  CHECK(s->geometry().axes[0] == std::vector<double>{0, 1, 2, 4, 8, 16});
+  std::vector<float> values(s->step_floats());
+  s->read(2, values);
+  for (std::size_t p = 0; p < 30; ++p) {
+    const std::size_t k = 60 + p;
+    if (k % 7 == 3) {
+      CHECK(std::isnan(values[2 * p]));
+    } else {
+      CHECK(values[2 * p] == static_cast<float>(k));
+      CHECK(values[2 * p + 1] == -static_cast<float>(k));
+    }
+  }
+}
+
+TEST_CASE("NetCDF: a global lon/lat grid has its seam closed", "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path file = dir / "global.nc";
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER, &nc));
+  int dy = 0, dx = 0, vy = 0, vx = 0, vu = 0, vv = 0;
+  ok(nc_def_dim(nc, "latitude", 3, &dy));
+  ok(nc_def_dim(nc, "longitude", 144, &dx));
+  ok(nc_def_var(nc, "latitude", NC_DOUBLE, 1, &dy, &vy));
+  ok(nc_put_att_text(nc, vy, "units", 13, "degrees_north"));
+  ok(nc_def_var(nc, "longitude", NC_DOUBLE, 1, &dx, &vx));
+  ok(nc_put_att_text(nc, vx, "units", 12, "degrees_east"));
+  const int dims[2] = {dy, dx};
+  for (const auto& [name, id] : {std::pair<const char*, int*>{"u", &vu}, {"v", &vv}}) {
+    ok(nc_def_var(nc, name, NC_DOUBLE, 2, dims, id));
+    ok(nc_put_att_text(nc, *id, "units", 3, "m/s"));
+  }
+  ok(nc_enddef(nc));
+  const double lat[3] = {-30, 0, 30};
+  std::vector<double> lon(144), u(3 * 144), v(3 * 144, 0.0);
+  for (std::size_t i = 0; i < 144; ++i) lon[i] = 2.5 * static_cast<double>(i);
+  for (std::size_t k = 0; k < u.size(); ++k) u[k] = static_cast<double>(k % 144);  // by column
+  ok(nc_put_var_double(nc, vy, lat));
+  ok(nc_put_var_double(nc, vx, lon.data()));
+  ok(nc_put_var_double(nc, vu, u.data()));
+  ok(nc_put_var_double(nc, vv, v.data()));
+  ok(nc_close(nc));
+
+  namespace io = orthofront::io;
+  orthofront::io::NetcdfOptions o;
+  o.dt = 3600;  // no time coordinate: one step
+  const auto s = io::open_netcdf_series({file}, o);
+  CHECK(io::netcdf_description(*s)->longitude_wrapped);
+  const orthofront::GridGeometry& g = s->geometry();
+  REQUIRE(g.size[0] == 145);
+  CHECK(g.bounds().hi.x() == Approx(360));
+  std::vector<float> values(s->step_floats());
+  s->read(0, values);
+  for (std::int64_t j = 0; j < 3; ++j) {
+    CHECK(values[2 * g.index(144, j, 0)] == values[2 * g.index(0, j, 0)]);
+    CHECK(values[2 * g.index(1, j, 0)] > 0);
+  }
+  // Without dt a file with no time coordinate is refused, naming it.
+  CHECK_THROWS_WITH(io::open_netcdf_series({file}), Catch::Contains("no CF time coordinate"));
+}
+
+TEST_CASE("NetCDF: bad files and names get messages naming the file and the value",
+          "[apps][netcdf]") {
+  TempDir dir;
+  const fs::path days = write_days(dir);
+  const auto expect = [](const std::string& args, const std::string& text) {
+    const auto r = cli_test::run(args);
+    INFO(args << "\n" << r.output);
+    CHECK(r.status == 2);
+    CHECK(r.output.find(text) != std::string::npos);
+  };
+  expect("info " + quoted(days / "day1.nc:uu,vv"),
+         "no variable 'uu' (variables: time, lat, lon, uo, vo)");
+  expect("info " + quoted(dir / "none.nc"), "cannot open '" + (dir / "none.nc").string());
+  expect("info " + quoted(dir / "none*.nc"), "matches no file");
+  {
+    std::ofstream bad(dir / "bad.nc");
+    bad << "CDF\x01 this is not a NetCDF file";
+  }
+  expect("info " + quoted(dir / "bad.nc"),
+         "cannot read '" + (dir / "bad.nc").string() + "' as NetCDF");
+  expect("info " + quoted(days / "day2.nc") + "," + (days / "day1.nc").string(),
+         "does not come after");
+  expect("info " + quoted(days / "day1.nc:uo,vo,lonlat=miles"), "lonlat=miles");
+  write_day(dir / "knots.nc", NC_CLASSIC_MODEL, 1, "days since 1950-01-01", "knots");
+  expect("info " + quoted(dir / "knots.nc"), "units 'knots' on a lon/lat grid");
+  write_day(dir / "months.nc", NC_CLASSIC_MODEL, 1, "months since 1950-01-01");
+  expect("info " + quoted(dir / "months.nc"), "'months since 1950-01-01'");
+}
