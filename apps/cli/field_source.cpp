@@ -49,8 +49,12 @@ std::unique_ptr<Field3> open_field(const std::string& spec) {
 
 std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const std::string& what) {
   // NetCDF: a file, a glob or a list, streamed through the same cache as HDF5.
-  if (const auto found = find_data_file(spec); found && io::is_netcdf_path(found->first.path))
-    return open_netcdf_series(found->first);
+  const auto found = find_data_file(spec);
+  if (found && io::is_netcdf_path(found->first.path)) return open_netcdf_series(found->first);
+  // A ParaView collection of grid files (.vti, .vtk, ...) with their times.
+  if (found && found->first.path.extension() == ".pvd" &&
+      std::filesystem::exists(found->first.path))
+    return io::open_pvd(found->first.path, found->first.selector);
   const std::filesystem::path file = spec;
   if (!std::filesystem::exists(file))
     throw InvalidArgument("--field '" + spec +
@@ -61,8 +65,8 @@ std::unique_ptr<io::TimeSeries> open_time_series(const std::string& spec, const 
   if (io::is_hdf5_file(file)) return io::open_hdf5_series(file);
   throw InvalidArgument("--field '" + spec + "': " + what +
                         " read time series in the project's HDF5 layout (docs/hdf5-layout.md), "
-                        "NetCDF files (a file, a glob or a list) or OpenVDB files of timed vector "
-                        "grids; this file is none of them");
+                        "NetCDF files (a file, a glob or a list), ParaView .pvd collections or "
+                        "OpenVDB files of timed vector grids; this file is none of them");
 }
 
 }  // namespace orthofront::cli

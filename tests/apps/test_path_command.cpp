@@ -130,6 +130,46 @@ TEST_CASE("path command: HDF5 series through the cache, and errors that leave no
   fs::remove_all(dir);
 }
 
+TEST_CASE("path command: a ParaView collection is read directly, as its HDF5 conversion is",
+          "[apps][path]") {
+  test_support::TempDir dir;
+  // Eleven steps of the double gyre on 41 x 21 points as inline-ascii .vti, listed by a .pvd.
+  const auto gyre = make_unsteady_field("double-gyre");
+  std::string collection = "<VTKFile type=\"Collection\" version=\"0.1\"><Collection>\n";
+  for (int step = 0; step <= 10; ++step) {
+    const double t = 0.2 * step;
+    std::string text =
+        "<VTKFile type=\"ImageData\"><ImageData WholeExtent=\"0 40 0 20 0 0\" Origin=\"0 0 0\" "
+        "Spacing=\"0.05 0.05 1\"><Piece Extent=\"0 40 0 20 0 0\"><PointData><DataArray "
+        "type=\"Float32\" Name=\"v\" NumberOfComponents=\"3\" format=\"ascii\">";
+    for (int j = 0; j <= 20; ++j)
+      for (int i = 0; i <= 40; ++i) {
+        Vec3 v;
+        REQUIRE(gyre->velocity(Vec3(0.05 * i, 0.05 * j, 0), t, v) == FieldStatus::inside);
+        text += std::to_string(v.x()) + " " + std::to_string(v.y()) + " 0 ";
+      }
+    text += "</DataArray></PointData></Piece></ImageData></VTKFile>";
+    const std::string name = "s" + std::to_string(step) + ".vti";
+    std::ofstream(dir / name) << text;
+    collection +=
+        "<DataSet timestep=\"" + std::to_string(t) + "\" part=\"0\" file=\"" + name + "\"/>\n";
+  }
+  std::ofstream(dir / "gyre.pvd") << collection + "</Collection></VTKFile>\n";
+  const std::string surface =
+      " --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 1.6 --edge 0.05 --cache-budget 1MiB";
+  REQUIRE(run("path --field " + (dir / "gyre.pvd").string() + surface + " --out " +
+                  (dir / "pvd.vtp").string(),
+              dir / "log1") == 0);
+  REQUIRE(run("convert " + (dir / "gyre.pvd").string() + " --out " + (dir / "gyre.h5").string(),
+              dir / "log2") == 0);
+  REQUIRE(run("path --field " + (dir / "gyre.h5").string() + surface + " --out " +
+                  (dir / "h5.vtp").string(),
+              dir / "log3") == 0);
+  INFO(read_text(dir / "log1"));
+  CHECK(io::read_mesh(dir / "pvd.vtp").vertex_count() > 100);
+  CHECK(read_text(dir / "pvd.vtp") == read_text(dir / "h5.vtp"));
+}
+
 TEST_CASE("path command: a step deleted from a per-step series keeps the surface up to it",
           "[apps][path]") {
   const fs::path dir = fresh_dir();
