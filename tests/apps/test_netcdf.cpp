@@ -346,4 +346,31 @@ TEST_CASE("NetCDF: bad files and names get messages naming the file and the valu
   expect("info " + quoted(dir / "knots.nc"), "units 'knots' on a lon/lat grid");
   write_day(dir / "months.nc", NC_CLASSIC_MODEL, 1, "months since 1950-01-01");
   expect("info " + quoted(dir / "months.nc"), "'months since 1950-01-01'");
+
+  // A coordinate variable on another, longer dimension than the one it names (read whole, it
+  // would overrun), and v stored transposed from u on a square grid.
+  const fs::path odd = dir / "odd.nc";
+  int nc = 0;
+  ok(nc_create(odd.c_str(), NC_CLOBBER, &nc));
+  int dlat = 0, dlon = 0, dy = 0, vlat = 0, vu = 0, vv = 0;
+  ok(nc_def_dim(nc, "lat", 4, &dlat));
+  ok(nc_def_dim(nc, "lon", 4, &dlon));
+  ok(nc_def_dim(nc, "y", 9, &dy));
+  ok(nc_def_var(nc, "lat", NC_DOUBLE, 1, &dy, &vlat));
+  const int uv[2] = {dlat, dlon}, vu_dims[2] = {dlon, dlat};
+  ok(nc_def_var(nc, "u", NC_FLOAT, 2, uv, &vu));
+  ok(nc_def_var(nc, "v", NC_FLOAT, 2, vu_dims, &vv));
+  ok(nc_close(nc));
+  expect("info " + cli_test::quoted(fs::path(odd.string() + ":u,v,dt=1")),
+         "coordinate variable 'lat' has 9 values for a dimension of 4");
+  namespace io = orthofront::io;
+  io::NetcdfOptions o;
+  o.dt = 1;
+  ok(nc_open(odd.c_str(), NC_WRITE, &nc));
+  ok(nc_redef(nc));
+  ok(nc_rename_var(nc, vlat, "ylat"));
+  ok(nc_close(nc));
+  CHECK_THROWS_WITH(io::open_netcdf_series({odd}, o),
+                    Catch::Contains("variable 'v' has dimension 'lon' of length 4 where") &&
+                        Catch::Contains("has 'lat' of length 4"));
 }

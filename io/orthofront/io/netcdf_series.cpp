@@ -250,7 +250,11 @@ TimeUnits parse_time_units(const std::string& units, Calendar calendar, const st
   int mo = 0, d = 0, h = 0, mi = 0, used = 0;
   double s = 0;
   std::string rest = t.epoch_text;
-  std::replace(rest.begin(), rest.end(), 'T', ' ');
+  // ISO 8601's 'T' between date and time.
+  if (const std::size_t t_at = rest.find_first_of("Tt");
+      t_at != std::string::npos && t_at > 0 &&
+      std::isdigit(static_cast<unsigned char>(rest[t_at - 1])))
+    rest[t_at] = ' ';
   if (std::sscanf(rest.c_str(), "%lld-%d-%d%n", &y, &mo, &d, &used) != 3 || mo < 1 || mo > 12 ||
       d < 1 || d > 31 || (calendar == Calendar::day360 && d > 30))
     throw bad("have a reference date that is not YYYY-MM-DD");
@@ -471,12 +475,17 @@ NetcdfSeries::NetcdfSeries(const std::vector<std::filesystem::path>& files,
           continue;
         }
         if (n == 1 && dims.size() - k > 1) continue;  // a singleton level (surface products)
-        if (spatial >= axes_.size() || axes_[spatial].length != n)
+        // Same lengths and names, in the same order (u and v transposed on a square grid would
+        // otherwise pass).
+        if (spatial >= axes_.size() || axes_[spatial].length != n ||
+            axes_[spatial].dimension != f.dimension_name(dims[k]))
           throw FormatError("'" + files[i].string() + "': variable '" + variables_[c] +
                             "' has dimension '" + f.dimension_name(dims[k]) + "' of length " +
                             std::to_string(n) + " where '" + files.front().string() + "' has " +
-                            (spatial < axes_.size() ? std::to_string(axes_[spatial].length)
-                                                    : std::string("no further dimension")));
+                            (spatial < axes_.size()
+                                 ? "'" + axes_[spatial].dimension + "' of length " +
+                                       std::to_string(axes_[spatial].length)
+                                 : std::string("no further dimension")));
         ++spatial;
       }
       if (spatial != axes_.size())
@@ -583,10 +592,16 @@ void NetcdfSeries::open_first(const NcFile& f) {
     a.dimension = f.dimension_name(dims[k]);
     a.length = n;
     if (const auto cv = f.variable(a.dimension)) {
-      if (f.dimensions(*cv).size() != 1)
+      const std::vector<int> cdims = f.dimensions(*cv);
+      if (cdims.size() != 1)
         throw FormatError("'" + f.path().string() + "': coordinate variable '" + a.dimension +
                           "' is not one-dimensional (a curvilinear grid: resample it first, as "
                           "datasets-scripts/orthofront-pop-convert does)");
+      // Read whole below: it must be exactly as long as the dimension it labels.
+      if (f.dimension_length(cdims[0]) != n)
+        throw FormatError("'" + f.path().string() + "': coordinate variable '" + a.dimension +
+                          "' has " + std::to_string(f.dimension_length(cdims[0])) +
+                          " values for a dimension of " + std::to_string(n));
       a.units = f.text(*cv, "units");
       a.standard_name = f.text(*cv, "standard_name");
       a.coordinates = f.read_all(*cv, n);
@@ -869,7 +884,9 @@ void NetcdfSeries::decode(const RawStep& raw, std::span<float> values) const {
         }
         o[0] = static_cast<float>(v[0] * east);
         o[1] = static_cast<float>(v[1] * north);
-        if (components_ == 3) o[2] = static_cast<float>(v[2] * (lonlat_ ? velocity_factor_ : 1));
+        // A 3D grid with u and v only: w = 0.
+        if (components_ == 3)
+          o[2] = comps == 3 ? static_cast<float>(v[2] * (lonlat_ ? velocity_factor_ : 1)) : 0.0f;
       }
     }
 }
