@@ -21,7 +21,7 @@
 #include "cli/batch_checkpoint.h"
 #include "cli/batch_job.h"
 #include "cli/commands.h"
-#include "cli/field_source.h"
+#include "orthofront/io/open_field.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
@@ -424,11 +424,11 @@ class BatchRun {
     }
     try {
       if (g.kind == SurfaceKind::stream) {
-        steady = open_field(g.field);
+        steady = io::open_field(g.field);
       } else if (!g.streamed) {
         flow = make_unsteady_field(g.field);
       } else {
-        series = open_time_series(g.field, "path surfaces");
+        series = io::open_time_series(g.field, "path surfaces");
         spacetime::CacheOptions co;
         co.budget_bytes = job_.cache_budget.empty()
                               ? cache_budget_for(available_memory_bytes())
@@ -589,7 +589,7 @@ class BatchRun {
       if (is_unsteady_field_name(s.field)) {
         result = spacetime::build_streak_surface(*make_unsteady_field(s.field), seed, o, sink);
       } else {
-        const auto series = open_time_series(s.field, "streak surfaces");
+        const auto series = io::open_time_series(s.field, "streak surfaces");
         spacetime::CacheOptions co;
         co.budget_bytes = job_.cache_budget.empty() ? cache_budget_for(available_memory_bytes())
                                                     : spacetime::parse_bytes(job_.cache_budget);

@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "cli/field_source.h"
+#include "orthofront/io/open_field.h"
 #include "cli/process_memory.h"
 #include "cli/streak_report.h"
 #include "orthofront/error.h"

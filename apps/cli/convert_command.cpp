@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "cli/commands.h"
-#include "cli/data_files.h"
 #include "cli/grid_args.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
+#include "orthofront/io/data_file.h"
 #include "orthofront/io/grid_file.h"
 #include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -66,7 +66,7 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   for (const std::string& input : inputs) {
     const bool pattern = input.find_first_of("*?[") != std::string::npos;
     // NetCDF specs stay whole: the reader expands them and applies the selector to every file.
-    const auto found = find_data_file(input);
+    const auto found = io::find_data_file(input);
     if (!pattern || std::filesystem::exists(input) ||
         (found && io::is_netcdf_path(found->first.path))) {
       files.push_back(input);
@@ -159,11 +159,11 @@ struct Input {
 };
 
 /// "FILE.ext[:SELECTOR]" split at the first ':' after a known data-file extension.
-DataFileSpec split_spec(const std::string& spec) {
-  const auto found = find_data_file(spec);
+io::DataFileSpec split_spec(const std::string& spec) {
+  const auto found = io::find_data_file(spec);
   if (!found) {
     throw InvalidArgument("input '" + spec + "' has an unknown extension (expected " +
-                          data_file_extensions() + ")");
+                          io::data_file_extensions() + ")");
   }
   return found->first;
 }
@@ -177,10 +177,10 @@ bool is_hdf5(const std::filesystem::path& path) {
 Input open_inputs(const std::vector<std::string>& files, const std::vector<double>& times) {
   Input input;
   if (files.size() == 1) {
-    const DataFileSpec spec = split_spec(files.front());
+    const io::DataFileSpec spec = split_spec(files.front());
     const std::string ext = lower(spec.path.extension().string());
     if (io::is_netcdf_path(spec.path)) {
-      input.series = open_netcdf_series(spec);
+      input.series = io::open_netcdf_series(spec);
       input.steady = input.series->step_count() == 1;
       input.has_times = true;
       return input;
@@ -222,29 +222,29 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
   }
   // Several NetCDF files: one series over all of them (steps and times from the files).
   if (std::all_of(files.begin(), files.end(), [](const std::string& f) {
-        const auto found = find_data_file(f);
+        const auto found = io::find_data_file(f);
         return found && io::is_netcdf_path(found->first.path);
       })) {
-    DataFileSpec all = split_spec(files.front());
+    io::DataFileSpec all = split_spec(files.front());
     std::string list;
     for (const std::string& f : files) {
-      const DataFileSpec spec = split_spec(f);
+      const io::DataFileSpec spec = split_spec(f);
       if (spec.selector != all.selector)
         throw InvalidArgument("inputs name different variables ('" + all.selector + "', '" +
                               spec.selector + "'); a series reads the same ones from every file");
       list += (list.empty() ? "" : ",") + spec.path.string();
     }
     all.path = list;
-    input.series = open_netcdf_series(all);
+    input.series = io::open_netcdf_series(all);
     input.steady = false;
     input.has_times = true;
     return input;
   }
   // Several files: one step each, the same array of each.
-  std::vector<DataFileSpec> specs;
+  std::vector<io::DataFileSpec> specs;
   bool all_vdb = true;
   for (const std::string& file : files) {
-    DataFileSpec spec = split_spec(file);
+    io::DataFileSpec spec = split_spec(file);
     if (io::grid_format_of(spec.path) == io::GridFormat::kUnknown) {
       throw InvalidArgument("input '" + file + "': a time series is made of grid files (" +
                             io::grid_extensions_text() + "); a .pvd or .h5 input stands alone");
@@ -382,7 +382,7 @@ void run_convert(const ConvertArgs& args) {
     io::Hdf5WriteOptions options;
     options.group = args.group;
     apply_compression(parse_compression(args.compress), options);
-  options.brick_size = args.brick;
+    options.brick_size = args.brick;
     options.storage = parse_layout(args.layout);
     options.units = args.units;
     if (std::isfinite(args.chunk_mib))
@@ -445,10 +445,12 @@ void add_convert_command(CLI::App& app) {
   c->add_option("--origin", args->origin, "Override the grid origin x,y,z (e.g. for .vec)");
   c->add_option("--spacing", args->spacing, "Override the grid spacing dx,dy,dz (e.g. for .vec)");
   c->add_flag("--keep-order", args->keep_order, "Keep the inputs in the given order");
-  c->add_option("--compress", args->compress, "HDF5: none | lz4 | zstd | gzip, each with an optional :LEVEL (1-9); lz4 (Blosc, "
+  c->add_option("--compress", args->compress,
+                "HDF5: none | lz4 | zstd | gzip, each with an optional :LEVEL (1-9); lz4 (Blosc, "
                 "byte shuffle) decodes fastest, see docs/hdf5-layout.md")
       ->capture_default_str();
-  c->add_option("--layout", args->layout, "HDF5 time series storage: bricked (a chunk per brick and step: partial "
+  c->add_option("--layout", args->layout,
+                "HDF5 time series storage: bricked (a chunk per brick and step: partial "
                 "reads) | chunked | per-step")
       ->capture_default_str();
   c->add_option("--brick", args->brick, "Bricked layout: points per brick along each axis")

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "cli/commands.h"
-#include "cli/data_files.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
+#include "orthofront/io/data_file.h"
 
 namespace orthofront::cli {
 
@@ -75,7 +75,8 @@ Statistics scan(const io::TimeSeries& series) {
   return stats;
 }
 
-nlohmann::json describe(const std::string& spec, const DataFile& file, const Statistics* stats) {
+nlohmann::json describe(const std::string& spec, const io::DataFile& file,
+                        const Statistics* stats) {
   const io::TimeSeries& series = *file.series;
   const GridGeometry& g = series.geometry();
   nlohmann::json j;
@@ -121,7 +122,7 @@ std::string percent(std::uint64_t part, std::uint64_t whole) {
   return text;
 }
 
-void print_text(const nlohmann::json& j, const DataFile& file, const Statistics* stats) {
+void print_text(const nlohmann::json& j, const io::DataFile& file, const Statistics* stats) {
   const io::TimeSeries& series = *file.series;
   const GridGeometry& g = series.geometry();
   std::cout << "file:         " << j["file"].get<std::string>() << "\n";
@@ -199,7 +200,7 @@ void add_info_command(CLI::App& app) {
   c->add_flag("--json", args->json, "Print JSON instead of text");
   c->add_flag("--no-stats", args->no_stats, "Skip reading the samples (ranges, NaN, zeros)");
   c->callback([args]() {
-    const DataFile file = open_data_file(args->file);
+    const io::DataFile file = io::open_data_file(args->file);
     Statistics stats;
     if (!args->no_stats) stats = scan(*file.series);
     const Statistics* s = args->no_stats ? nullptr : &stats;

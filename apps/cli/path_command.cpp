@@ -10,7 +10,8 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
-#include "cli/field_source.h"
+#include "cli/path_args.h"
+#include "cli/pictures.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
@@ -18,6 +19,7 @@
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
+#include "orthofront/io/open_field.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_command_json.h"
@@ -25,18 +27,7 @@
 
 namespace orthofront::cli {
 
-
 namespace {
-
-struct PathArgs {
-  std::string field, seed, out, report, budget;  // budget: empty = a quarter of --memory
-  int seed_count = 20;
-  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
-  bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
-  std::string cache_unit = "brick";
-  StreamSurfaceOptions options;
-  MemoryLimits limits;
-};
 
 // One status line on stderr (terminals only): simulated time, vertices against the cap,
 // resident memory, band, cache.
@@ -79,9 +70,84 @@ class PathStatus {
 
 }  // namespace
 
+void add_path_flags(CLI::App& command, PathArgs& args) {
+  command.add_option("--seed-count", args.seed_count, "Vertices on the seed curve")
+      ->capture_default_str();
+  command.add_option("--t0", args.t0, "Seed time")->capture_default_str();
+  command.add_option("--t1", args.t1, "End time: the surface stops where its path lines reach it")
+      ->capture_default_str();
+  command
+      .add_option("--time-scale", args.time_scale,
+                  "c of the lifted time coordinate tau = c t (length per time unit); 0: median "
+                  "seed speed at t0")
+      ->capture_default_str();
+  command.add_option("--cache-budget", args.budget,
+                     "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
+                     "(default: a quarter of --memory, now " +
+                         format_memory(cache_budget_for(available_memory_bytes())) + ")");
+  command
+      .add_option("--cache-unit", args.cache_unit,
+                  "What the cache holds: brick (the file's bricks, a space-time band around the "
+                  "front) or step (whole time steps, the old cache)")
+      ->check(CLI::IsMember({"brick", "step"}))
+      ->capture_default_str();
+  command.add_flag("--no-prefetch", args.no_prefetch, "Load on demand only (no read-ahead)");
+  command.add_flag("--warm", args.warm,
+                   "Build the surface twice through one cache that keeps everything it read, and "
+                   "report the second build: compute with the data in memory (needs a budget that "
+                   "holds every brick the surface touches)");
+  command
+      .add_option("--max-band", args.max_band,
+                  "Bound the front's time band (time units; 0: none): vertices further behind keep "
+                  "pace, so long runs fit a small cache")
+      ->check(CLI::NonNegativeNumber);
+  command
+      .add_option("--band-ramp", args.band_ramp,
+                  "With --max-band: share of the bound over which lagging vertices' alpha ramps up "
+                  "smoothly (0: a hard switch at the bound)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  command.add_flag("--spacetime-out", args.spacetime_out,
+                   "2D flows: write positions (x, y, t) instead of (x, y, 0)");
+  add_engine_flags(command, args.options);
+  add_memory_flag(command, args.limits);
+}
+
+void check_seed_count(int seed_count, std::size_t max_vertices) {
+  if (seed_count < 2)
+    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(seed_count));
+  if (static_cast<std::size_t>(seed_count) > max_vertices)
+    throw InvalidArgument("--seed-count " + std::to_string(seed_count) +
+                          " exceeds the vertex budget of " + std::to_string(max_vertices) +
+                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
+}
+
+spacetime::PathSurfaceOptions path_options(const PathArgs& args) {
+  spacetime::PathSurfaceOptions o;
+  o.engine = args.options;
+  o.t0 = args.t0;
+  o.t1 = args.t1;
+  o.time_scale = args.time_scale;
+  o.max_band = args.max_band;
+  o.engine.lag_ramp = args.band_ramp;
+  o.seed_name = args.seed;  // errors name the seed and field as given
+  o.field_name = args.field;
+  return o;
+}
+
+spacetime::CacheOptions path_cache_options(const PathArgs& args) {
+  spacetime::CacheOptions co;
+  // An explicit --cache-budget wins over the share of --memory.
+  co.budget_bytes = args.budget.empty() ? cache_budget_for(args.limits.memory_bytes)
+                                        : spacetime::parse_bytes(args.budget);
+  co.prefetch = !args.no_prefetch;
+  co.whole_steps = args.cache_unit == "step";
+  return co;
+}
+
 void add_path_command(CLI::App& app) {
   auto args = std::make_shared<PathArgs>();
-  args->options.max_steps = 1'000'000;  // path surfaces end at t1
+  auto preview = std::make_shared<PreviewFlags>();
   CLI::App* c = app.add_subcommand(
       "path", "Build a path surface of an unsteady flow (analytic, or an HDF5 time series)");
   c->add_option("--field", args->field,
@@ -90,71 +156,23 @@ void add_path_command(CLI::App& app) {
       ->required();
   c->add_option("--seed", args->seed, "Seed curve at t0 (as for `stream`; 2D flows use x, y)")
       ->required();
-  c->add_option("--seed-count", args->seed_count, "Vertices on the seed curve")
-      ->capture_default_str();
-  c->add_option("--t0", args->t0, "Seed time")->capture_default_str();
-  c->add_option("--t1", args->t1, "End time: the surface stops where its path lines reach it")
-      ->capture_default_str();
-  c->add_option("--time-scale", args->time_scale,
-                "c of the lifted time coordinate tau = c t (length per time unit); 0: median "
-                "seed speed at t0")
-      ->capture_default_str();
-  c->add_option("--cache-budget", args->budget,
-                "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
-                "(default: a quarter of --memory, now " +
-                    format_memory(cache_budget_for(available_memory_bytes())) + ")");
-  c->add_option("--cache-unit", args->cache_unit,
-                "What the cache holds: brick (the file's bricks, a space-time band around the "
-                "front) or step (whole time steps, the old cache)")
-      ->check(CLI::IsMember({"brick", "step"}))
-      ->capture_default_str();
-  c->add_flag("--no-prefetch", args->no_prefetch, "Load on demand only (no read-ahead)");
-  c->add_flag("--warm", args->warm,
-              "Build the surface twice through one cache that keeps everything it read, and "
-              "report the second build: compute with the data in memory (needs a budget that "
-              "holds every brick the surface touches)");
-  c->add_option("--max-band", args->max_band,
-                "Bound the front's time band (time units; 0: none): vertices further behind keep "
-                "pace, so long runs fit a small cache")
-      ->check(CLI::NonNegativeNumber);
-  c->add_option("--band-ramp", args->band_ramp,
-                "With --max-band: share of the bound over which lagging vertices' alpha ramps up "
-                "smoothly (0: a hard switch at the bound)")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  c->add_flag("--spacetime-out", args->spacetime_out,
-              "2D flows: write positions (x, y, t) instead of (x, y, 0)");
-  add_engine_flags(*c, args->options);
-  add_memory_flag(*c, args->limits);
+  add_path_flags(*c, *args);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
+  add_preview_flags(*c, *preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args, c]() {
+  c->callback([args, preview, c]() {
     apply_memory_flag(*c, args->limits, args->options);
+    check_preview(*preview);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))
       throw InvalidArgument("output '" + args->out +
                             "' has an unknown extension (expected .vtp, .ply or .obj)");
     io::check_writable(out);
     if (!args->report.empty()) io::check_writable(args->report);
-    if (args->seed_count < 2)
-      throw InvalidArgument("--seed-count must be at least 2, got " +
-                            std::to_string(args->seed_count));
-    if (static_cast<std::size_t>(args->seed_count) > args->options.max_vertices)
-      throw InvalidArgument("--seed-count " + std::to_string(args->seed_count) +
-                            " exceeds the vertex budget of " +
-                            std::to_string(args->options.max_vertices) +
-                            " (--max-vertices, or half of --memory at ~300 B a vertex)");
+    check_seed_count(args->seed_count, args->options.max_vertices);
     const SeedCurve seed = parse_seed(args->seed);
-    spacetime::PathSurfaceOptions o;
-    o.engine = args->options;
-    o.t0 = args->t0;
-    o.t1 = args->t1;
-    o.time_scale = args->time_scale;
-    o.max_band = args->max_band;
-    o.engine.lag_ramp = args->band_ramp;
-    o.seed_name = args->seed;  // errors name the seed and field as given here
-    o.field_name = args->field;
+    spacetime::PathSurfaceOptions o = path_options(*args);
     PathStatus status(args->options.max_vertices);
     o.progress = [&](const spacetime::PathProgress& p) { return status.update(p); };
 
@@ -164,20 +182,17 @@ void add_path_command(CLI::App& app) {
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
     } else {
-      const std::unique_ptr<io::TimeSeries> series = open_time_series(args->field, "path surfaces");
-      spacetime::CacheOptions co;
-      // An explicit --cache-budget wins over the share of --memory.
-      co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
-                                             : spacetime::parse_bytes(args->budget);
+      const std::unique_ptr<io::TimeSeries> series =
+          io::open_time_series(args->field, "path surfaces");
+      const spacetime::CacheOptions co = path_cache_options(*args);
       cache_budget = co.budget_bytes;
-      co.prefetch = !args->no_prefetch;
-      co.whole_steps = args->cache_unit == "step";
       spacetime::BrickCache cache(*series, co);
       if (args->warm) {
         spacetime::PathSurfaceOptions cold = o;
         cold.progress = {};
         const auto first = spacetime::build_path_surface(cache, seed, args->seed_count, cold);
-        if (!first.path.complete) throw Error("--warm: the first build stopped: " + first.path.message);
+        if (!first.path.complete)
+          throw Error("--warm: the first build stopped: " + first.path.message);
       }
       result = spacetime::build_path_surface(cache, seed, args->seed_count, o);
     }
@@ -232,29 +247,31 @@ void add_path_command(CLI::App& app) {
           "space): %.1f%% quads, %.1f%% of quad angles within 90±10°, edge spread %.3f, "
           "%zu folds, %zu non-manifold edges, %zu degenerate faces. Time %.3f s",
           args->field.c_str(), args->seed.c_str(), mesh.vertex_count(), mesh.face_count(), pr.t0,
-          pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(),
-          result.report.steps, to_string(result.report.stop_reason),
-          pr.complete ? "" : " (incomplete)", 100.0 * result.report.quality.quad_share,
+          pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(), result.report.steps,
+          to_string(result.report.stop_reason), pr.complete ? "" : " (incomplete)",
+          100.0 * result.report.quality.quad_share,
           100.0 * result.report.quality.quad_angles_within_10,
           result.report.quality.edge_spread_median, result.report.quality.folds,
           result.report.quality.non_manifold_edges, result.report.quality.degenerate_faces,
           pr.total_seconds);
       if (pr.streamed)
-        std::printf(" (waited %.3f s for data; read %.3f s, decode %.3f s in the pipeline); "
-                    "cache: %zu units of %s touched, %zu hits, %zu misses, %zu late prefetches, "
-                    "%s read (%.3fx needed), peak %s",
-                    pr.wait_seconds, pr.io_seconds, pr.decode_seconds, pr.cache.units_touched,
-                    spacetime::format_bytes(pr.cache.unit_bytes).c_str(), pr.cache.hits,
-                    pr.cache.misses, pr.cache.late_prefetches,
-                    spacetime::format_bytes(pr.cache.bytes_read).c_str(),
-                    pr.cache.read_amplification(),
-                    spacetime::format_bytes(pr.cache.peak_bytes).c_str());
+        std::printf(
+            " (waited %.3f s for data; read %.3f s, decode %.3f s in the pipeline); "
+            "cache: %zu units of %s touched, %zu hits, %zu misses, %zu late prefetches, "
+            "%s read (%.3fx needed), peak %s",
+            pr.wait_seconds, pr.io_seconds, pr.decode_seconds, pr.cache.units_touched,
+            spacetime::format_bytes(pr.cache.unit_bytes).c_str(), pr.cache.hits, pr.cache.misses,
+            pr.cache.late_prefetches, spacetime::format_bytes(pr.cache.bytes_read).c_str(),
+            pr.cache.read_amplification(), spacetime::format_bytes(pr.cache.peak_bytes).c_str());
       std::printf(".\nWrote %s%s%s\n", args->out.c_str(), args->report.empty() ? "" : " and ",
                   args->report.c_str());
     }
+    std::fflush(stdout);
+    if (mesh.face_count() > 0) draw_run_pictures(*preview, out, args->report, args->quiet);
     if (mesh.face_count() == 0)
-      std::fprintf(stderr, "orthofront: warning: the surface has no faces (stopped: %s after %d "
-                           "steps); check --t1, --steps, --edge and the flow along the seed\n",
+      std::fprintf(stderr,
+                   "orthofront: warning: the surface has no faces (stopped: %s after %d "
+                   "steps); check --t1, --steps, --edge and the flow along the seed\n",
                    to_string(result.report.stop_reason), result.report.steps);
     if (!pr.complete) {
       if (interrupted()) throw Error("interrupted: the surface built so far was written");

@@ -8,16 +8,18 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
-#include "cli/field_source.h"
+#include "cli/pictures.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
+#include "cli/streak_args.h"
 #include "cli/streak_report.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
+#include "orthofront/io/open_field.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/io/vdb_grid.h"
 #include "orthofront/spacetime/path_command_json.h"
@@ -28,16 +30,6 @@
 namespace orthofront::cli {
 
 namespace {
-
-struct StreakArgs {
-  std::string field, seed, release, frames, out, report, budget, insertion = "exact";
-  std::string route = "direct", point, device;
-  int seed_count = 0;
-  double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
-  std::size_t max_vertices = 0;
-  bool quiet = false;
-  MemoryLimits limits;
-};
 
 double parse_time(const std::string& text, const std::string& option) {
   std::size_t used = 0;
@@ -231,6 +223,8 @@ void run_spacetime_route(const StreakArgs& args) {
         r.mesh.face_count(), r.time_scale, 100 * r.report.quality.quad_share,
         100 * r.report.quality.quad_angles_within_10, r.report.quality.edge_spread_median,
         r.report.quality.folds, r.report.times.total, args.out.c_str());
+  std::fflush(stdout);
+  draw_run_pictures(args.preview, out, args.report, args.quiet);
 }
 
 // The paper's route for a seed curve: at each observation time, the stream surface of the
@@ -252,6 +246,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
   o.path.field_name = args.field;
   o.path.progress = [](const spacetime::PathProgress&) { return !interrupted(); };
   nlohmann::json frames = nlohmann::json::array();
+  std::filesystem::path last_frame;
   std::size_t derived = 0, evaluations = 0;
   double seconds = 0;
   bool complete = true;
@@ -264,7 +259,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
     }
     // The surface the engine built, in (x, y, age); its projection is the planar streak surface.
     w.mesh.positions = w.lifted;
-    writer.add_frame(w.mesh, t);
+    last_frame = writer.add_frame(w.mesh, t);
     derived += w.derived_evaluations;
     evaluations += w.flow_evaluations;
     seconds += w.seconds;
@@ -304,6 +299,8 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
     std::printf("Wrote %s (%zu frames in %s, positions (x, y, age))%s%s\n", args.out.c_str(),
                 writer.frames(), writer.frame_folder().string().c_str(),
                 args.report.empty() ? "" : " and ", args.report.c_str());
+  std::fflush(stdout);
+  if (!last_frame.empty()) draw_run_pictures(args.preview, last_frame, args.report, args.quiet);
   if (!complete)
     throw Error("interrupted: the " + std::to_string(writer.frames()) +
                 " frames written are listed in " + args.out);
@@ -321,6 +318,85 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& report) {
   return report_json(report);
 }
 
+void add_streak_flags(CLI::App& command, StreakArgs& args) {
+  command.add_option("--release", args.release, "Release interval T0:T1")->required();
+  command.add_option("--frames", args.frames,
+                     "Observation times: a list t1,t2,... or START:END:COUNT (after T0); with "
+                     "--route spacetime, the last one ends the surface");
+  command
+      .add_option(
+          "--route", args.route,
+          "direct: release rows of particles and write one frame per observation time "
+          "(.pvd); streak-line: 2D analytic flows, at each observation time the stream "
+          "surface of the streak-line field (Weinkauf & Theisel) over (x, y, age) built by "
+          "the flow-orthogonal engine (.pvd, positions (x, y, age)); spacetime: 2D analytic "
+          "flows, the streak lines of --point at all times as one surface in (x, y, t) "
+          "(.vtp, .ply, .obj)")
+      ->check(CLI::IsMember({"direct", "streak-line", "spacetime"}))
+      ->capture_default_str();
+  command.add_option("--point", args.point, "--route spacetime: the release point x,y");
+  command.add_option("--edge", args.edge, "Target edge length")->capture_default_str();
+  command.add_option("--split", args.split, "Split edges longer than this many edge lengths")
+      ->capture_default_str();
+  command
+      .add_option("--merge", args.merge,
+                  "Remove particles whose edges are both shorter than this many edge lengths")
+      ->capture_default_str();
+  command
+      .add_option("--release-step", args.release_step,
+                  "Time between released rows (0: edge / median speed on the seed)")
+      ->capture_default_str();
+  command
+      .add_option("--seed-count", args.seed_count,
+                  "Particles per row at release (0: seed length / edge + 1)")
+      ->capture_default_str();
+  command
+      .add_option("--insert", args.insertion,
+                  "How inserted particles are placed: exact (released at their own (s, tau) and "
+                  "integrated; a streamed series then reads earlier steps again) or interpolate "
+                  "(cubic; every step is read once)")
+      ->check(CLI::IsMember({"exact", "interpolate"}))
+      ->capture_default_str();
+  command.add_option("--max-vertices", args.max_vertices,
+                     "Stop when the particles exceed this (default: from --memory)");
+  add_memory_flag(command, args.limits);
+  command.add_option("--cache-budget", args.budget,
+                     "Memory for resident and in-flight data of a streamed series (default: a "
+                     "quarter of --memory)");
+  command
+      .add_option("--device", args.device,
+                  "Gridded series: move particles by bulk advection (whole steps, slab by slab) on "
+                  "cpu, cuda or auto (cuda when built with it and a device is present); default: "
+                  "the streamed field's integrated flow map")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+}
+
+spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
+  StreamSurfaceOptions caps;
+  if (command.count("--max-vertices") > 0) caps.max_vertices = args.max_vertices;
+  apply_memory_flag(command, args.limits, caps);
+  spacetime::StreakOptions o;
+  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
+  o.frames = parse_frames(args.frames);
+  o.edge = args.edge;
+  o.split = args.split;
+  o.merge = args.merge;
+  o.release_step = args.release_step;
+  o.seed_count = args.seed_count;
+  o.insertion = args.insertion == "exact" ? spacetime::ParticleInsertion::exact
+                                          : spacetime::ParticleInsertion::interpolate;
+  o.max_vertices = caps.max_vertices;
+  o.seed_name = args.seed;
+  o.field_name = args.field;
+  if (!args.device.empty()) o.device = advect::parse_device(args.device);
+  return o;
+}
+
+std::size_t streak_cache_budget(const StreakArgs& args) {
+  return args.budget.empty() ? cache_budget_for(args.limits.memory_bytes)
+                             : spacetime::parse_bytes(args.budget);
+}
+
 void add_streak_command(CLI::App& app) {
   auto args = std::make_shared<StreakArgs>();
   CLI::App* c = app.add_subcommand(
@@ -332,54 +408,14 @@ void add_streak_command(CLI::App& app) {
                 "series or an OpenVDB file of timed vector grids")
       ->required();
   c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows use x, y)");
-  c->add_option("--release", args->release, "Release interval T0:T1")->required();
-  c->add_option("--frames", args->frames,
-                "Observation times: a list t1,t2,... or START:END:COUNT (after T0); with "
-                "--route spacetime, the last one ends the surface");
-  c->add_option("--route", args->route,
-                "direct: release rows of particles and write one frame per observation time "
-                "(.pvd); streak-line: 2D analytic flows, at each observation time the stream "
-                "surface of the streak-line field (Weinkauf & Theisel) over (x, y, age) built by "
-                "the flow-orthogonal engine (.pvd, positions (x, y, age)); spacetime: 2D analytic "
-                "flows, the streak lines of --point at all times as one surface in (x, y, t) "
-                "(.vtp, .ply, .obj)")
-      ->check(CLI::IsMember({"direct", "streak-line", "spacetime"}))
-      ->capture_default_str();
-  c->add_option("--point", args->point, "--route spacetime: the release point x,y");
-  c->add_option("--edge", args->edge, "Target edge length")->capture_default_str();
-  c->add_option("--split", args->split, "Split edges longer than this many edge lengths")
-      ->capture_default_str();
-  c->add_option("--merge", args->merge,
-                "Remove particles whose edges are both shorter than this many edge lengths")
-      ->capture_default_str();
-  c->add_option("--release-step", args->release_step,
-                "Time between released rows (0: edge / median speed on the seed)")
-      ->capture_default_str();
-  c->add_option("--seed-count", args->seed_count,
-                "Particles per row at release (0: seed length / edge + 1)")
-      ->capture_default_str();
-  c->add_option("--insert", args->insertion,
-                "How inserted particles are placed: exact (released at their own (s, tau) and "
-                "integrated; a streamed series then reads earlier steps again) or interpolate "
-                "(cubic; every step is read once)")
-      ->check(CLI::IsMember({"exact", "interpolate"}))
-      ->capture_default_str();
-  c->add_option("--max-vertices", args->max_vertices,
-                "Stop when the particles exceed this (default: from --memory)");
-  add_memory_flag(*c, args->limits);
-  c->add_option("--cache-budget", args->budget,
-                "Memory for resident and in-flight data of a streamed series (default: a "
-                "quarter of --memory)");
-  c->add_option("--device", args->device,
-                "Gridded series: move particles by bulk advection (whole steps, slab by slab) on "
-                "cpu, cuda or auto (cuda when built with it and a device is present); default: "
-                "the streamed field's integrated flow map")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  add_streak_flags(*c, *args);
   c->add_option("--out", args->out, "Output collection DIR/NAME.pvd (frames go to DIR/NAME/)")
       ->required();
   c->add_option("--report", args->report, "Write the JSON report here");
+  add_preview_flags(*c, args->preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
   c->callback([args, c]() {
+    check_preview(args->preview);
     if (args->frames.empty()) throw InvalidArgument("--frames is required (the observation times)");
     if (args->route == "spacetime") {
       run_spacetime_route(*args);
@@ -390,34 +426,19 @@ void add_streak_command(CLI::App& app) {
       run_streak_line_route(*args, parse_seed(args->seed));
       return;
     }
-    StreamSurfaceOptions caps;
-    if (c->count("--max-vertices") > 0) caps.max_vertices = args->max_vertices;
-    apply_memory_flag(*c, args->limits, caps);
+    spacetime::StreakOptions o = streak_options(*c, *args);
     io::MeshSeriesWriter writer(args->out);  // checks the extension and the folder
     if (!args->report.empty()) io::check_writable(args->report);
     const SeedCurve seed = parse_seed(args->seed);
-    spacetime::StreakOptions o;
-    std::tie(o.release_begin, o.release_end) = parse_release(args->release);
-    o.frames = parse_frames(args->frames);
-    o.edge = args->edge;
-    o.split = args->split;
-    o.merge = args->merge;
-    o.release_step = args->release_step;
-    o.seed_count = args->seed_count;
-    o.insertion = args->insertion == "exact" ? spacetime::ParticleInsertion::exact
-                                             : spacetime::ParticleInsertion::interpolate;
-    o.max_vertices = caps.max_vertices;
-    o.seed_name = args->seed;
-    o.field_name = args->field;
     StreakStatus status;
     o.progress = [&](const spacetime::StreakProgress& p) { return status.update(p); };
+    std::filesystem::path last_frame;
     const auto sink = [&](const spacetime::StreakFrame& frame) {
-      writer.add_frame(frame.mesh, frame.time);
+      last_frame = writer.add_frame(frame.mesh, frame.time);
     };
 
     spacetime::StreakReport result;
     std::size_t cache_budget = 0;
-    if (!args->device.empty()) o.device = advect::parse_device(args->device);
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
@@ -426,10 +447,9 @@ void add_streak_command(CLI::App& app) {
       result = spacetime::build_streak_surface(*flow, seed, o, sink);
     } else {
       const std::unique_ptr<io::TimeSeries> series =
-          open_time_series(args->field, "streak surfaces");
+          io::open_time_series(args->field, "streak surfaces");
       spacetime::CacheOptions co;
-      co.budget_bytes = args->budget.empty() ? cache_budget_for(args->limits.memory_bytes)
-                                             : spacetime::parse_bytes(args->budget);
+      co.budget_bytes = streak_cache_budget(*args);
       cache_budget = co.budget_bytes;
       spacetime::BrickCache cache(*series, co);
       result = spacetime::build_streak_surface(cache, seed, o, sink);
@@ -478,6 +498,9 @@ void add_streak_command(CLI::App& app) {
                   writer.frame_folder().string().c_str(), args->report.empty() ? "" : " and ",
                   args->report.c_str());
     }
+    std::fflush(stdout);
+    if (!last_frame.empty())
+      draw_run_pictures(args->preview, last_frame, args->report, args->quiet);
     if (!result.complete) {
       if (interrupted())
         throw Error("interrupted: the " + std::to_string(writer.frames()) +

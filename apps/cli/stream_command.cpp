@@ -3,6 +3,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/pictures.h"
 #include "cli/process_memory.h"
 #include "cli/surface_job.h"
 #include "orthofront/error.h"
@@ -22,6 +23,7 @@ struct StreamArgs {
   int exr_bins = 0;
   bool quiet = false;
   MemoryLimits limits;
+  PreviewFlags preview;
 };
 }  // namespace
 
@@ -47,9 +49,11 @@ void add_stream_command(CLI::App& app) {
                 "Columns (s bins) of the --exr image; 0: the widest front's vertex count")
       ->check(CLI::Range(0, 1 << 16))
       ->capture_default_str();
+  add_preview_flags(*c, args->preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
   c->callback([args, c]() {
     apply_memory_flag(*c, args->limits, args->job.options);
+    check_preview(args->preview);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))
       throw InvalidArgument("output '" + args->out +
@@ -101,12 +105,15 @@ void add_stream_command(CLI::App& app) {
       std::cout << summarize(args->job, result.report) << "\nWrote " << args->out;
       if (!args->report.empty()) std::cout << " and " << args->report;
       if (!args->exr.empty()) std::cout << " and " << args->exr;
-      std::cout << "\n";
+      std::cout << "\n" << std::flush;
     }
+    if (result.mesh.face_count() > 0)
+      draw_run_pictures(args->preview, out, args->report, args->quiet);
     if (capped)
-      std::cerr << "orthofront: warning: " << cap_text << "; the surface built so far was written to "
-                << args->out << ", marked incomplete. To go further, "
-                << args->limits.raise_advice() << ", or raise --edge\n";
+      std::cerr << "orthofront: warning: " << cap_text
+                << "; the surface built so far was written to " << args->out
+                << ", marked incomplete. To go further, " << args->limits.raise_advice()
+                << ", or raise --edge\n";
     if (result.mesh.face_count() == 0)
       std::cerr << "orthofront: warning: the surface has no faces (stopped: "
                 << to_string(result.report.stop_reason) << " after " << result.report.steps

@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "cli/field_source.h"
+#include "orthofront/io/open_field.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "orthofront/error.h"
@@ -53,7 +53,7 @@ void check_stream_seed(const Field3& field_ref, const Seed<3>& seed, const Surfa
 }
 
 SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
-  const auto field = open_field(job.field);
+  const auto field = io::open_field(job.field);
   const SeedCurve curve = parse_seed(job.seed);
   if (job.seed_count < 2)
     throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));

@@ -41,6 +41,30 @@ bool same_geometry(const GridGeometry& a, const GridGeometry& b) {
 
 }  // namespace
 
+MemorySeries::MemorySeries(GridGeometry geometry, int components,
+                           std::vector<std::vector<float>> steps, std::vector<double> times,
+                           std::string description)
+    : geometry_(std::move(geometry)),
+      components_(components),
+      steps_(std::move(steps)),
+      times_(std::move(times)),
+      description_(std::move(description)) {
+  if (steps_.empty()) throw InvalidArgument(description_ + ": a time series needs a step");
+  if (times_.size() != steps_.size())
+    throw InvalidArgument(description_ + ": " + std::to_string(steps_.size()) + " steps but " +
+                          std::to_string(times_.size()) + " times");
+  const std::size_t floats = geometry_.point_count() * static_cast<std::size_t>(components_);
+  for (std::size_t i = 0; i < steps_.size(); ++i) {
+    if (steps_[i].size() != floats)
+      throw InvalidArgument(description_ + ": step " + std::to_string(i) + " holds " +
+                            std::to_string(steps_[i].size()) + " values, the grid needs " +
+                            std::to_string(floats));
+    if (!std::isfinite(times_[i]) || (i > 0 && !(times_[i] > times_[i - 1])))
+      throw InvalidArgument(description_ + ": times must be finite and strictly increasing (step " +
+                            std::to_string(i) + ")");
+  }
+}
+
 GridFileSeries::GridFileSeries(std::vector<std::filesystem::path> files, std::vector<double> times,
                                std::string selector)
     : files_(std::move(files)), times_(std::move(times)), selector_(std::move(selector)) {
@@ -96,8 +120,8 @@ void GridFileSeries::decode(const RawStep& raw, std::span<float> values) const {
   if (!same_geometry(grid.geometry, geometry_) || grid.components != components_) {
     throw FormatError(file.string() + " (step " + std::to_string(raw.step) + "): grid " +
                       describe_grid(grid) + " differs from the first step's " +
-                      detail::size_text(geometry_) + " x " + std::to_string(components_) +
-                      " (" + files_.front().string() + ")");
+                      detail::size_text(geometry_) + " x " + std::to_string(components_) + " (" +
+                      files_.front().string() + ")");
   }
   if (values.size() != grid.values.size()) {
     throw InvalidArgument("decode: buffer of " + std::to_string(values.size()) +
@@ -127,7 +151,8 @@ std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
       if (!root) throw FormatError(file + ": <DataSet> outside <VTKFile type=\"Collection\">");
       const std::string* name = tag.attribute("file");
       if (name == nullptr || name->empty())
-        throw FormatError(file + ": <DataSet> entry " + std::to_string(entries.size()) + " has no file");
+        throw FormatError(file + ": <DataSet> entry " + std::to_string(entries.size()) +
+                          " has no file");
       double t = static_cast<double>(entries.size());
       if (const std::string* ts = tag.attribute("timestep")) {
         if (!detail::parse_number(*ts, t) || !std::isfinite(t))
@@ -143,7 +168,8 @@ std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
       entries.emplace_back(t, data);
     }
   }
-  if (!root) throw FormatError(file + ": not a ParaView collection (no <VTKFile type=\"Collection\">)");
+  if (!root)
+    throw FormatError(file + ": not a ParaView collection (no <VTKFile type=\"Collection\">)");
   if (entries.empty()) throw FormatError(file + ": the collection lists no <DataSet>");
   std::stable_sort(entries.begin(), entries.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -151,8 +177,9 @@ std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
   std::vector<double> times;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     if (i > 0 && entries[i].first == entries[i - 1].first) {
-      throw FormatError(file + ": timestep " + std::to_string(entries[i].first) + " is listed twice (" +
-                        entries[i - 1].second.string() + ", " + entries[i].second.string() + ")");
+      throw FormatError(file + ": timestep " + std::to_string(entries[i].first) +
+                        " is listed twice (" + entries[i - 1].second.string() + ", " +
+                        entries[i].second.string() + ")");
     }
     times.push_back(entries[i].first);
     files.push_back(entries[i].second);

@@ -33,6 +33,34 @@ class SingleGridSeries final : public TimeSeries {
   std::string description_;
 };
 
+/// Steps held in memory (arrays handed over by Python or ParaView), each at its time: a series
+/// the brick cache streams like a file's, so a surface from memory equals the one from disk.
+class MemorySeries final : public TimeSeries {
+ public:
+  /// `steps[i]` holds geometry.point_count() * components floats at `times[i]`. Throws
+  /// InvalidArgument for no step, a step of another size, or times that do not increase.
+  MemorySeries(GridGeometry geometry, int components, std::vector<std::vector<float>> steps,
+               std::vector<double> times, std::string description);
+  std::size_t step_count() const override { return steps_.size(); }
+  double time(std::size_t step) const override { return times_.at(step); }
+  const GridGeometry& geometry() const override { return geometry_; }
+  int components() const override { return components_; }
+  std::string describe() const override { return description_; }
+  RawStep read_raw(std::size_t step) const override {
+    const std::vector<float>& values = steps_.at(step);
+    RawStep raw{step, std::vector<std::byte>(values.size() * sizeof(float)), false};
+    std::memcpy(raw.bytes.data(), values.data(), raw.bytes.size());
+    return raw;
+  }
+
+ private:
+  GridGeometry geometry_;
+  int components_;
+  std::vector<std::vector<float>> steps_;
+  std::vector<double> times_;
+  std::string description_;
+};
+
 /// One file per step. The first file is read when the series is opened (geometry and component
 /// count); every step must match it, or decode throws FormatError naming the file and the step.
 /// read_raw reads the file's bytes (encoded); decode parses them (thread-safe).

@@ -1,16 +1,16 @@
-#include "cli/data_files.h"
+#include "orthofront/io/data_file.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cstring>
 
-#include "cli/grid_data_files.h"
 #include "orthofront/error.h"
+#include "orthofront/io/grid_data_file.h"
 #include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/netcdf_series.h"
 
-namespace orthofront::cli {
+namespace orthofront::io {
 
 namespace {
 
@@ -20,7 +20,7 @@ std::string lower(std::string text) {
   return text;
 }
 
-std::string compression_text(const io::Hdf5Description& d) {
+std::string compression_text(const Hdf5Description& d) {
   if (d.filters.empty()) return "none";
   std::string text;
   for (const std::string& f : d.filters) {
@@ -31,22 +31,21 @@ std::string compression_text(const io::Hdf5Description& d) {
 }
 
 DataFile open_hdf5(const DataFileSpec& spec) {
-  io::Hdf5ReadOptions options;
+  Hdf5ReadOptions options;
   options.steady_as_single_step = true;
-  auto series =
-      io::open_hdf5_series(spec.path, spec.selector.empty() ? "/" : spec.selector, options);
-  const io::Hdf5Description& d = series->description();
+  auto series = open_hdf5_series(spec.path, spec.selector.empty() ? "/" : spec.selector, options);
+  const Hdf5Description& d = series->description();
   DataFile file;
   file.format = "HDF5 (orthofront layout)";
-  file.steady = d.storage == io::Hdf5Storage::steady;
+  file.steady = d.storage == Hdf5Storage::steady;
   file.zero_is_no_data = d.zero_is_no_data;
   file.stored_bytes = d.stored_bytes;
   file.details.emplace_back("group", d.group);
   file.details.emplace_back("samples", d.dataset + " (" + d.stored_type + ")");
   std::string storage = to_string(d.storage);
   const std::int64_t slices = d.geometry.dimension == 3 ? d.geometry.size[2] : d.geometry.size[1];
-  if (d.storage == io::Hdf5Storage::bricked) {
-    const io::BrickLayout b = series->bricks();
+  if (d.storage == Hdf5Storage::bricked) {
+    const BrickLayout b = series->bricks();
     storage += ", bricks of " + std::to_string(b.size[0]) + " x " + std::to_string(b.size[1]) +
                (d.geometry.dimension == 3 ? " x " + std::to_string(b.size[2]) : std::string()) +
                " points (" + std::to_string(b.bricks()) + " per step)";
@@ -60,7 +59,8 @@ DataFile open_hdf5(const DataFileSpec& spec) {
   file.details.emplace_back("storage", storage);
   if (!d.missing_steps.empty()) {
     std::string missing;
-    for (std::size_t s : d.missing_steps) missing += (missing.empty() ? "" : ", ") + std::to_string(s);
+    for (std::size_t s : d.missing_steps)
+      missing += (missing.empty() ? "" : ", ") + std::to_string(s);
     file.details.emplace_back("missing steps",
                               missing + " (no dataset: reading them fails; surfaces stop there)");
   }
@@ -83,7 +83,7 @@ DataFile open_netcdf(const DataFileSpec& spec) {
   file.steady = file.series->step_count() == 1;
   file.zero_is_no_data = false;  // no data is NaN, fill values and the valid range
 #ifdef ORTHOFRONT_HAVE_NETCDF
-  const io::NetcdfDescription& d = *io::netcdf_description(*file.series);
+  const NetcdfDescription& d = *netcdf_description(*file.series);
   file.format = d.format + " (CF)";
   std::string vars;
   for (const std::string& v : d.variables) vars += (vars.empty() ? "" : ", ") + v;
@@ -100,10 +100,10 @@ DataFile open_netcdf(const DataFileSpec& spec) {
 
 }  // namespace
 
-std::unique_ptr<io::TimeSeries> open_netcdf_series(const DataFileSpec& spec) {
+std::unique_ptr<TimeSeries> open_netcdf_series(const DataFileSpec& spec) {
 #ifdef ORTHOFRONT_HAVE_NETCDF
-  return io::open_netcdf_series(io::expand_file_pattern(spec.path.string()),
-                                io::parse_netcdf_selector(spec.selector));
+  return open_netcdf_series(expand_file_pattern(spec.path.string()),
+                            parse_netcdf_selector(spec.selector));
 #else
   throw InvalidArgument("'" + spec.path.string() +
                         "': this build reads no NetCDF (install libnetcdf-dev and configure "
@@ -164,8 +164,8 @@ DataFile open_data_file(const std::string& spec) {
   return found->second->open(found->first);
 }
 
-std::unique_ptr<io::TimeSeries> single_grid_series(VectorGrid grid, std::string description) {
-  return std::make_unique<io::SingleGridSeries>(std::move(grid), std::move(description));
+std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description) {
+  return std::make_unique<SingleGridSeries>(std::move(grid), std::move(description));
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::io

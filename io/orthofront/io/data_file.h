@@ -12,7 +12,7 @@
 #include "orthofront/field/grid.h"
 #include "orthofront/io/time_series.h"
 
-namespace orthofront::cli {
+namespace orthofront::io {
 
 /// A file and what to read in it (an HDF5 group, an array name, ...; empty: the default).
 struct DataFileSpec {
@@ -26,7 +26,7 @@ struct DataFile {
   /// Facts worth printing, in order: storage, compression, units, ... (`info` shows them).
   std::vector<std::pair<std::string, std::string>> details;
   /// The samples; a steady file is a series of one step at time 0.
-  std::unique_ptr<io::TimeSeries> series;
+  std::unique_ptr<TimeSeries> series;
   bool steady = true;
   /// Whether a zero vector means "no data" in this file (GridFieldOptions::zero_is_no_data).
   bool zero_is_no_data = true;
@@ -61,11 +61,11 @@ bool looks_like_file(const std::string& spec);
 DataFile open_data_file(const std::string& spec);
 
 /// A NetCDF series: `spec.path` is a file, a glob or a comma-separated list of them; the selector
-/// names the variables and options (io::parse_netcdf_selector). Throws InvalidArgument when the
+/// names the variables and options (parse_netcdf_selector). Throws InvalidArgument when the
 /// build has no NetCDF.
-std::unique_ptr<io::TimeSeries> open_netcdf_series(const DataFileSpec& spec);
+std::unique_ptr<TimeSeries> open_netcdf_series(const DataFileSpec& spec);
 
 /// A series of one grid held in memory (for formats whose readers produce a VectorGrid).
-std::unique_ptr<io::TimeSeries> single_grid_series(VectorGrid grid, std::string description);
+std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::io

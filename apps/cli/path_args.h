@@ -1,0 +1,44 @@
+#pragma once
+/// The options of a path surface as `path` takes them, shared with the Python module (same names,
+/// defaults and checks).
+#include <CLI/CLI.hpp>
+#include <cstddef>
+#include <string>
+
+#include "cli/engine_options.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/path_surface.h"
+
+namespace orthofront::cli {
+
+struct PathArgs {
+  std::string field, seed, out, report, budget;  // budget: empty = a quarter of --memory
+  int seed_count = 20;
+  double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
+  bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
+  std::string cache_unit = "brick";
+  StreamSurfaceOptions options = path_engine_defaults();
+  MemoryLimits limits;
+
+  static StreamSurfaceOptions path_engine_defaults() {
+    StreamSurfaceOptions o;
+    o.max_steps = 1'000'000;  // path surfaces end at t1
+    return o;
+  }
+};
+
+/// Adds every option of a path surface but --field, --seed, --out, --report and --quiet: the
+/// seed count, times, cache, band, engine and memory flags.
+void add_path_flags(CLI::App& command, PathArgs& args);
+
+/// Throws InvalidArgument for fewer than 2 seed vertices or more than the vertex cap.
+void check_seed_count(int seed_count, std::size_t max_vertices);
+
+/// The library's options (after apply_memory_flag); errors name args.seed and args.field.
+spacetime::PathSurfaceOptions path_options(const PathArgs& args);
+
+/// The cache of a streamed series: --cache-budget (default: a quarter of --memory), prefetch and
+/// unit.
+spacetime::CacheOptions path_cache_options(const PathArgs& args);
+
+}  // namespace orthofront::cli

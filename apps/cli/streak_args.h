@@ -1,0 +1,36 @@
+#pragma once
+/// The options of a streak surface as `streak` takes them, shared with the Python module (same
+/// names, defaults and checks).
+#include <CLI/CLI.hpp>
+#include <cstddef>
+#include <string>
+
+#include "cli/engine_options.h"
+#include "cli/pictures.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+namespace orthofront::cli {
+
+struct StreakArgs {
+  std::string field, seed, release, frames, out, report, budget, insertion = "exact";
+  std::string route = "direct", point, device;
+  int seed_count = 0;
+  double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
+  std::size_t max_vertices = 0;
+  bool quiet = false;
+  MemoryLimits limits;
+  PreviewFlags preview;
+};
+
+/// Adds every option of a streak surface but --field, --seed, --out, --report and --quiet:
+/// release, frames, route, particle spacing, insertion, memory, cache and device.
+void add_streak_flags(CLI::App& command, StreakArgs& args);
+
+/// After parsing `command`: the library's options for the direct route (resolves --memory;
+/// throws InvalidArgument naming a bad --release, --frames or --device).
+spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args);
+
+/// --cache-budget, or a quarter of --memory.
+std::size_t streak_cache_budget(const StreakArgs& args);
+
+}  // namespace orthofront::cli

@@ -1,0 +1,359 @@
+// The `orthofront` Python module (`_orthofront`, wrapped by orthofront/__init__.py): fields and
+// series from numpy arrays or files, and stream, path and streak surfaces built by the library
+// with the command line's options.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cli/engine_options.h"
+#include "cli/path_args.h"
+#include "cli/seed_spec.h"
+#include "cli/streak_args.h"
+#include "cli/streak_report.h"
+#include "cli/surface_job.h"
+#include "keyword_options.h"
+#include "numpy_grid.h"
+#include "orthofront/error.h"
+#include "orthofront/field/grid_field.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/error.h"
+#include "orthofront/io/mesh_io.h"
+#include "orthofront/io/open_field.h"
+#include "orthofront/io/report_json.h"
+#include "orthofront/seed/seed.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/path_command_json.h"
+#include "orthofront/spacetime/path_surface.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+namespace py = pybind11;
+
+namespace orthofront::python {
+
+namespace {
+
+/// A steady field: a numpy grid, a data file or an analytic field.
+struct PyField {
+  std::shared_ptr<const Field3> field;
+  std::string name;
+};
+
+/// A time series: numpy steps or data files.
+struct PySeries {
+  std::shared_ptr<io::TimeSeries> series;
+  std::string name;
+};
+
+/// Ctrl-C during a build: the engine asks between front steps, with the GIL released.
+class InterruptCheck {
+ public:
+  bool keep_going() {
+    if (raised_) return false;
+    py::gil_scoped_acquire gil;
+    raised_ = PyErr_CheckSignals() != 0;  // leaves KeyboardInterrupt set for rethrow()
+    return !raised_;
+  }
+  /// With the GIL held, after the build.
+  void rethrow_if_raised() const {
+    if (raised_) throw py::error_already_set();
+  }
+
+ private:
+  bool raised_ = false;
+};
+
+PyField resolve_field(const py::object& field) {
+  if (py::isinstance<PyField>(field)) return field.cast<PyField>();
+  if (py::isinstance<py::str>(field)) {
+    const auto spec = field.cast<std::string>();
+    return {io::open_field(spec), spec};
+  }
+  throw py::type_error("field must be an orthofront.Field or a string (a file or analytic name)");
+}
+
+SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name) {
+  if (py::isinstance<py::str>(seed)) {
+    name = seed.cast<std::string>();
+    return cli::parse_seed(name);
+  }
+  const auto points = FloatArray::ensure(seed);
+  if (!points || points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3) ||
+      points.shape(0) < 2)
+    throw py::value_error(
+        "seed must be a seed string (e.g. 'line:0,0,0:1,0,0') or an (n, 2) or "
+        "(n, 3) array of at least 2 points");
+  std::vector<Vec3> polyline;
+  const auto p = points.unchecked<2>();
+  for (py::ssize_t i = 0; i < points.shape(0); ++i)
+    polyline.emplace_back(p(i, 0), p(i, 1), points.shape(1) == 3 ? p(i, 2) : 0.0f);
+  name = "array of " + std::to_string(points.shape(0)) + " points";
+  return SeedCurve::polyline(std::move(polyline), closed);
+}
+
+/// The surface as numpy arrays plus its report (JSON text; the Python side loads it).
+py::dict surface_dict(const Mesh& mesh, const nlohmann::json& report) {
+  py::dict out = mesh_to_dict(mesh);
+  out["report"] = report.dump();
+  return out;
+}
+
+py::dict stream_surface(const py::object& field_in, const py::object& seed_in, bool closed,
+                        const py::kwargs& options) {
+  cli::SurfaceJob job;
+  cli::MemoryLimits limits;
+  CLI::App command("stream_surface");
+  command.add_option("--seed-count", job.seed_count)->capture_default_str();
+  cli::add_engine_flags(command, job.options);
+  cli::add_memory_flag(command, limits);
+  parse_keywords(command, options);
+  cli::apply_memory_flag(command, limits, job.options);
+  const PyField field = resolve_field(field_in);
+  const SeedCurve curve = resolve_seed(seed_in, closed, job.seed);
+  job.field = field.name;
+  cli::check_seed_count(job.seed_count, job.options.max_vertices);
+  const Seed<3> seed = make_seed(curve, job.seed_count);
+  cli::check_stream_seed(*field.field, seed, job);
+  InterruptCheck interrupt;
+  SurfaceResult result;
+  {
+    py::gil_scoped_release release;
+    result = build_stream_surface(*field.field, seed, job.options,
+                                  [&](const Progress&) { return interrupt.keep_going(); });
+  }
+  interrupt.rethrow_if_raised();
+  nlohmann::json report = io::to_json(result.report);
+  report["field"] = job.field;
+  report["seed"] = job.seed;
+  report["seed_count"] = job.seed_count;
+  report["complete"] = result.report.complete;
+  report["limits"] = limits.to_json();
+  return surface_dict(result.mesh, report);
+}
+
+py::dict path_surface(const py::object& field_in, const py::object& seed_in, bool closed,
+                      const py::kwargs& options) {
+  cli::PathArgs args;
+  CLI::App command("path_surface");
+  cli::add_path_flags(command, args);
+  parse_keywords(command, options);
+  cli::apply_memory_flag(command, args.limits, args.options);
+  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed);
+  cli::check_seed_count(args.seed_count, args.options.max_vertices);
+
+  std::unique_ptr<UnsteadyField> analytic;
+  PySeries series;
+  if (py::isinstance<PySeries>(field_in)) {
+    series = field_in.cast<PySeries>();
+  } else if (py::isinstance<py::str>(field_in)) {
+    series.name = field_in.cast<std::string>();
+    if (is_unsteady_field_name(series.name))
+      analytic = make_unsteady_field(series.name);
+    else
+      series.series = io::open_time_series(series.name, "path surfaces");
+  } else {
+    throw py::type_error(
+        "field must be an orthofront.Series or a string (an unsteady field "
+        "name, or a series of files)");
+  }
+  args.field = series.name;
+  spacetime::PathSurfaceOptions o = cli::path_options(args);
+  InterruptCheck interrupt;
+  o.progress = [&](const spacetime::PathProgress&) { return interrupt.keep_going(); };
+  spacetime::PathSurfaceResult result;
+  std::size_t cache_budget = 0;
+  {
+    py::gil_scoped_release release;
+    if (analytic) {
+      result = spacetime::build_path_surface(*analytic, seed, args.seed_count, o);
+    } else {
+      const spacetime::CacheOptions co = cli::path_cache_options(args);
+      cache_budget = co.budget_bytes;
+      spacetime::BrickCache cache(*series.series, co);
+      result = spacetime::build_path_surface(cache, seed, args.seed_count, o);
+    }
+  }
+  interrupt.rethrow_if_raised();
+  if (args.spacetime_out && !result.spacetime_positions.empty())
+    result.mesh.positions = result.spacetime_positions;
+  nlohmann::json report = io::to_json(result.report);
+  report["field"] = args.field;
+  report["seed"] = args.seed;
+  report["seed_count"] = args.seed_count;
+  report["complete"] = result.report.complete;
+  report["path"] = spacetime::to_json(result.path);
+  report["path"]["spacetime_out"] = args.spacetime_out;
+  report["limits"] = args.limits.to_json();
+  if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
+  py::dict out = surface_dict(result.mesh, report);
+  if (!result.spacetime_positions.empty()) {
+    Mesh lifted;
+    lifted.positions = result.spacetime_positions;
+    out["spacetime_vertices"] = mesh_to_dict(lifted)["vertices"];
+  }
+  return out;
+}
+
+py::dict streak_surface(const py::object& field_in, const py::object& seed_in, bool closed,
+                        const py::kwargs& options) {
+  cli::StreakArgs args;
+  CLI::App command("streak_surface");
+  cli::add_streak_flags(command, args);
+  parse_keywords(command, options);
+  if (args.route != "direct")
+    throw py::value_error("route '" + args.route +
+                          "': the module builds the direct route; the command line writes the "
+                          "others (orthofront streak --route " +
+                          args.route + ")");
+  if (args.frames.empty()) throw py::type_error("frames is required (the observation times)");
+  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed);
+  std::unique_ptr<UnsteadyField> analytic;
+  PySeries series;
+  if (py::isinstance<PySeries>(field_in)) {
+    series = field_in.cast<PySeries>();
+  } else if (py::isinstance<py::str>(field_in)) {
+    series.name = field_in.cast<std::string>();
+    if (is_unsteady_field_name(series.name))
+      analytic = make_unsteady_field(series.name);
+    else
+      series.series = io::open_time_series(series.name, "streak surfaces");
+  } else {
+    throw py::type_error("field must be an orthofront.Series or a string");
+  }
+  args.field = series.name;
+  spacetime::StreakOptions o = cli::streak_options(command, args);
+  if (analytic && o.device)
+    throw py::value_error("device: bulk advection reads gridded series, not analytic fields");
+  InterruptCheck interrupt;
+  o.progress = [&](const spacetime::StreakProgress&) { return interrupt.keep_going(); };
+  std::vector<spacetime::StreakFrame> frames;
+  const auto sink = [&](const spacetime::StreakFrame& frame) { frames.push_back(frame); };
+  spacetime::StreakReport result;
+  std::size_t cache_budget = 0;
+  {
+    py::gil_scoped_release release;
+    if (analytic) {
+      result = spacetime::build_streak_surface(*analytic, seed, o, sink);
+    } else {
+      spacetime::CacheOptions co;
+      co.budget_bytes = cli::streak_cache_budget(args);
+      cache_budget = co.budget_bytes;
+      spacetime::BrickCache cache(*series.series, co);
+      result = spacetime::build_streak_surface(cache, seed, o, sink);
+    }
+  }
+  interrupt.rethrow_if_raised();
+  nlohmann::json report = cli::streak_report_json(result);
+  report["field"] = args.field;
+  report["seed"] = args.seed;
+  report["limits"] = args.limits.to_json();
+  if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
+  py::list frame_list;
+  for (const spacetime::StreakFrame& f : frames) {
+    py::dict d = mesh_to_dict(f.mesh);
+    d["time"] = f.time;
+    d["report"] = io::to_json(f.quality).dump();
+    frame_list.append(d);
+  }
+  py::dict out;
+  out["frames"] = frame_list;
+  out["report"] = report.dump();
+  return out;
+}
+
+}  // namespace
+
+}  // namespace orthofront::python
+
+PYBIND11_MODULE(_orthofront, m) {
+  using namespace orthofront;
+  using namespace orthofront::python;
+  m.doc() = "Flow-orthogonal stream, path and streak surfaces (the compiled part of orthofront)";
+  m.attr("__version__") = ORTHOFRONT_VERSION;
+
+  // Library errors as Python's: bad input is a ValueError, unreadable files an OSError.
+  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const io::IoError& e) {
+      PyErr_SetString(PyExc_OSError, e.what());
+    } catch (const InvalidArgument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const io::FormatError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const Error& e) {
+      error(e.what());
+    }
+  });
+
+  py::class_<PyField>(m, "Field", "A steady vector field: a grid from numpy, a file or analytic")
+      .def(py::init([](const FloatArray& values, const py::object& origin,
+                       const py::object& spacing, const py::object& axes, bool zero_is_no_data) {
+             auto grid =
+                 std::make_shared<VectorGrid>(grid_from_array(values, origin, spacing, axes));
+             GridFieldOptions options;
+             options.zero_is_no_data = zero_is_no_data;
+             return PyField{std::make_shared<GridField>(std::move(grid), options), "numpy array"};
+           }),
+           py::arg("values"), py::kw_only(), py::arg("origin") = py::none(),
+           py::arg("spacing") = py::none(), py::arg("axes") = py::none(),
+           py::arg("zero_is_no_data") = false,
+           "values: (ny, nx, 2) or (nz, ny, nx, 3), x fastest; NaN is no data")
+      .def_static(
+          "open",
+          [](const std::string& spec) {
+            return PyField{io::open_field(spec), spec};
+          },
+          py::arg("spec"), "A data file (FILE.ext[:SELECTOR]) or an analytic field NAME[:k=v,...]")
+      .def_property_readonly("name", [](const PyField& f) { return f.name; })
+      .def("describe", [](const PyField& f) { return f.field->describe(); })
+      .def("__repr__", [](const PyField& f) { return "<orthofront.Field " + f.name + ">"; });
+
+  py::class_<PySeries>(m, "Series", "A time series of vector grids: numpy steps or files")
+      .def(py::init([](const FloatArray& values, const py::object& times, const py::object& origin,
+                       const py::object& spacing, const py::object& axes) {
+             return PySeries{std::shared_ptr<io::TimeSeries>(
+                                 series_from_array(values, times, origin, spacing, axes)),
+                             "numpy array series"};
+           }),
+           py::arg("values"), py::arg("times"), py::kw_only(), py::arg("origin") = py::none(),
+           py::arg("spacing") = py::none(), py::arg("axes") = py::none(),
+           "values: (nt, ny, nx, 2) or (nt, nz, ny, nx, 3); times: nt increasing numbers")
+      .def_static(
+          "open",
+          [](const std::string& spec) {
+            return PySeries{
+                std::shared_ptr<io::TimeSeries>(io::open_time_series(spec, "time series")), spec};
+          },
+          py::arg("spec"),
+          "HDF5, NetCDF (file, glob or list), .pvd, a glob or list of grid files, OpenVDB")
+      .def_property_readonly("name", [](const PySeries& s) { return s.name; })
+      .def_property_readonly("times",
+                             [](const PySeries& s) {
+                               std::vector<double> t(s.series->step_count());
+                               for (std::size_t i = 0; i < t.size(); ++i) t[i] = s.series->time(i);
+                               return t;
+                             })
+      .def("describe", [](const PySeries& s) { return s.series->describe(); })
+      .def("__len__", [](const PySeries& s) { return s.series->step_count(); })
+      .def("__repr__", [](const PySeries& s) { return "<orthofront.Series " + s.name + ">"; });
+
+  m.def("_stream_surface", &stream_surface, py::arg("field"), py::arg("seed"), py::kw_only(),
+        py::arg("closed") = false);
+  m.def("_path_surface", &path_surface, py::arg("field"), py::arg("seed"), py::kw_only(),
+        py::arg("closed") = false);
+  m.def("_streak_surface", &streak_surface, py::arg("field"), py::arg("seed"), py::kw_only(),
+        py::arg("closed") = false);
+  m.def(
+      "_write_mesh",
+      [](const py::array& vertices, const py::array& faces, const py::dict& attributes,
+         const std::string& path) {
+        io::write_mesh(mesh_from_arrays(vertices, faces, attributes), path);
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("attributes"), py::arg("path"));
+}

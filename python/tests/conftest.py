@@ -1,0 +1,48 @@
+"""Shared helpers of the Python tests: the command-line binary and files written like users do."""
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope="session")
+def orthofront_binary():
+    path = os.environ.get("ORTHOFRONT_BINARY")
+    if not path or not os.path.isfile(path):
+        pytest.fail("ORTHOFRONT_BINARY must name the orthofront executable (ctest sets it)")
+    return path
+
+
+def run_cli(binary, *args, check=True, env=None):
+    """Runs the command line; returns the completed process (stdout and stderr as text)."""
+    result = subprocess.run([binary, *map(str, args)], capture_output=True, text=True, env=env)
+    if check and result.returncode != 0:
+        raise AssertionError("orthofront %s failed (%d):\n%s%s" % (
+            " ".join(map(str, args)), result.returncode, result.stdout, result.stderr))
+    return result
+
+
+def write_vti(path, values, origin, spacing):
+    """VTK XML ImageData with ASCII point vectors (float32, printed to round-trip exactly)."""
+    values = np.asarray(values, dtype=np.float32)
+    if values.ndim == 3:  # (ny, nx, 2): a 2D grid
+        ny, nx, _ = values.shape
+        nz = 1
+        vectors = values.reshape(-1, 2)
+        origin, spacing = list(origin) + [0.0], list(spacing) + [1.0]
+    else:
+        nz, ny, nx, _ = values.shape
+        vectors = values.reshape(-1, 3)
+    components = vectors.shape[1]
+    text = " ".join("%.9g" % v for v in vectors.ravel())
+    with open(path, "w") as file:
+        file.write(
+            '<?xml version="1.0"?>\n<VTKFile type="ImageData" version="0.1">\n'
+            '<ImageData WholeExtent="0 %d 0 %d 0 %d" Origin="%r %r %r" Spacing="%r %r %r">\n'
+            '<Piece Extent="0 %d 0 %d 0 %d"><PointData Vectors="velocity">\n'
+            '<DataArray type="Float32" Name="velocity" NumberOfComponents="%d" format="ascii">\n'
+            '%s\n</DataArray></PointData></Piece></ImageData></VTKFile>\n' % (
+                nx - 1, ny - 1, nz - 1, *origin, *spacing, nx - 1, ny - 1, nz - 1, components,
+                text))

@@ -1,0 +1,213 @@
+"""The Python module: fields from numpy and files, surfaces as arrays, the CLI's options."""
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import orthofront
+from orthofront import preview
+from conftest import run_cli, write_vti
+
+
+def helix_grid(n=17):
+    """v = (-y, x, 1) on [-2, 2]^2 x [0, 4]: linear, so the trilinear grid field is exact."""
+    axis = np.linspace(-2.0, 2.0, n)
+    z = np.linspace(0.0, 4.0, n)
+    zz, yy, xx = np.meshgrid(z, axis, axis, indexing="ij")
+    values = np.stack([-yy, xx, np.ones_like(xx)], axis=-1).astype(np.float32)
+    spacing = (axis[1] - axis[0], axis[1] - axis[0], z[1] - z[0])
+    return values, (-2.0, -2.0, 0.0), spacing
+
+
+def test_version_and_types():
+    assert orthofront.__version__.count(".") == 2
+    values, origin, spacing = helix_grid()
+    field = orthofront.Field(values, origin=origin, spacing=spacing)
+    assert "numpy" in repr(field)
+
+
+def test_stream_surface_from_numpy_is_a_helicoid():
+    values, origin, spacing = helix_grid()
+    field = orthofront.Field(values, origin=origin, spacing=spacing)
+    seed = np.array([[0.5, 0.0, 0.2], [1.5, 0.0, 0.2]])
+    surface = orthofront.stream_surface(field, seed, seed_count=11, edge=0.1, steps=30)
+    assert surface.report["complete"]
+    assert surface.vertices.shape[1] == 3 and len(surface.vertices) > 200
+    assert surface.faces.shape[1] == 4
+    assert surface.quad_count > 0.9 * len(surface.faces)
+    # Rotation about z keeps every stream line on its radius; the seed parameter s gives it.
+    radius = np.hypot(surface.vertices[:, 0], surface.vertices[:, 1])
+    expected = 0.5 + surface.attributes["s"]
+    assert np.max(np.abs(radius - expected)) < 1e-6
+    # dz/dt = 1 along every stream line.
+    assert np.max(np.abs(surface.vertices[:, 2] - 0.2 - surface.attributes["time"])) < 1e-6
+
+
+def test_numpy_field_gives_the_mesh_of_the_same_grid_read_from_a_file(tmp_path, orthofront_binary):
+    values, origin, spacing = helix_grid(9)
+    vti = tmp_path / "helix.vti"
+    write_vti(vti, values, origin, spacing)
+    options = dict(seed_count=8, edge=0.15, steps=20)
+    from_numpy = orthofront.stream_surface(orthofront.Field(values, origin=origin, spacing=spacing),
+                                           "line:0.5,0,0.2:1.5,0,0.2", **options)
+    from_file = orthofront.stream_surface(str(vti), "line:0.5,0,0.2:1.5,0,0.2", **options)
+    assert np.array_equal(from_numpy.vertices, from_file.vertices)
+    assert np.array_equal(from_numpy.faces, from_file.faces)
+    # ... and the command line with the same options writes that mesh too.
+    out = tmp_path / "cli.vtp"
+    run_cli(orthofront_binary, "stream", "--field", vti, "--seed", "line:0.5,0,0.2:1.5,0,0.2",
+            "--seed-count", 8, "--edge", 0.15, "--steps", 20, "--out", out, "--quiet")
+    vertices, faces, attributes = preview.read_mesh(out)
+    assert np.allclose(vertices, from_file.vertices, rtol=0, atol=1e-12)
+    assert np.array_equal(faces, from_file.faces)
+    assert np.allclose(attributes["time"], from_file.attributes["time"], rtol=0, atol=1e-12)
+
+
+def shear_series(steps=6, dt=0.5):
+    """u = (1, t) on [0, 4]^2: linear in t, so path lines are x = x0 + t, y = y0 + t^2/2."""
+    x = np.linspace(0.0, 4.0, 9)
+    y = np.linspace(0.0, 4.0, 9)
+    times = np.arange(steps) * dt
+    values = np.zeros((steps, len(y), len(x), 2), dtype=np.float32)
+    values[..., 0] = 1.0
+    for i, t in enumerate(times):
+        values[i, ..., 1] = t
+    return values, times, (0.0, 0.0), (0.5, 0.5)
+
+
+def test_path_surface_from_a_numpy_series_follows_the_path_lines():
+    values, times, origin, spacing = shear_series()
+    series = orthofront.Series(values, times, origin=origin, spacing=spacing)
+    assert len(series) == 6 and series.times[-1] == 2.5
+    surface = orthofront.path_surface(series, "line:0.2,0.2,0:0.2,0.6,0", t0=0, t1=2,
+                                      seed_count=9, edge=0.1)
+    assert surface.report["complete"] and surface.report["path"]["time_reached"] >= 2 - 1e-9
+    t = surface.attributes["time"]
+    s = surface.attributes["s"]
+    assert np.max(np.abs(surface.vertices[:, 0] - (0.2 + t))) < 1e-6
+    assert np.max(np.abs(surface.vertices[:, 1] - (0.2 + 0.4 * s + 0.5 * t * t))) < 1e-6
+    assert surface.spacetime_vertices.shape == surface.vertices.shape
+    assert np.allclose(surface.spacetime_vertices[:, 2] / surface.report["path"]["time_scale"], t)
+
+
+def test_series_equals_a_glob_of_files_on_the_command_line(tmp_path, orthofront_binary):
+    values, times, origin, spacing = shear_series()
+    for i in range(len(times)):
+        write_vti(tmp_path / ("frame%d.vti" % i), values[i], origin, spacing)
+    series = orthofront.Series(values, times, origin=origin, spacing=spacing)
+    options = dict(t0=0, t1=2, seed_count=9, edge=0.1)
+    from_numpy = orthofront.path_surface(series, "line:0.2,0.2,0:0.2,0.6,0", **options)
+    pattern = str(tmp_path / "frame*.vti") + ":dt=0.5"
+    from_glob = orthofront.path_surface(pattern, "line:0.2,0.2,0:0.2,0.6,0", **options)
+    assert np.array_equal(from_numpy.vertices, from_glob.vertices)
+    assert np.array_equal(from_numpy.faces, from_glob.faces)
+    out = tmp_path / "path.vtp"
+    run_cli(orthofront_binary, "path", "--field", pattern, "--seed", "line:0.2,0.2,0:0.2,0.6,0",
+            "--t0", 0, "--t1", 2, "--seed-count", 9, "--edge", 0.1, "--out", out, "--quiet")
+    vertices, faces, _ = preview.read_mesh(out)
+    assert np.allclose(vertices, from_glob.vertices, rtol=0, atol=1e-12)
+    assert np.array_equal(faces, from_glob.faces)
+
+
+def test_streak_surface_frames_match_the_command_line(tmp_path, orthofront_binary):
+    options = dict(release=(0, 1), frames=[1, 2], edge=0.05)
+    streak = orthofront.streak_surface("double-gyre", "line:0.3,0.3,0:0.3,0.45,0", **options)
+    assert streak.times == [1.0, 2.0] and streak.report["complete"]
+    last = streak[-1]
+    assert "age" in last.attributes and "particle_id" in last.attributes
+    assert np.all(last.attributes["age"] >= -1e-12) and np.all(last.attributes["age"] <= 2 + 1e-12)
+    out = tmp_path / "streak.pvd"
+    run_cli(orthofront_binary, "streak", "--field", "double-gyre", "--seed",
+            "line:0.3,0.3,0:0.3,0.45,0", "--release", "0:1", "--frames", "1,2", "--edge", 0.05,
+            "--out", out, "--quiet")
+    frames = sorted((tmp_path / "streak").glob("*.vtp"))
+    assert len(frames) == 2
+    vertices, faces, _ = preview.read_mesh(frames[-1])
+    assert np.allclose(vertices, last.vertices, rtol=0, atol=1e-12)
+    assert np.array_equal(faces, last.faces)
+
+
+def test_keywords_are_the_command_line_options():
+    with pytest.raises(TypeError, match="--no-such-option"):
+        orthofront.stream_surface("abc", "line:0,0,0:1,0,0", no_such_option=3)
+    with pytest.raises(ValueError, match="mu-mode"):
+        orthofront.stream_surface("abc", "line:0,0,0:1,0,0", mu_mode="sideways")
+    with pytest.raises(ValueError, match="seed-count"):
+        orthofront.stream_surface("abc", "line:0,0,0:1,0,0", seed_count=1)
+    with pytest.raises(TypeError, match="release"):
+        orthofront.streak_surface("double-gyre", "line:0.3,0.3,0:0.3,0.45,0", frames=[1])
+
+
+def test_bad_input_names_what_is_wrong(tmp_path):
+    with pytest.raises(ValueError, match="components"):
+        orthofront.Field(np.zeros((4, 4, 4, 2), dtype=np.float32))
+    with pytest.raises(ValueError, match="spacing"):
+        orthofront.Field(np.zeros((4, 4, 2), dtype=np.float32), spacing=(1, 1, 1))
+    with pytest.raises(ValueError, match="times"):
+        orthofront.Series(np.zeros((3, 4, 4, 2), dtype=np.float32), [0, 1])
+    with pytest.raises(ValueError, match="increasing"):
+        orthofront.Series(np.zeros((2, 4, 4, 2), dtype=np.float32), [1, 0])
+    missing = str(tmp_path / "missing.vti")
+    with pytest.raises((OSError, ValueError), match="missing.vti"):
+        orthofront.Field.open(missing)
+    values, origin, spacing = helix_grid(5)
+    field = orthofront.Field(values, origin=origin, spacing=spacing)
+    with pytest.raises(ValueError, match="outside the domain"):
+        orthofront.stream_surface(field, "line:10,10,10:11,10,10")
+
+
+def test_save_round_trips(tmp_path):
+    values, origin, spacing = helix_grid(9)
+    surface = orthofront.stream_surface(orthofront.Field(values, origin=origin, spacing=spacing),
+                                        "line:0.5,0,0.2:1.5,0,0.2", seed_count=6, edge=0.2,
+                                        steps=10)
+    path = tmp_path / "saved.vtp"
+    surface.save(path)
+    vertices, faces, attributes = preview.read_mesh(path)
+    assert np.array_equal(vertices, surface.vertices)
+    assert np.array_equal(faces, surface.faces)
+    assert np.array_equal(attributes["alpha"], surface.attributes["alpha"])
+
+
+def test_the_build_releases_the_interpreter_lock():
+    values, origin, spacing = helix_grid(17)
+    field = orthofront.Field(values, origin=origin, spacing=spacing)
+    ticks = []
+    done = threading.Event()
+
+    def count():
+        while not done.is_set():
+            ticks.append(1)
+            time.sleep(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    started = time.monotonic()
+    try:
+        orthofront.stream_surface(field, "line:0.3,0,0.1:1.8,0,0.1", seed_count=40, edge=0.003,
+                                  steps=1200)
+    finally:
+        done.set()
+        counter.join()
+    elapsed = time.monotonic() - started
+    assert elapsed > 0.2, "the build was too short to tell"
+    # With the lock held the counter could not run at all during the build.
+    assert len(ticks) > 20
+
+
+def test_ctrl_c_stops_a_build():
+    values, origin, spacing = helix_grid(17)
+    field = orthofront.Field(values, origin=origin, spacing=spacing)
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        # Unbounded in practice: millions of steps at a tiny edge.
+        orthofront.stream_surface(field, "line:0.3,0,0.1:1.8,0,0.1", seed_count=50, edge=0.002,
+                                  steps=1000000, max_vertices=100000000)
+    timer.cancel()
+    assert time.monotonic() - started < 10
