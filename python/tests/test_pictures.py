@@ -8,33 +8,7 @@ import numpy as np
 
 import orthofront
 from orthofront import preview
-from conftest import run_cli
-
-
-def read_png(path):
-    """(height, width, channels) uint8 pixels, read by VTK's PNG reader."""
-    import vtk
-    from vtk.util import numpy_support
-    reader = vtk.vtkPNGReader()
-    reader.SetFileName(str(path))
-    reader.Update()
-    image = reader.GetOutput()
-    width, height, _ = image.GetDimensions()
-    scalars = image.GetPointData().GetScalars()
-    pixels = numpy_support.vtk_to_numpy(scalars).reshape(height, width, -1)
-    return pixels
-
-
-def assert_picture(path, size):
-    """The PNG has `size` (width, height), and it shows something: a good share of pixels
-    differ from the white background and they carry several colours."""
-    assert os.path.isfile(path), path
-    pixels = read_png(path)[..., :3]
-    assert (pixels.shape[1], pixels.shape[0]) == tuple(size)
-    drawn = np.any(pixels < 240, axis=-1)
-    assert drawn.mean() > 0.05, "%s is nearly blank (%.3f drawn)" % (path, drawn.mean())
-    colours = np.unique(pixels[drawn].reshape(-1, 3) // 32, axis=0)
-    assert len(colours) >= 8, "%s has only %d colour classes" % (path, len(colours))
+from conftest import assert_picture, read_png, run_cli
 
 
 def assert_histograms(path):
