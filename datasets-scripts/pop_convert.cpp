@@ -1,6 +1,6 @@
-// orthofront-pop-convert: POP ocean model output (NetCDF-4, read through HDF5) on its curvilinear
-// lon/lat grid and layered depth -> a uniform grid in the project's HDF5 layout, one step per
-// input file. Land (velocity exactly zero, or fill values) becomes NaN (no data). The resampling
+// orthofront-pop-convert: POP ocean model output (NetCDF, read by orthofront's reader) on its
+// curvilinear lon/lat grid and layered depth, or a 2D product of surface currents (--w none
+// --depth none) -> a uniform grid in the project's HDF5 layout, one step per input file. Land (velocity exactly zero, or fill values) becomes NaN (no data). The resampling
 // loss is measured by interpolating the uniform grid back at every original ocean point.
 //
 //   orthofront-pop-convert t.x1_SAMOC_flux.1690*.nc --out pop.h5 [--coords degrees|metres]
@@ -16,8 +16,6 @@
 //     trajectories are again exactly those on the sphere, mapped to the plane.
 // Times: the files in natural order at t = 0, dt, 2 dt, ... (--dt, default 1 with unit "step"),
 // or --times. The files carry no time variable.
-#include <hdf5.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
@@ -41,6 +39,7 @@
 #include "orthofront/field/grid_field.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_layout.h"
+#include "orthofront/io/netcdf_series.h"
 
 namespace fs = std::filesystem;
 using orthofront::Error;
@@ -58,74 +57,46 @@ constexpr double kDegree = M_PI / 180.0;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // ------------------------------------------------------------------------------------------------
-// Reading NetCDF-4 variables through HDF5
+// Reading the model's variables (netCDF-C through orthofront's NetCDF reader: classic, 64-bit
+// offset and NetCDF-4 files; packing, fill and missing values and the valid range applied)
 
 struct Variable {
-  std::vector<hsize_t> dims;
-  std::vector<float> values;  // fill / missing values already NaN
+  std::vector<std::size_t> dims;
+  std::vector<float> values;  // no data already NaN
+  std::string units;
 };
 
-/// Closes an HDF5 handle with the given function when it goes out of scope.
-struct Handle {
-  hid_t id = -1;
-  herr_t (*close)(hid_t) = nullptr;
-  Handle(hid_t i, herr_t (*c)(hid_t)) : id(i), close(c) {}
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  ~Handle() {
-    if (id >= 0 && close != nullptr) close(id);
+/// The variable with leading length-1 dimensions (a time axis of one step) dropped down to
+/// `rank`; FormatError naming the file, the variable and its shape when it does not have `rank`
+/// dimensions then.
+Variable read_variable(const fs::path& path, const std::string& name, std::size_t rank) {
+  orthofront::io::NetcdfVariable v = orthofront::io::read_netcdf_variable(path, name);
+  while (v.shape.size() > rank && v.shape.front() == 1) {
+    v.shape.erase(v.shape.begin());
+    v.dimensions.erase(v.dimensions.begin());
   }
-};
-
-void check_netcdf4(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot read " + path.string());
-  char magic[8] = {};
-  in.read(magic, 8);
-  if (std::string(magic, 3) == "CDF") {
-    throw FormatError(path.string() +
-                      ": NetCDF-3 classic file; this converter reads NetCDF-4 (HDF5) files: "
-                      "convert it first with `nccopy -k nc4 IN.nc OUT.nc` (Debian netcdf-bin)");
+  if (v.shape.size() != rank) {
+    std::string shape;
+    for (std::size_t k = 0; k < v.shape.size(); ++k)
+      shape += (k ? ", " : "") + v.dimensions[k] + " = " + std::to_string(v.shape[k]);
+    throw FormatError(path.string() + ": variable '" + name + "' has dimensions (" + shape +
+                      "); expected " + std::to_string(rank));
   }
-  if (std::string(magic, 8) != std::string("\x89HDF\r\n\x1a\n", 8))
-    throw FormatError(path.string() + ": not a NetCDF-4 / HDF5 file");
+  Variable out;
+  out.dims = v.shape;
+  out.units = v.units;
+  out.values.resize(v.values.size());
+  for (std::size_t p = 0; p < v.values.size(); ++p) {
+    const double x = v.values[p];
+    out.values[p] = std::abs(x) > 1e30 ? kNaN : static_cast<float>(x);  // POP's unflagged fill
+  }
+  return out;
 }
 
-std::optional<float> float_attribute(hid_t dataset, const char* name) {
-  if (H5Aexists(dataset, name) <= 0) return std::nullopt;
-  Handle attribute(H5Aopen(dataset, name, H5P_DEFAULT), H5Aclose);
-  if (attribute.id < 0) return std::nullopt;
-  float value = 0;
-  if (H5Aread(attribute.id, H5T_NATIVE_FLOAT, &value) < 0) return std::nullopt;
-  return value;
-}
-
-Variable read_variable(hid_t file, const fs::path& path, const std::string& name) {
-  if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0)
-    throw FormatError(path.string() + ": no variable '" + name + "'");
-  Handle dataset(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
-  if (dataset.id < 0) throw FormatError(path.string() + ": cannot open variable '" + name + "'");
-  Handle space(H5Dget_space(dataset.id), H5Sclose);
-  const int rank = H5Sget_simple_extent_ndims(space.id);
-  if (rank < 1 || rank > 4) throw FormatError(path.string() + ": variable '" + name + "' has rank " + std::to_string(rank));
-  Variable v;
-  v.dims.resize(static_cast<std::size_t>(rank));
-  H5Sget_simple_extent_dims(space.id, v.dims.data(), nullptr);
-  std::size_t count = 1;
-  for (const hsize_t d : v.dims) count *= static_cast<std::size_t>(d);
-  v.values.resize(count);
-  if (H5Dread(dataset.id, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.values.data()) < 0)
-    throw FormatError(path.string() + ": cannot read variable '" + name + "' as float");
-  const auto fill = float_attribute(dataset.id, "_FillValue");
-  const auto missing = float_attribute(dataset.id, "missing_value");
-  for (float& x : v.values) {
-    if ((fill && x == *fill) || (missing && x == *missing) || std::abs(x) > 1e30f) x = kNaN;
-  }
-  return v;
-}
+bool given(const std::string& name) { return !name.empty() && name != "none"; }
 
 struct PopFile {
-  std::vector<float> u, v, w;  // [k][j][i], cm/s, NaN = fill
+  std::vector<float> u, v, w;  // [k][j][i], in the file's velocity unit, NaN = fill
 };
 
 /// Positions of one variable's samples: a curvilinear lon/lat grid and depth levels.
@@ -136,46 +107,84 @@ struct Layout {
 
 /// POP's B grid: UVEL and VVEL at U points (ULON, ULAT) and layer centres; WVEL at T points (the
 /// centres of the U cells: U(i, j) is the north-east corner of T(i, j)) on the top face of each
-/// layer (w_dep[k]).
+/// layer (w_dep[k]). A 2D product (no depth) has one level and no w.
 struct PopGrid {
   std::size_t ni = 0, nj = 0, nk = 0;
+  bool surface_only = false;  // 2D: u and v only, one level
+  double metres_per_unit = 0.01;  // velocity unit of the files
+  std::string velocity_units;
   Layout uv;  // U points, layer centres
   Layout w;   // T points, layer tops
 };
 
 struct Names {
   std::string u = "UVEL", v = "VVEL", w = "WVEL", lon = "ULON", lat = "ULAT", depth = "w_dep";
+  std::string units;  // overrides the files' velocity units
 };
 
-PopGrid read_grid(const fs::path& path, const Names& names) {
-  check_netcdf4(path);
-  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (file.id < 0) throw IoError("cannot open " + path.string() + " with HDF5");
-  const Variable lon = read_variable(file.id, path, names.lon);
-  const Variable lat = read_variable(file.id, path, names.lat);
-  const Variable depth = read_variable(file.id, path, names.depth);
-  const Variable u = read_variable(file.id, path, names.u);
-  if (u.dims.size() != 3)
-    throw FormatError(path.string() + ": " + names.u + " has rank " + std::to_string(u.dims.size()) + ", expected 3 (k, j, i)");
-  PopGrid g;
-  g.nk = u.dims[0];
-  g.nj = u.dims[1];
-  g.ni = u.dims[2];
-  if (lon.dims.size() != 2 || lon.dims[0] != g.nj || lon.dims[1] != g.ni || lat.dims != lon.dims) {
+/// lon and lat as (j, i) arrays: 2D variables as they are, 1D axes (lon(i), lat(j)) spread out.
+void read_lon_lat(const fs::path& path, const Names& names, PopGrid& g) {
+  const auto rank = orthofront::io::read_netcdf_variable(path, names.lon).shape.size();
+  if (rank == 1) {
+    const Variable lon = read_variable(path, names.lon, 1);
+    const Variable lat = read_variable(path, names.lat, 1);
+    if (lon.dims[0] != g.ni || lat.dims[0] != g.nj)
+      throw FormatError(path.string() + ": " + names.lon + "(" + std::to_string(lon.dims[0]) +
+                        ") and " + names.lat + "(" + std::to_string(lat.dims[0]) +
+                        ") do not match " + names.u + "'s (j, i) = (" + std::to_string(g.nj) +
+                        ", " + std::to_string(g.ni) + ")");
+    for (std::size_t j = 0; j < g.nj; ++j)
+      for (std::size_t i = 0; i < g.ni; ++i) {
+        g.uv.lon.push_back(lon.values[i]);
+        g.uv.lat.push_back(lat.values[j]);
+      }
+    return;
+  }
+  const Variable lon = read_variable(path, names.lon, 2);
+  const Variable lat = read_variable(path, names.lat, 2);
+  if (lon.dims != std::vector<std::size_t>{g.nj, g.ni} || lat.dims != lon.dims)
     throw FormatError(path.string() + ": " + names.lon + "/" + names.lat + " are not (j, i) = (" +
                       std::to_string(g.nj) + ", " + std::to_string(g.ni) + ") like " + names.u);
-  }
-  if (g.ni < 2 || g.nj < 2 || g.nk < 2) throw FormatError(path.string() + ": fewer than 2 points on an axis");
   g.uv.lon.assign(lon.values.begin(), lon.values.end());
   g.uv.lat.assign(lat.values.begin(), lat.values.end());
+}
+
+PopGrid read_grid(const fs::path& path, const Names& names) {
+  PopGrid g;
+  g.surface_only = !given(names.depth);
+  if (g.surface_only == given(names.w))
+    throw InvalidArgument("give both --w and --depth for 3D output, or neither (--w none "
+                          "--depth none) for a 2D product");
+  const Variable u = read_variable(path, names.u, g.surface_only ? 2 : 3);
+  g.nk = g.surface_only ? 1 : u.dims[0];
+  g.nj = u.dims[u.dims.size() - 2];
+  g.ni = u.dims[u.dims.size() - 1];
+  if (g.ni < 2 || g.nj < 2 || (!g.surface_only && g.nk < 2))
+    throw FormatError(path.string() + ": fewer than 2 points on an axis of " + names.u);
+  g.velocity_units = names.units.empty() ? u.units : names.units;
+  if (g.velocity_units.empty()) {
+    g.velocity_units = "cm/s (assumed: " + names.u + " states no units; POP's)";
+  } else if (const auto factor = orthofront::io::metres_per_second(g.velocity_units)) {
+    g.metres_per_unit = *factor;
+  } else {
+    throw FormatError(path.string() + ": " + names.u + " has units '" + g.velocity_units +
+                      "', not a speed (give --units m/s or cm/s if they are)");
+  }
+  read_lon_lat(path, names, g);
   for (std::size_t p = 0; p < g.uv.lon.size(); ++p) {
     if (!std::isfinite(g.uv.lon[p]) || !std::isfinite(g.uv.lat[p]))
       throw FormatError(path.string() + ": " + names.lon + "/" + names.lat + " hold fill values");
     while (g.uv.lon[p] - g.uv.lon[0] > 180.0) g.uv.lon[p] -= 360.0;
     while (g.uv.lon[p] - g.uv.lon[0] < -180.0) g.uv.lon[p] += 360.0;
   }
+  if (g.surface_only) {
+    g.uv.z = {0.0};
+    g.w = g.uv;
+    return g;
+  }
+  const Variable depth = read_variable(path, names.depth, 1);
   const std::size_t nd = depth.values.size();
-  if (depth.dims.size() != 1 || (nd != g.nk && nd != g.nk + 1)) {
+  if (nd != g.nk && nd != g.nk + 1) {
     throw FormatError(path.string() + ": " + names.depth + " has " + std::to_string(nd) +
                       " values; expected " + std::to_string(g.nk) + " layer centres or " +
                       std::to_string(g.nk + 1) + " interfaces");
@@ -212,25 +221,36 @@ PopGrid read_grid(const fs::path& path, const Names& names) {
 }
 
 PopFile read_step(const fs::path& path, const PopGrid& grid, const Names& names) {
-  check_netcdf4(path);
-  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (file.id < 0) throw IoError("cannot open " + path.string() + " with HDF5");
   PopFile step;
-  for (auto [name, target] : {std::pair{&names.u, &step.u}, std::pair{&names.v, &step.v}, std::pair{&names.w, &step.w}}) {
-    Variable v = read_variable(file.id, path, *name);
-    if (v.dims != std::vector<hsize_t>{grid.nk, grid.nj, grid.ni}) {
-      throw FormatError(path.string() + ": " + *name + " is not (k, j, i) = (" + std::to_string(grid.nk) + ", " +
-                        std::to_string(grid.nj) + ", " + std::to_string(grid.ni) + ") like the first file's");
-    }
+  const std::size_t rank = grid.surface_only ? 2 : 3;
+  const std::vector<std::size_t> shape =
+      grid.surface_only ? std::vector<std::size_t>{grid.nj, grid.ni}
+                        : std::vector<std::size_t>{grid.nk, grid.nj, grid.ni};
+  for (auto [name, target] : {std::pair{&names.u, &step.u}, std::pair{&names.v, &step.v},
+                              std::pair{&names.w, &step.w}}) {
+    if (!given(*name)) continue;
+    Variable v = read_variable(path, *name, rank);
+    if (v.dims != shape)
+      throw FormatError(path.string() + ": " + *name + " is not (" +
+                        (grid.surface_only ? "" : "k, ") + "j, i) = (" +
+                        (grid.surface_only ? "" : std::to_string(grid.nk) + ", ") +
+                        std::to_string(grid.nj) + ", " + std::to_string(grid.ni) +
+                        ") like the first file's");
     *target = std::move(v.values);
   }
+  if (grid.surface_only) step.w.assign(step.u.size(), 0.0f);
   // The grid must be the first file's.
-  const Variable lon = read_variable(file.id, path, names.lon);
-  for (std::size_t p = 0; p < lon.values.size(); ++p) {
-    double x = lon.values[p];
+  PopGrid same;
+  same.ni = grid.ni;
+  same.nj = grid.nj;
+  read_lon_lat(path, names, same);
+  for (std::size_t p = 0; p < same.uv.lon.size(); ++p) {
+    double x = same.uv.lon[p];
     while (x - grid.uv.lon[0] > 180.0) x -= 360.0;
     while (x - grid.uv.lon[0] < -180.0) x += 360.0;
-    if (std::abs(x - grid.uv.lon[p]) > 1e-9) throw FormatError(path.string() + ": " + names.lon + " differs from the first file's");
+    if (std::abs(x - grid.uv.lon[p]) > 1e-9 || std::abs(same.uv.lat[p] - grid.uv.lat[p]) > 1e-9)
+      throw FormatError(path.string() + ": " + names.lon + "/" + names.lat +
+                        " differ from the first file's");
   }
   return step;
 }
@@ -240,6 +260,7 @@ PopFile read_step(const fs::path& path, const PopGrid& grid, const Names& names)
 
 struct Mapping {
   bool metres = false;
+  double metres_per_unit = 0.01;  // the files' velocity unit (POP: cm/s)
   double lon_c = 0, lat_c = 0;  // projection centre (metres)
 
   // (lon, lat, z) -> output position
@@ -248,11 +269,12 @@ struct Mapping {
     return Vec3(kEarthRadius * std::cos(lat_c * kDegree) * (lon - lon_c) * kDegree,
                 kEarthRadius * (lat - lat_c) * kDegree, z);
   }
-  // Output velocity per cm/s of (u east, v north, w up) at latitude lat: the diagonal scale.
+  // Output velocity per file unit of (u east, v north, w up) at latitude lat: the diagonal scale.
   Vec3 scale(double lat) const {
     const double cos_lat = std::cos(lat * kDegree);
-    if (!metres) return Vec3(0.01 / (kEarthRadius * cos_lat) / kDegree, 0.01 / kEarthRadius / kDegree, 0.01);
-    return Vec3(0.01 * std::cos(lat_c * kDegree) / cos_lat, 0.01, 0.01);
+    const double f = metres_per_unit;
+    if (!metres) return Vec3(f / (kEarthRadius * cos_lat) / kDegree, f / kEarthRadius / kDegree, f);
+    return Vec3(f * std::cos(lat_c * kDegree) / cos_lat, f, f);
   }
   std::string length_unit() const { return metres ? "m (equirectangular x east, y north; z up)" : "deg (x longitude east, y latitude north), m (z up)"; }
   std::string velocity_unit() const { return metres ? "m/s" : "deg/s (x, y), m/s (z)"; }
@@ -357,7 +379,10 @@ struct Target {
 
   double lon(std::int64_t i) const { return lon_lo + (lon_hi - lon_lo) * static_cast<double>(i) / static_cast<double>(geometry.size[0] - 1); }
   double lat(std::int64_t j) const { return lat_lo + (lat_hi - lat_lo) * static_cast<double>(j) / static_cast<double>(geometry.size[1] - 1); }
-  double z(std::int64_t k) const { return z_bottom + (z_top - z_bottom) * static_cast<double>(k) / static_cast<double>(geometry.size[2] - 1); }
+  double z(std::int64_t k) const {
+    if (geometry.size[2] == 1) return z_top;  // a 2D product: one level
+    return z_bottom + (z_top - z_bottom) * static_cast<double>(k) / static_cast<double>(geometry.size[2] - 1);
+  }
 };
 
 /// Trilinear stencils (bilinear in the curvilinear cell, linear between levels) of every target
@@ -379,7 +404,8 @@ std::vector<Stencil> build_stencils(const Layout& layout, const PopGrid& g, cons
     const double z = target.z(k);
     std::size_t layer = 0;
     while (layer + 2 < g.nk && layout.z[layer + 1] > z) ++layer;
-    const double r = std::clamp((layout.z[layer] - z) / (layout.z[layer] - layout.z[layer + 1]), 0.0, 1.0);
+    const double r = g.nk == 1 ? 0.0
+                               : std::clamp((layout.z[layer] - z) / (layout.z[layer] - layout.z[layer + 1]), 0.0, 1.0);
     for (std::int64_t j = 0; j < geo.size[1]; ++j)
       for (std::int64_t i = 0; i < geo.size[0]; ++i) {
         const auto c = static_cast<std::size_t>(j * geo.size[0] + i);
@@ -408,19 +434,21 @@ Target build_target(const PopGrid& g, const Mapping& map, std::array<std::int64_
   target.lat_hi = *std::max_element(g.uv.lat.begin(), g.uv.lat.end());
   target.z_top = g.uv.z.front();
   target.z_bottom = g.uv.z.back();
-  if (resolution[2] == 0) {
+  if (g.surface_only) {
+    resolution[2] = 1;
+  } else if (resolution[2] == 0) {
     double finest = INFINITY;
     for (std::size_t k = 1; k < g.nk; ++k) finest = std::min(finest, g.uv.z[k - 1] - g.uv.z[k]);
     resolution[2] = static_cast<std::int64_t>(std::ceil((target.z_top - target.z_bottom) / finest)) + 1;
   }
   GridGeometry& geo = target.geometry;
-  geo.dimension = 3;
+  geo.dimension = g.surface_only ? 2 : 3;
   geo.size = resolution;
   // Uniform in (lon, lat, z); the mapping is affine per axis, so also uniform in the output.
   const Vec3 lo = map.position(target.lon_lo, target.lat_lo, target.z_bottom);
   const Vec3 hi = map.position(target.lon_hi, target.lat_hi, target.z_top);
   geo.origin = lo;
-  for (int a = 0; a < 3; ++a)
+  for (int a = 0; a < geo.dimension; ++a)
     geo.spacing[a] = (hi[a] - lo[a]) / static_cast<double>(resolution[static_cast<std::size_t>(a)] - 1);
   target.uv = build_stencils(g.uv, g, target, false);
   target.w = build_stencils(g.w, g, target, true);
@@ -444,7 +472,7 @@ Source source_samples(const PopGrid& g, const PopFile& f, const Mapping& map) {
       for (std::size_t i = 0; i < g.ni; ++i) {
         const std::size_t p = (k * g.nj + j) * g.ni + i;
         const double u = f.u[p], v = f.v[p];
-        src.w[p] = std::isfinite(f.w[p]) ? 0.01 * f.w[p] : NAN;
+        src.w[p] = std::isfinite(f.w[p]) ? map.metres_per_unit * f.w[p] : NAN;
         if (!std::isfinite(u) || !std::isfinite(v) || (u == 0 && v == 0)) {
           src.u[p] = NAN;
           src.v[p] = NAN;
@@ -458,7 +486,8 @@ Source source_samples(const PopGrid& g, const PopFile& f, const Mapping& map) {
   return src;
 }
 
-void resample(const Target& target, const Source& src, std::vector<float>& values) {
+void resample(const Target& target, const Source& src, int components, std::vector<float>& values) {
+  const auto nc = static_cast<std::size_t>(components);
   for (std::size_t p = 0; p < target.uv.size(); ++p) {
     const Stencil& a = target.uv[p];
     const Stencil& b = target.w[p];
@@ -475,9 +504,9 @@ void resample(const Target& target, const Source& src, std::vector<float>& value
       ok = std::isfinite(s);
       w += b.weight[static_cast<std::size_t>(c)] * s;
     }
-    values[3 * p] = ok ? static_cast<float>(u) : kNaN;
-    values[3 * p + 1] = ok ? static_cast<float>(v) : kNaN;
-    values[3 * p + 2] = ok ? static_cast<float>(w) : kNaN;
+    values[nc * p] = ok ? static_cast<float>(u) : kNaN;
+    values[nc * p + 1] = ok ? static_cast<float>(v) : kNaN;
+    if (nc == 3) values[nc * p + 2] = ok ? static_cast<float>(w) : kNaN;
   }
 }
 
@@ -505,11 +534,12 @@ Loss measure_loss(const PopGrid& g, const PopFile& f, const Mapping& map, const 
                   const std::vector<float>& values) {
   auto grid = std::make_shared<VectorGrid>();
   grid->geometry = geometry;
-  grid->components = 3;
+  grid->components = geometry.dimension;
   grid->values = values;
   orthofront::GridFieldOptions options;
   options.zero_is_no_data = false;
   const orthofront::GridField field(grid, options);
+  const double to_cm = 100.0 * map.metres_per_unit;  // differences are stated in cm/s
   Loss loss;
   for (std::size_t k = 0; k < g.nk; ++k)
     for (std::size_t j = 0; j < g.nj; ++j)
@@ -522,10 +552,10 @@ Loss measure_loss(const PopGrid& g, const PopFile& f, const Mapping& map, const 
         if (ocean) {
           Error2& e = loss.horizontal;
           ++e.samples;
-          e.max_value = std::max(e.max_value, std::hypot(u, v));
+          e.max_value = std::max(e.max_value, to_cm * std::hypot(u, v));
           if (field.velocity(map.position(g.uv.lon[c], g.uv.lat[c], g.uv.z[k]), back) == orthofront::FieldStatus::inside) {
-            const Vec3 cm = back.cwiseQuotient(map.scale(g.uv.lat[c]));
-            const double d = std::hypot(cm[0] - u, cm[1] - v);
+            const Vec3 unit = back.cwiseQuotient(map.scale(g.uv.lat[c]));  // the file's unit
+            const double d = to_cm * std::hypot(unit[0] - u, unit[1] - v);
             ++e.compared;
             e.max = std::max(e.max, d);
             e.sum += d;
@@ -534,9 +564,9 @@ Loss measure_loss(const PopGrid& g, const PopFile& f, const Mapping& map, const 
         if (std::isfinite(w) && w != 0.0) {
           Error2& e = loss.vertical;
           ++e.samples;
-          e.max_value = std::max(e.max_value, std::abs(w));
+          e.max_value = std::max(e.max_value, to_cm * std::abs(w));
           if (field.velocity(map.position(g.w.lon[c], g.w.lat[c], g.w.z[k]), back) == orthofront::FieldStatus::inside) {
-            const double d = std::abs(100.0 * back[2] - w);
+            const double d = std::abs(100.0 * back[2] - to_cm * w);
             ++e.compared;
             e.max = std::max(e.max, d);
             e.sum += d;
@@ -567,9 +597,11 @@ std::array<std::int64_t, 3> parse_resolution(const std::string& text, const PopG
     return {2 * static_cast<std::int64_t>(g.ni - 1) + 1, 2 * static_cast<std::int64_t>(g.nj - 1) + 1, 0};
   std::array<std::int64_t, 3> n{};
   std::size_t start = 0;
-  for (std::size_t a = 0; a < 3; ++a) {
+  const bool two = std::count(text.begin(), text.end(), ',') == 1;  // NX,NY: NZ chosen (or 2D)
+  for (std::size_t a = 0; a < (two ? 2u : 3u); ++a) {
     const std::size_t comma = text.find(',', start);
-    if ((a < 2) == (comma == std::string::npos)) throw InvalidArgument("--resolution '" + text + "' must be NX,NY,NZ");
+    if ((a + 1 < (two ? 2u : 3u)) == (comma == std::string::npos))
+      throw InvalidArgument("--resolution '" + text + "' must be NX,NY or NX,NY,NZ");
     const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     const auto r = std::from_chars(part.data(), part.data() + part.size(), n[a]);
     if (r.ec != std::errc() || r.ptr != part.data() + part.size() || n[a] < 2)
@@ -588,8 +620,10 @@ int run(const Args& args) {
     throw InvalidArgument("--coords '" + args.coords + "' must be degrees or metres");
 
   const PopGrid grid = read_grid(files.front(), args.names);
+  const int components = grid.surface_only ? 2 : 3;
   Mapping map;
   map.metres = args.coords != "degrees";
+  map.metres_per_unit = grid.metres_per_unit;
   if (map.metres) {
     const auto [lon_lo, lon_hi] = std::minmax_element(grid.uv.lon.begin(), grid.uv.lon.end());
     const auto [lat_lo, lat_hi] = std::minmax_element(grid.uv.lat.begin(), grid.uv.lat.end());
@@ -621,13 +655,14 @@ int run(const Args& args) {
   options.units.velocity = map.velocity_unit();
   options.units.time = !args.time_unit.empty() ? args.time_unit : (args.times.empty() && args.dt == 1.0 ? "step" : "s");
   options.zero_is_no_data = true;
-  orthofront::io::Hdf5SeriesWriter writer(args.out, geo, 3, times, options);
+  orthofront::io::Hdf5SeriesWriter writer(args.out, geo, components, times, options);
 
   nlohmann::json report;
   report["inputs"] = files;
   report["output"] = args.out;
   report["coords"] = map.metres ? "metres" : "degrees";
   report["source_grid"] = {grid.ni, grid.nj, grid.nk};
+  report["velocity_units"] = grid.velocity_units;
   report["target_grid"] = {geo.size[0], geo.size[1], geo.size[2]};
   report["origin"] = {geo.origin[0], geo.origin[1], geo.origin[2]};
   report["spacing"] = {geo.spacing[0], geo.spacing[1], geo.spacing[2]};
@@ -639,23 +674,25 @@ int run(const Args& args) {
                           {"relative_max", e.max_value > 0 ? e.max / e.max_value : 0.0}};
   };
   if (!args.quiet) {
-    std::cout << "POP " << grid.ni << " x " << grid.nj << " x " << grid.nk
-              << " (B grid: u, v at U points and layer centres, w at T points and layer tops) -> uniform "
+    std::cout << (grid.surface_only ? "2D product " : "POP ") << grid.ni << " x " << grid.nj << " x " << grid.nk
+              << (grid.surface_only ? " (u, v in " + grid.velocity_units + ") -> uniform "
+                                    : " (B grid: u, v at U points and layer centres, w at T points and layer tops; " +
+                                          grid.velocity_units + ") -> uniform ")
               << geo.size[0] << " x " << geo.size[1] << " x " << geo.size[2] << " in "
               << report["coords"].get<std::string>() << "; land (u = v = 0 or fill) -> NaN\n"
               << "resampling loss: the uniform grid interpolated back at the original samples (cm/s)\n"
               << "  step  file                          |d(u,v)| max     mean    (max |(u,v)|)   |dw| max       mean\n";
   }
   Loss total;
-  std::vector<float> values(geo.point_count() * 3);
+  std::vector<float> values(geo.point_count() * static_cast<std::size_t>(components));
   for (std::size_t s = 0; s < files.size(); ++s) {
     const PopFile step = read_step(files[s], grid, args.names);
     const Source source = source_samples(grid, step, map);
-    resample(target, source, values);
+    resample(target, source, components, values);
     writer.write_step(values);
     const Loss loss = measure_loss(grid, step, map, geo, values);
     std::size_t nan = 0;
-    for (std::size_t p = 0; p < geo.point_count(); ++p) nan += std::isnan(values[3 * p]) ? 1 : 0;
+    for (std::size_t p = 0; p < geo.point_count(); ++p) nan += std::isnan(values[static_cast<std::size_t>(components) * p]) ? 1 : 0;
     report["steps"].push_back({{"file", files[s]}, {"time", times[s]}, {"source_land_points", source.land},
                                {"target_nan_points", nan}, {"horizontal", error_json(loss.horizontal)},
                                {"vertical", error_json(loss.vertical)}});
@@ -696,9 +733,10 @@ int run(const Args& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"POP ocean output (NetCDF-4) -> uniform grid in the orthofront HDF5 layout"};
+  CLI::App app{"POP ocean output, or a 2D lon/lat product of surface currents (NetCDF: classic, "
+               "64-bit offset or NetCDF-4) -> uniform grid in the orthofront HDF5 layout"};
   Args args;
-  app.add_option("inputs", args.inputs, "POP NetCDF-4 files, one per time step (natural order)")->required();
+  app.add_option("inputs", args.inputs, "NetCDF files, one per time step (natural order)")->required();
   app.add_option("--out", args.out, "Output .h5 (with .xmf sidecar)")->required();
   app.add_option("--coords", args.coords, "degrees (lon, lat, z m; deg/s) or metres (equirectangular, m/s)")
       ->capture_default_str();
@@ -713,15 +751,19 @@ int main(int argc, char** argv) {
   app.add_option("--report", args.report, "Write the loss report as JSON here");
   app.add_option("--u", args.names.u, "Variable of the eastward velocity")->capture_default_str();
   app.add_option("--v", args.names.v, "Variable of the northward velocity")->capture_default_str();
-  app.add_option("--w", args.names.w, "Variable of the upward velocity")->capture_default_str();
-  app.add_option("--lon", args.names.lon, "Longitude variable (j, i)")->capture_default_str();
-  app.add_option("--lat", args.names.lat, "Latitude variable (j, i)")->capture_default_str();
-  app.add_option("--depth", args.names.depth, "Depth variable: layer interfaces (nk + 1) or centres (nk)")
+  app.add_option("--w", args.names.w, "Variable of the upward velocity (none: a 2D product, with --depth none)")
       ->capture_default_str();
+  app.add_option("--lon", args.names.lon, "Longitude variable: (j, i), or an axis lon(i)")->capture_default_str();
+  app.add_option("--lat", args.names.lat, "Latitude variable: (j, i), or an axis lat(j)")->capture_default_str();
+  app.add_option("--depth", args.names.depth,
+                 "Depth variable: layer interfaces (nk + 1) or centres (nk); none: a 2D product (u, v only)")
+      ->capture_default_str();
+  app.add_option("--units", args.names.units,
+                 "Velocity units of the files when their `units` attribute is absent or wrong (m/s, cm/s); "
+                 "default: the attribute, or POP's cm/s when there is none");
   app.add_flag("--quiet", args.quiet, "No report on stdout");
   try {
     app.parse(argc, argv);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by us
     return run(args);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);

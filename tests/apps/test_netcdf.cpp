@@ -6,9 +6,11 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -374,3 +376,68 @@ TEST_CASE("NetCDF: bad files and names get messages naming the file and the valu
                     Catch::Contains("variable 'v' has dimension 'lon' of length 4 where") &&
                         Catch::Contains("has 'lat' of length 4"));
 }
+
+#ifdef ORTHOFRONT_POP_CONVERT  // builds that read NetCDF
+TEST_CASE("NetCDF: the model converter takes a 2D product of daily NetCDF-3 files",
+          "[apps][netcdf][pop]") {
+  TempDir dir;
+  const fs::path days = write_days(dir);
+  const fs::path out = dir / "surface.h5";
+  const fs::path report = dir / "loss.json";
+  const std::string command =
+      cli_test::quoted(fs::path(ORTHOFRONT_POP_CONVERT)) + " " +
+      cli_test::quoted(days / "day1.nc") + " " + cli_test::quoted(days / "day2.nc") + " " +
+      cli_test::quoted(days / "day10.nc") +
+      " --u uo --v vo --w none --depth none --lon lon --lat lat --dt 86400 --out " +
+      cli_test::quoted(out) + " --report " + cli_test::quoted(report) + " > " +
+      cli_test::quoted(dir / "log.txt") + " 2>&1";
+  INFO(command);
+  REQUIRE(std::system(command.c_str()) == 0);
+  CHECK_THAT(read_text(dir / "log.txt"), Catch::Matchers::Contains("2D product 41 x 41 x 1"));
+
+  orthofront::io::Hdf5ReadOptions options;
+  const auto series = orthofront::io::open_hdf5_series(out, "/", options);
+  REQUIRE(series->step_count() == 3);
+  CHECK(series->time(2) == 2 * 86400.0);
+  CHECK(series->components() == 2);
+  const orthofront::GridGeometry& g = series->geometry();
+  CHECK(g.dimension == 2);
+  CHECK(g.size[0] == 81);  // twice the cells: every source point is a sample
+  CHECK(g.size[1] == 81);
+  CHECK(g.origin.x() == Approx(10));
+  CHECK(g.origin.y() == Approx(-10));
+  std::vector<float> values(series->step_floats());
+  series->read(1, values);
+  constexpr double kPopRadius = 6.37122e6;  // the converter's (POP's) sphere
+  for (std::int64_t j = 0; j < 81; j += 4)
+    for (std::int64_t i = 0; i < 81; i += 4) {
+      const double lon = 10 + 0.25 * static_cast<double>(i),
+                   lat = -10 + 0.25 * static_cast<double>(j);
+      const float* v = values.data() + 2 * g.index(i, j, 0);
+      INFO("lon " << lon << " lat " << lat);
+      // Land and the cells touching it have no data; elsewhere u / (R cos lat) in deg/s.
+      if (lon >= 23.5 && lon <= 27.5 && lat >= -6.5 && lat <= -2.5) {
+        if (land(lon, lat)) CHECK(std::isnan(v[0]));
+        continue;
+      }
+      CHECK(v[0] == Approx(kEast * kDeg / (kPopRadius * std::cos(lat / kDeg))).epsilon(1e-5));
+      CHECK(v[1] == 0.0f);
+    }
+  std::ifstream in(report);
+  const nlohmann::json loss = nlohmann::json::parse(in);
+  CHECK(loss["velocity_units"] == "m s-1");
+  CHECK(loss["loss"]["horizontal"]["relative_max"].get<double>() < 1e-5);
+  CHECK(loss["loss"]["vertical"]["samples"].get<std::size_t>() == 0);
+
+  // A 3D layout asked of a 2D product names the variable and its shape.
+  const std::string wrong = cli_test::quoted(fs::path(ORTHOFRONT_POP_CONVERT)) + " " +
+                            cli_test::quoted(days / "day1.nc") +
+                            " --u uo --v vo --w wo --depth depth --lon lon --lat lat --out " +
+                            cli_test::quoted(dir / "x.h5") + " > " +
+                            cli_test::quoted(dir / "wrong.txt") + " 2>&1";
+  CHECK(std::system(wrong.c_str()) != 0);
+  CHECK_THAT(read_text(dir / "wrong.txt"),
+             Catch::Matchers::Contains("day1.nc") && Catch::Matchers::Contains("uo"));
+  CHECK_FALSE(fs::exists(dir / "x.h5"));
+}
+#endif

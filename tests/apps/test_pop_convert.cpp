@@ -13,6 +13,7 @@
 using Catch::Matchers::Contains;
 using namespace grid_test;
 
+#ifdef ORTHOFRONT_POP_CONVERT  // builds that read NetCDF
 TEST_CASE("pop-convert: the six POP steps become a uniform HDF5 series with land as NaN",
           "[apps][pop][realdata]") {
   const fs::path data = datasets_dir("pop-southern-ocean");
@@ -78,3 +79,5 @@ TEST_CASE("pop-convert: the six POP steps become a uniform HDF5 series with land
   CHECK(h["mean_cm_s"].get<double>() < 0.05);
   CHECK(report["loss"]["vertical"]["relative_max"].get<double>() < 0.1);
 }
+#endif
+

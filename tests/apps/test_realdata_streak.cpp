@@ -82,6 +82,7 @@ TEST_CASE("a streak surface through the 10 tornado steps", "[apps][streak][reald
                9);
 }
 
+#ifdef ORTHOFRONT_POP_CONVERT  // builds that read NetCDF
 TEST_CASE("a streak surface through the 6 POP steps, land as no data", "[apps][streak][realdata]") {
   const fs::path data = fs::path(ORTHOFRONT_DATASETS_DIR) / "pop-southern-ocean";
   if (!fs::exists(data)) {
@@ -99,3 +100,4 @@ TEST_CASE("a streak surface through the 6 POP steps, land as no data", "[apps][s
                "--edge 0.3 --cache-budget 128MiB",
                5);
 }
+#endif

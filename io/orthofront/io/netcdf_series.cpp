@@ -297,17 +297,18 @@ TimeUnits parse_time_units(const std::string& units, Calendar calendar, const st
 // ---- Velocity units -------------------------------------------------------------------------
 
 // Metres per second per unit of the file's velocity, or nullopt when the units are not a speed.
-std::optional<double> metres_per_second(const std::string& units) {
+std::optional<double> speed_unit(const std::string& units) {
   std::string u = lower(trim(units));
   std::string compact;
   for (const char c : u)
     if (c != ' ' && c != '*' && c != '^' && c != '.') compact += c;
   static const char* const kMetres[] = {
-      "m/s",           "ms-1",           "msec-1",          "meter/second",
+      "m/s",           "ms-1",           "msec-1",          "meter/second",  "meter/s", "metre/s",
       "meters/second", "metre/second",   "metres/second",   "meters/sec",
       "metersecond-1", "meterssecond-1", "metrespersecond", "meterspersecond"};
-  static const char* const kCentimetres[] = {"cm/s", "cms-1", "centimeter/second",
-                                             "centimeters/second", "centimetre/second"};
+  static const char* const kCentimetres[] = {
+      "cm/s",           "cms-1",    "centimeter/second", "centimeters/second",
+      "centimetre/second", "centimeter/s", "centimetre/s", "cm/sec"};
   for (const char* m : kMetres)
     if (compact == m) return 1.0;
   for (const char* m : kCentimetres)
@@ -661,7 +662,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
   coordinates[1] = ay.coordinates;
   if (d == 3) coordinates[2] = axes_[0].coordinates;
   if (lonlat_) {
-    const std::optional<double> factor = metres_per_second(description_.velocity_units);
+    const std::optional<double> factor = speed_unit(description_.velocity_units);
     if (!factor)
       throw FormatError("'" + f.path().string() + "': variable '" + variables_[0] +
                         "' has units '" + description_.velocity_units +
@@ -945,6 +946,37 @@ NetcdfOptions parse_netcdf_selector(const std::string& selector) {
 std::unique_ptr<TimeSeries> open_netcdf_series(const std::vector<std::filesystem::path>& files,
                                                const NetcdfOptions& options) {
   return std::make_unique<NetcdfSeries>(files, options);
+}
+
+std::optional<double> metres_per_second(const std::string& units) { return speed_unit(units); }
+
+NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std::string& name,
+                                    std::size_t max_values) {
+  const NcFile f(file);
+  const std::optional<int> v = f.variable(name);
+  if (!v) {
+    std::string names;
+    for (const std::string& n : f.variable_names()) names += (names.empty() ? "" : ", ") + n;
+    throw FormatError("'" + file.string() + "': no variable '" + name + "' (the file has: " +
+                      names + ")");
+  }
+  NetcdfVariable out;
+  std::size_t count = 1;
+  for (const int d : f.dimensions(*v)) {
+    out.dimensions.push_back(f.dimension_name(d));
+    out.shape.push_back(f.dimension_length(d));
+    if (out.shape.back() != 0 && count > max_values / out.shape.back())
+      throw FormatError("'" + file.string() + "': variable '" + name + "' holds more than " +
+                        std::to_string(max_values) + " values");
+    count *= out.shape.back();
+  }
+  out.values = f.read_all(*v, count);
+  const NoDataRules rules = no_data_rules(f, *v);
+  for (double& x : out.values)
+    x = rules.is_no_data(x) ? std::numeric_limits<double>::quiet_NaN()
+                            : x * rules.scale + rules.offset;
+  out.units = f.text(*v, "units");
+  return out;
 }
 
 const NetcdfDescription* netcdf_description(const TimeSeries& series) {

@@ -7,6 +7,7 @@
 /// with velocities in m/s (see LonLatMetric).
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,5 +69,25 @@ std::unique_ptr<TimeSeries> open_netcdf_series(const std::vector<std::filesystem
 
 /// The description of a series opened by open_netcdf_series (nullptr for other series).
 const NetcdfDescription* netcdf_description(const TimeSeries& series);
+
+/// One whole variable of a NetCDF file, unpacked: scale_factor / add_offset applied, and
+/// _FillValue, missing_value and values outside valid_min / valid_max / valid_range NaN (the
+/// rules of the series above), for readers of layouts other than CF grids (curvilinear models).
+struct NetcdfVariable {
+  std::vector<std::string> dimensions;  ///< names, slowest first
+  std::vector<std::size_t> shape;       ///< lengths, slowest first
+  std::vector<double> values;
+  std::string units;                    ///< the `units` attribute ("" when absent)
+};
+
+/// Reads variable `name` of `file` (classic, 64-bit offset, CDF5 or NetCDF-4). Throws IoError for
+/// a missing file, FormatError naming the file and the variable when it is absent (listing the
+/// variables there) or holds more than `max_values` values.
+NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std::string& name,
+                                    std::size_t max_values = std::size_t{1} << 31);
+
+/// Metres per second per unit of a velocity `units` attribute ("m/s", "m s-1", "cm/s", ...), or
+/// nullopt when it is not a speed.
+std::optional<double> metres_per_second(const std::string& units);
 
 }  // namespace orthofront::io
