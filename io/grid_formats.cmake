@@ -1,8 +1,10 @@
 # Vector-grid readers and writers of real data formats (.vec, AmiraMesh, NRRD, VTK XML ImageData,
 # legacy VTK, ParaView collections), their shared helpers and the file-per-step time series.
 find_package(ZLIB REQUIRED)
+find_package(BZip2 REQUIRED)  # NRRD's bzip2 encoding
 target_sources(orthofront_io PRIVATE
   orthofront/io/zlib_codec.cpp
+  orthofront/io/bzip2_codec.cpp
   orthofront/io/vtk_xml.cpp
   orthofront/io/grid_decode.cpp
   orthofront/io/vec_reader.cpp
@@ -13,7 +15,7 @@ target_sources(orthofront_io PRIVATE
   orthofront/io/grid_file.cpp
   orthofront/io/grid_series.cpp
 )
-target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB)
+target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB BZip2::BZip2)
 
 # OpenVDB: sparse vector grids (reader, writer, time series) and the field that samples them.
 target_sources(orthofront_io PRIVATE

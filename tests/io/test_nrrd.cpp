@@ -1,4 +1,4 @@
-// NRRD reader: raw in both byte orders, gzip, ascii, detached data, component axis placement,
+// NRRD reader: raw in both byte orders, gzip, bzip2, hex, ascii, detached data, component axis placement,
 // geometry fields; bad files rejected; the square-cylinder data.
 #include <cmath>
 
@@ -6,6 +6,7 @@
 #include "io/hostile_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/nrrd_reader.h"
+#include "orthofront/io/bzip2_codec.h"
 #include "orthofront/io/zlib_codec.h"
 
 using Catch::Matchers::Contains;
@@ -50,6 +51,31 @@ TEST_CASE("nrrd: synthetic files read back exactly", "[nrrd]") {
     write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: gzip\n\n" +
                                    orthofront::io::detail::gzip_deflate(
                                        float_bytes(expected.values, true)));
+    check(read_nrrd(dir / "a.nrrd"));
+  }
+  SECTION("bzip2 (libbz2), also as two concatenated streams") {
+    const std::string bytes = float_bytes(expected.values, true);
+    write_file(dir / "a.nrrd", kHeader3D + "endian: little\nencoding: bzip2\n\n" +
+                                   orthofront::io::detail::bzip2_compress(bytes));
+    check(read_nrrd(dir / "a.nrrd"));
+    const std::size_t half = bytes.size() / 2;
+    write_file(dir / "b.nrrd",
+               kHeader3D + "endian: little\nencoding: bz2\n\n" +
+                   orthofront::io::detail::bzip2_compress(bytes.substr(0, half), 1) +
+                   orthofront::io::detail::bzip2_compress(bytes.substr(half), 1));
+    check(read_nrrd(dir / "b.nrrd"));
+  }
+  SECTION("hex, with line breaks") {
+    const std::string bytes = float_bytes(expected.values, false);
+    std::string hex;
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+      static const char* const kDigits = "0123456789abcdef";
+      const auto b = static_cast<unsigned char>(bytes[i]);
+      hex += kDigits[b >> 4];
+      hex += kDigits[b & 15];
+      if (i % 32 == 31) hex += '\n';
+    }
+    write_file(dir / "a.nrrd", kHeader3D + "endian: big\nencoding: hex\n\n" + hex);
     check(read_nrrd(dir / "a.nrrd"));
   }
   SECTION("zlib stream under the gzip name") {
@@ -144,6 +170,32 @@ TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]"
     CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "byte.nrrd"); }),
                Contains("byte.nrrd") && Contains("holds 721 data bytes") && Contains("need 720"));
   }
+  SECTION("bad bzip2 and hex data") {
+    const std::string bz = orthofront::io::detail::bzip2_compress(data);
+    write_file(dir / "short.nrrd", kHeader3D + "endian: little\nencoding: bzip2\n\n" +
+                                       bz.substr(0, bz.size() / 2));
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "short.nrrd"); }),
+               Contains("short.nrrd") && Contains("bzip2"));
+    std::string corrupt = bz;
+    for (std::size_t i = 10; i < 40; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5a);
+    write_file(dir / "corrupt.nrrd", kHeader3D + "endian: little\nencoding: bzip2\n\n" + corrupt);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "corrupt.nrrd"); }),
+               Contains("corrupt.nrrd") && Contains("bzip2"));
+    // More data than the sizes describe: stopped at the sizes, not read to the end.
+    std::string header = kHeader3D;
+    header.replace(header.find("sizes: 3 5 4 3"), 14, "sizes: 3 5 4 2");
+    write_file(dir / "long.nrrd", header + "endian: little\nencoding: bzip2\n\n" + bz);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "long.nrrd"); }),
+               Contains("long.nrrd") && Contains("more than the 480 bytes"));
+    write_file(dir / "hex.nrrd", kHeader3D + "endian: little\nencoding: hex\n\n" +
+                                     std::string(2 * data.size() - 2, '0') + "zz");
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "hex.nrrd"); }),
+               Contains("hex.nrrd") && Contains("bad hex character 'z'"));
+    write_file(dir / "hexshort.nrrd",
+               kHeader3D + "endian: little\nencoding: hex\n\n" + std::string(100, 'a'));
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "hexshort.nrrd"); }),
+               Contains("hexshort.nrrd") && Contains("truncated"));
+  }
   SECTION("truncated gzip data") {
     const std::string gz = orthofront::io::detail::gzip_deflate(data);
     write_file(dir / "short.nrrd",
@@ -169,9 +221,9 @@ TEST_CASE("nrrd: bad files are rejected naming the file and the value", "[nrrd]"
                Contains("four.nrrd") && Contains("non-vector data") && Contains("size 4"));
   }
   SECTION("unsupported encoding") {
-    write_file(dir / "bz.nrrd", kHeader3D + "endian: little\nencoding: bzip2\n\n" + data);
-    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "bz.nrrd"); }),
-               Contains("bz.nrrd") && Contains("unsupported encoding 'bzip2'"));
+    write_file(dir / "zz.nrrd", kHeader3D + "endian: little\nencoding: zstd\n\n" + data);
+    CHECK_THAT(thrown<FormatError>([&] { read_nrrd(dir / "zz.nrrd"); }),
+               Contains("zz.nrrd") && Contains("unsupported encoding 'zstd'"));
   }
   SECTION("no endian for a multi-byte type") {
     write_file(dir / "end.nrrd", kHeader3D + "encoding: raw\n\n" + data);

@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "orthofront/io/bzip2_codec.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/number_text.h"
@@ -340,10 +341,12 @@ class NrrdParser {
     if (encoding.empty()) throw error("no 'encoding' field in the header");
     for (char& c : encoding) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (encoding == "gz") encoding = "gzip";
+    if (encoding == "bz2") encoding = "bzip2";
     if (encoding == "txt" || encoding == "text") encoding = "ascii";
-    if (encoding != "raw" && encoding != "gzip" && encoding != "ascii") {
+    if (encoding != "raw" && encoding != "gzip" && encoding != "bzip2" && encoding != "hex" &&
+        encoding != "ascii") {
       throw error("unsupported encoding '" + field("encoding") +
-                  "' (raw, gzip and ascii are supported)");
+                  "' (raw, gzip, bzip2, hex and ascii are supported)");
     }
     const std::size_t scalar = detail::scalar_size(*type);
     bool little = true;
@@ -425,7 +428,46 @@ class NrrdParser {
       return;
     }
     std::string inflated;
-    if (encoding == "gzip") {
+    if (encoding == "hex") {
+      // Two hex digits a byte, whitespace anywhere between them.
+      if (data.size() < 2 * bytes)
+        throw error("truncated: " + data_name + " holds " + std::to_string(data.size()) +
+                    " characters, too few for the " + std::to_string(bytes) +
+                    " hex bytes of sizes " + field("sizes") + " of " + field("type"));
+      inflated.reserve(bytes);
+      int high = -1;
+      for (const char c : data) {
+        if (std::isspace(static_cast<unsigned char>(c))) continue;
+        int digit = -1;
+        if (c >= '0' && c <= '9') digit = c - '0';
+        if (c >= 'a' && c <= 'f') digit = c - 'a' + 10;
+        if (c >= 'A' && c <= 'F') digit = c - 'A' + 10;
+        if (digit < 0) throw error("bad hex character '" + std::string(1, c) + "' in the data");
+        if (high < 0) {
+          high = digit;
+          continue;
+        }
+        if (inflated.size() == bytes)
+          throw error(data_name + " holds more hex bytes than sizes " + field("sizes") + " of " +
+                      field("type") + " need (" + std::to_string(bytes) + ")");
+        inflated.push_back(static_cast<char>(high * 16 + digit));
+        high = -1;
+      }
+      if (inflated.size() < bytes || high >= 0)
+        throw error("truncated: the hex data holds " + std::to_string(inflated.size()) +
+                    " bytes; sizes " + field("sizes") + " of " + field("type") + " need " +
+                    std::to_string(bytes));
+      data = inflated;
+    } else if (encoding == "bzip2") {
+      if (byte_skip > 0)
+        data.remove_prefix(std::min<std::size_t>(data.size(), static_cast<std::size_t>(byte_skip)));
+      inflated = detail::bzip2_decompress(data, data_name + ": bzip2 data", bytes);
+      data = inflated;
+      if (data.size() < bytes)
+        throw error("truncated: the bzip2 data holds " + std::to_string(data.size()) +
+                    " bytes; sizes " + field("sizes") + " of " + field("type") + " need " +
+                    std::to_string(bytes));
+    } else if (encoding == "gzip") {
       if (byte_skip > 0) data.remove_prefix(std::min<std::size_t>(data.size(), static_cast<std::size_t>(byte_skip)));
       // Deflate expands at most 1032:1: fewer compressed bytes cannot hold the grid.
       if (static_cast<double>(data.size()) * 1032.0 < static_cast<double>(bytes))

@@ -4,7 +4,8 @@
 /// space direction, or a NaN spacing; the first axis when nothing says otherwise), the others
 /// are 2 or 3 spatial axes. Geometry from `space directions` (axis-aligned) or `spacings`, and
 /// `space origin` or `axis mins` (with `centers`). Types int8..uint64, float, double; encodings
-/// raw, gzip (zlib) and ascii; `endian`; `byte skip` (-1 with raw), `line skip`.
+/// raw, gzip (zlib), bzip2 (libbz2), hex and ascii; `endian`; `byte skip` (-1 with raw),
+/// `line skip`.
 #include <filesystem>
 #include <string>
 #include <string_view>
