@@ -12,7 +12,8 @@ namespace orthofront::cli {
 
 namespace {
 
-constexpr std::uint32_t kFormat = 1;
+// 2: the report stores clamped-α and insertion-fallback counts by cause.
+constexpr std::uint32_t kFormat = 2;
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 
 std::string read_file(const std::filesystem::path& path) {

@@ -27,10 +27,11 @@ def paraview_run(tmp_path_factory):
     steps, _, origin2, spacing2 = shear_series()
     for i in range(len(steps)):
         write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
-    command = [pvbatch, SCRIPT, str(work)]
-    if not os.environ.get("DISPLAY"):
-        command = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24"] + command
-    result = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    # A private Xvfb that tells its own display number: xvfb-run -a guesses a free number and
+    # fails when another test's server takes it first.
+    with preview.display():
+        result = subprocess.run([pvbatch, SCRIPT, str(work)], capture_output=True, text=True,
+                                timeout=300)
     assert result.returncode == 0 and (work / "result.json").exists(), (
         "pvbatch failed (%d):\n%s\n%s" % (result.returncode, result.stdout, result.stderr))
     return work, json.loads((work / "result.json").read_text())

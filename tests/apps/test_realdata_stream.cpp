@@ -46,6 +46,19 @@ Surface stream(const fs::path& field, const std::string& args, const std::string
   // The report carries the same quality figures as an independent measurement of the file.
   CHECK(s.report["quality"]["folds"].get<std::size_t>() == s.quality.folds);
   CHECK(s.report["quality"]["quads"].get<std::size_t>() == s.quality.quads);
+  // ... and says why fronts waited and why insertions fell back, cause by cause.
+  const nlohmann::json& counts = s.report["counts"];
+  std::size_t clamped = 0, fallbacks = 0;
+  for (const auto& [cause, n] : counts["clamped_alpha_by_cause"].items())
+    clamped += n.get<std::size_t>();
+  for (const auto& [cause, n] : counts["insertion_fallbacks_by_cause"].items())
+    fallbacks += n.get<std::size_t>();
+  CHECK(clamped == counts["clamped_alpha"].get<std::size_t>());
+  CHECK(fallbacks == counts["insertion_fallbacks"].get<std::size_t>());
+  WARN(name << ": clamped alpha by cause " << counts["clamped_alpha_by_cause"].dump()
+            << " of " << counts["vertex_steps"] << " vertex-steps; insertion fallbacks by cause "
+            << counts["insertion_fallbacks_by_cause"].dump() << ", "
+            << counts["streamline_insertions"] << " stream-line insertions");
   return s;
 }
 

@@ -207,6 +207,12 @@ TEST_CASE("every analytic field gives a valid mesh in the default mode", "[engin
     require_valid(r);
     CHECK(r.report.quality.quad_share > 0.9);
     CHECK(r.report.quality.quad_angles_within_10 > 0.9);
+    // Every clamped α and every insertion fallback has exactly one cause.
+    const SurfaceReport& p = r.report;
+    CHECK(p.clamped_slow_flow + p.clamped_front_end + p.clamped_infeasible_step +
+              p.clamped_ahead ==
+          p.clamped_alpha);
+    CHECK(p.fallback_left_domain + p.fallback_far_from_front == p.insertion_fallbacks);
   }
 }
 

@@ -73,6 +73,12 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::fronts_stalled,
     &SurfaceReport::infeasible_damping_steps,
     &SurfaceReport::field_evaluations,
+    &SurfaceReport::clamped_slow_flow,
+    &SurfaceReport::clamped_front_end,
+    &SurfaceReport::clamped_infeasible_step,
+    &SurfaceReport::clamped_ahead,
+    &SurfaceReport::fallback_left_domain,
+    &SurfaceReport::fallback_far_from_front,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

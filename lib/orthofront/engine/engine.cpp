@@ -443,12 +443,22 @@ class Engine {
     // Front step h (α-time); negative α handling.
     if (opt_.method == Method::orthogonal) {
       double max_speed = 0;
+      double slow = -1;  // the slow-flow threshold, computed at the first clamp
       for (std::size_t i = 0; i < n; ++i) {
         if (alpha_[i] < 0) {
           ++report_.negative_alpha;
           if (opt_.negative_alpha == NegativeAlpha::clamp) {
             alpha_[i] = 0;
             ++report_.clamped_alpha;
+            if (slow < 0) slow = opt_.rip_speed_fraction * median_of(speed_);
+            if (speed_[i] < slow)
+              ++report_.clamped_slow_flow;
+            else if (!f.closed && (i == 0 || i + 1 == n))
+              ++report_.clamped_front_end;
+            else if (damping_infeasible_)
+              ++report_.clamped_infeasible_step;
+            else
+              ++report_.clamped_ahead;
           }
         }
       }
@@ -549,6 +559,7 @@ class Engine {
   /// Builds p, q, r, solves for α (into alpha_), chooses μ. Closed fronts drop the equation
   /// with the smallest |r| (rotating the front so it becomes the closing segment).
   AlphaOutcome solve_alpha(Front<N>& f, std::vector<char>& cut) {
+    damping_infeasible_ = false;
     const std::size_t n = f.v.size();
     const std::size_t segments = f.closed ? n : n - 1;
     p_.resize(segments);
@@ -641,6 +652,7 @@ class Engine {
     if (opt_.mu_mode == MuMode::damping) {
       const DampingChoice choice = choose_damping_mu(
           aln_, kernel_, std::span<const double>(speed_.data(), n), opt_.edge / h_star_);
+      damping_infeasible_ = !choice.feasible;
       if (!choice.feasible) ++report_.infeasible_damping_steps;
       // An unbounded μ means the kernel vanishes on every moving vertex: advance along α^L.
       mu = std::isfinite(choice.mu) ? choice.mu : 0.0;
@@ -798,6 +810,7 @@ class Engine {
     Vec<N> x = Vec<N>::Zero();
     int evaluations = 0;
     enum class Outcome : unsigned char { seed, streamline, fallback, interpolated } outcome{};
+    bool left_domain = false;  ///< a fallback whose stream line left the domain or met no data
   };
 
   /// Splits segments longer than split_factor·ℓ with vertices on the stream lines of seed
@@ -878,7 +891,10 @@ class Engine {
         const InsertionJob& job = jobs_[next_job];
         report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
         if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
-        if (job.outcome == InsertionJob::Outcome::fallback) ++report_.insertion_fallbacks;
+        if (job.outcome == InsertionJob::Outcome::fallback) {
+          ++report_.insertion_fallbacks;
+          ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
+        }
         FrontVertex<N> nv;
         nv.s = job.s;
         nv.t = job.t;
@@ -942,6 +958,7 @@ class Engine {
         return;
       }
       job.outcome = Outcome::fallback;
+      job.left_domain = r.status != FieldStatus::inside;
       job.x = guess;
       return;
     }
@@ -1226,6 +1243,7 @@ class Engine {
   StopReason reason_ = StopReason::none;
   Tolerance tol_;
   double h_star_ = 0;
+  bool damping_infeasible_ = false;  ///< the last α solve's damping target could not be met
   Mesh mesh_;
   SurfaceReport report_;
   AlphaSolver solver_;

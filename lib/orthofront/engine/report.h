@@ -56,9 +56,19 @@ struct SurfaceReport {
   std::size_t rips = 0;
   std::size_t negative_alpha = 0;      ///< vertex-steps with α < 0 (before clamping)
   std::size_t clamped_alpha = 0;       ///< vertex-steps whose α was clamped to 0
+  /// Why α was clamped (the four add up to clamped_alpha), first that applies: the flow at the
+  /// vertex is slow (below rip_speed_fraction of the front's median speed: walls, no-slip
+  /// layers), the vertex ends an open front (beside no data or the domain's edge), the step's
+  /// damping target was infeasible, or none of these (the vertex was ahead of its neighbours).
+  std::size_t clamped_slow_flow = 0, clamped_front_end = 0, clamped_infeasible_step = 0,
+              clamped_ahead = 0;
   std::size_t lag_raised_alpha = 0;    ///< vertex-steps whose α the lag bound raised
   std::size_t splits = 0, merges = 0;
   std::size_t streamline_insertions = 0, insertion_fallbacks = 0;
+  /// Why a stream-line insertion fell back to the cubic point (the two add up to
+  /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
+  /// quarter of the segment or more away from the front.
+  std::size_t fallback_left_domain = 0, fallback_far_from_front = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
   std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
   std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;
