@@ -52,6 +52,8 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
                "Row skipping: minimum move, as a share of the edge length")
       ->capture_default_str();
   c.add_flag("!--no-rip", o.rip, "Never rip the front at saddles");
+  c.add_flag("!--no-fold-guard", o.fold_guard,
+             "Keep strips whose faces fold over a neighbour instead of ripping the front there");
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},
                                            {"rk4", IntegratorKind::rk4}}));

@@ -18,9 +18,11 @@ import argparse
 import contextlib
 import json
 import os
+import random
 import shutil
 import subprocess
 import sys
+import time
 
 import numpy as np
 
@@ -36,15 +38,23 @@ def display():
     xvfb = shutil.which("Xvfb")
     if xvfb is None:
         raise RuntimeError("no display to render on and no Xvfb (Debian: apt-get install xvfb)")
-    read_end, write_end = os.pipe()
-    server = subprocess.Popen([xvfb, "-displayfd", str(write_end), "-screen", "0", "1280x1024x24",
-                               "-nolisten", "tcp"], pass_fds=(write_end,),
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    os.close(write_end)
-    with os.fdopen(read_end) as pipe:
-        number = pipe.readline().strip()
+    # A display number of our own, far from the low ones Xvfb -displayfd would pick: a server on
+    # a number another process has just given up can lose its socket to that process's cleanup.
+    chooser = random.Random(os.getpid() ^ time.monotonic_ns())
+    number, server = "", None
+    for _ in range(20):
+        read_end, write_end = os.pipe()
+        server = subprocess.Popen([xvfb, ":%d" % chooser.randrange(100, 30000), "-displayfd",
+                                   str(write_end), "-screen", "0", "1280x1024x24", "-nolisten",
+                                   "tcp"], pass_fds=(write_end,), stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
+        os.close(write_end)
+        with os.fdopen(read_end) as pipe:
+            number = pipe.readline().strip()
+        if number:
+            break
+        server.wait()  # that number was taken: try another
     if not number:
-        server.kill()
         raise RuntimeError("Xvfb did not start")
     os.environ["DISPLAY"] = ":" + number
     try:

@@ -27,8 +27,8 @@ def paraview_run(tmp_path_factory):
     steps, _, origin2, spacing2 = shear_series()
     for i in range(len(steps)):
         write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
-    # A private Xvfb that tells its own display number: xvfb-run -a guesses a free number and
-    # fails when another test's server takes it first.
+    # A private Xvfb on a display number of its own (xvfb-run -a guesses a free number and fails
+    # when another test's server takes it first).
     with preview.display():
         result = subprocess.run([pvbatch, SCRIPT, str(work)], capture_output=True, text=True,
                                 timeout=300)

@@ -99,6 +99,9 @@ TEST_CASE("focus-sink: a closed front is not merged down to two vertices", "[eng
   o.edge = 0.3803;
   o.max_steps = 82;
   o.integrator = IntegratorKind::rk4;
+  // The stitch is the subject: the fold guard would end this front (five vertices around a
+  // circle of radius 0.31 at ℓ = 0.38, a tube whose faces meet at more than 90°) at once.
+  o.fold_guard = false;
   const auto seed = make_seed(SeedCurve::circle(Vec3(-3.35657, -2.17437, 2.33267),
                                                 Vec3(0.247819, -0.280342, 0.369121), 0.310606),
                               36);
@@ -137,6 +140,9 @@ TEST_CASE("abc: no collinear fan from a kept vertex across vertices inserted in 
   StreamSurfaceOptions o;
   o.edge = 0.8607;
   o.max_steps = 342;
+  // The stitch is the subject, on a surface that folds over itself: the fold guard would end it
+  // within a few dozen steps (see the fold guard's test below).
+  o.fold_guard = false;
   const auto seed = make_seed(SeedCurve::line(Vec3(1.70774, 6.31526, 9.72642),
                                               Vec3(6.23884, 2.72689, 10.108)),
                               24);
@@ -169,6 +175,9 @@ TEST_CASE("abc: no new mesh vertex on top of a mesh vertex of its own faces", "[
   StreamSurfaceOptions o;
   o.edge = 0.7794;
   o.max_steps = 260;
+  // The stitch is the subject, on a surface that folds over itself: the fold guard would end it
+  // within a few dozen steps (see the fold guard's test below).
+  o.fold_guard = false;
   const auto seed = make_seed(SeedCurve::circle(Vec3(-0.294639, -1.11774, 2.57763),
                                                 Vec3(0.803721, -0.774879, 0.64411), 2.1236, true),
                               14);
@@ -191,6 +200,9 @@ TEST_CASE("abc with negative alpha kept: no front along one stream line where th
   o.edge = 0.8906;
   o.max_steps = 357;
   o.negative_alpha = NegativeAlpha::keep;
+  // The stitch is the subject, on a surface that folds over itself: the fold guard would end it
+  // within a few dozen steps (see the fold guard's test below).
+  o.fold_guard = false;
   const auto seed = make_seed(SeedCurve::line(Vec3(2.73419, 7.32986, 5.6956),
                                               Vec3(-2.01563, 3.59467, 1.83745)),
                               35);
@@ -203,4 +215,31 @@ TEST_CASE("abc with negative alpha kept: no front along one stream line where th
   std::size_t most = 0;
   for (const auto& [s, count] : per_line) most = std::max(most, count);
   CHECK(most <= static_cast<std::size_t>(r.report.steps) + 1);
+}
+
+TEST_CASE("abc: the fold guard leaves no fold, and rips the front only where it folded",
+          "[engine][stitch][fold]") {
+  // `stream --field abc --seed line:0,0,1:3,3,1 --edge 0.1 --steps 300`: 637 folds without the
+  // guard, where the front crosses the flow's separating surfaces.
+  const auto field = make_analytic_field("abc");
+  StreamSurfaceOptions o;
+  o.edge = 0.1;
+  o.max_steps = 300;
+  const auto seed = make_seed(SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 20);
+  o.fold_guard = false;
+  const SurfaceResult unguarded = build_stream_surface<3>(*field, seed, o);
+  o.fold_guard = true;
+  const SurfaceResult r = build_stream_surface<3>(*field, seed, o);
+  REQUIRE(unguarded.report.quality.folds > 100);
+  check_no_degenerate(r);
+  CHECK(measure_quality(r.mesh).folds == 0);
+  CHECK(r.report.fold_rips > 0);
+  CHECK(r.report.folds_left == 0);
+  // A local repair: the surface keeps nearly all of its extent.
+  CHECK(r.mesh.vertex_count() > 0.9 * static_cast<double>(unguarded.mesh.vertex_count()));
+  // Every vertex is used by a face (vertices the guard took out are removed from the mesh).
+  std::vector<char> used(r.mesh.vertex_count(), 0);
+  for (const Face& f : r.mesh.faces)
+    for (int k = 0; k < f.size; ++k) used[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])] = 1;
+  CHECK(std::count(used.begin(), used.end(), 0) == 0);
 }

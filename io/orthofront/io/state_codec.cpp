@@ -79,6 +79,8 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::clamped_ahead,
     &SurfaceReport::fallback_left_domain,
     &SurfaceReport::fallback_far_from_front,
+    &SurfaceReport::fold_rips,
+    &SurfaceReport::folds_left,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

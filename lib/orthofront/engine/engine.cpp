@@ -7,6 +7,7 @@
 #include <numeric>
 #include <string>
 
+#include "orthofront/engine/fold_guard.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
@@ -132,6 +133,7 @@ class Engine {
     next_front_id_ = state.next_front_id;
     elapsed_before_ = state.elapsed_seconds;
     mesh_ = std::move(state.mesh);
+    if (fold_guard_on()) fold_guard_.rebuild(mesh_);
     report_ = std::move(state.report);
     report_.options = opt_;
   }
@@ -210,6 +212,8 @@ class Engine {
   }
 
   SurfaceResult finish() {
+    // (Decided by the report, which a saved state keeps: a resumed run ends with the same mesh.)
+    if (report_.fold_rips > 0) mesh_.remove_unused_vertices();
     report_.stop_reason = reason_;
     report_.steps = step_;
     report_.vertices = mesh_.vertex_count();
@@ -738,6 +742,7 @@ class Engine {
   /// parts of `f`: more than one where split_long cut it at segments no stream line can fill.
   std::vector<Front<N>> adapt_and_link(Front<N>&& f, const Front<N>* old, int step) {
     std::vector<Front<N>> parts;
+    const std::size_t first_inserted = mesh_.vertex_count();
     {
       StageTimer timer(report_.times.adapt);
       merge_short(f);
@@ -749,13 +754,68 @@ class Engine {
       }
     }
     StageTimer timer(report_.times.stitch);
-    if (old) {
+    if (!old) return parts;
+    if (!fold_guard_on()) {
       for (auto& part : parts) {
         emit_moved(part, *old, step);
         stitch(*old, part);
       }
+      return parts;
     }
-    return parts;
+    std::vector<Front<N>> linked;
+    for (auto& part : parts) link_guarded(std::move(part), *old, step, first_inserted, linked);
+    return linked;
+  }
+
+  bool fold_guard_on() const { return opt_.fold_guard && opt_.method == Method::orthogonal; }
+
+  /// Emits and stitches one part; where a face of the strip folds over a neighbour (fold_guard.h)
+  /// the strip is undone, the vertices standing on the fold leave the front (a local rip: their
+  /// stream lines end at their previous mesh vertices) and the rest is stitched again, up to
+  /// three times. Folds left after that stay in the mesh, counted in the report. Vertices
+  /// inserted this step (mesh vertices from first_inserted on) may stand on a fold too; one taken
+  /// out leaves a mesh vertex no face uses, which finish() removes when the guard ripped.
+  void link_guarded(Front<N>&& part, const Front<N>& old, int step, std::size_t first_inserted,
+                    std::vector<Front<N>>& out) {
+    constexpr int kRounds = 3;
+    std::vector<Front<N>> pieces;
+    pieces.push_back(std::move(part));
+    for (int round = 0;; ++round) {
+      // The part as split_long left it, before emit_moved renews mesh vertices and anchors.
+      const std::vector<Front<N>> pristine = pieces;
+      const std::size_t vertices = mesh_.vertex_count(), faces = mesh_.face_count();
+      const std::size_t skipped = report_.skipped_vertex_steps;
+      std::vector<std::int32_t> folded;
+      for (auto& piece : pieces) {
+        const std::size_t first_face = mesh_.face_count();
+        emit_moved(piece, old, step);
+        stitch(old, piece);
+        const auto found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
+        folded.insert(folded.end(), found.begin(), found.end());
+      }
+      if (folded.empty() || round + 1 == kRounds) {
+        if (!folded.empty()) report_.folds_left += folded.size();
+        fold_guard_.accept(mesh_, faces);
+        for (auto& piece : pieces) out.push_back(std::move(piece));
+        return;
+      }
+      // Undo the round and take the folded vertices out of their pieces.
+      mesh_.truncate(vertices, faces);
+      report_.skipped_vertex_steps = skipped;
+      std::sort(folded.begin(), folded.end());
+      std::vector<Front<N>> next;
+      for (std::size_t p = 0; p < pieces.size(); ++p) {
+        const Front<N>& linked = pieces[p];
+        std::vector<char> keep(linked.v.size(), 1), cut(linked.v.size(), 0);
+        for (std::size_t i = 0; i < linked.v.size(); ++i)
+          if (std::binary_search(folded.begin(), folded.end(), linked.v[i].mesh)) {
+            keep[i] = 0;
+            ++report_.fold_rips;
+          }
+        for (auto& piece : split(Front<N>(pristine[p]), keep, cut)) next.push_back(std::move(piece));
+      }
+      pieces = std::move(next);
+    }
   }
 
   void merge_short(Front<N>& f) {
@@ -1244,6 +1304,7 @@ class Engine {
   Tolerance tol_;
   double h_star_ = 0;
   bool damping_infeasible_ = false;  ///< the last α solve's damping target could not be met
+  FoldGuard fold_guard_;
   Mesh mesh_;
   SurfaceReport report_;
   AlphaSolver solver_;

@@ -64,6 +64,10 @@ struct StreamSurfaceOptions {
   double lag_ramp = 1.0;
 
   bool rip = true;
+  /// Undo a strip whose faces fold over a neighbour (normals more than 90° apart) and take the
+  /// vertices on the fold out of the front, which ends their stream lines there (orthogonal
+  /// method only; the timeline baseline is left as the paper has it).
+  bool fold_guard = true;
   double rip_sharpness = 0.5;        ///< 1 - (α_{i-1} + α_{i+1}) / (2 α_i) above this ...
   double rip_speed_fraction = 0.05;  ///< ... and |v_i| below this share of the median speed
   double zero_speed_fraction = 1e-9; ///< |v| below this share of the median speed: no flow

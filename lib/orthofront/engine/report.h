@@ -69,6 +69,10 @@ struct SurfaceReport {
   /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
   /// quarter of the segment or more away from the front.
   std::size_t fallback_left_domain = 0, fallback_far_from_front = 0;
+  /// The fold guard (StreamSurfaceOptions::fold_guard): front vertices taken out where a face
+  /// stitched to them folded over a neighbour (local rips), and fold vertices it left in place
+  /// after its last try.
+  std::size_t fold_rips = 0, folds_left = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
   std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
   std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;

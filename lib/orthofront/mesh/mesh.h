@@ -1,6 +1,8 @@
 #pragma once
 /// Polygon surface mesh (quads and triangles kept as such) with per-vertex attributes.
+#include <Eigen/Geometry>  // cross products
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -54,6 +56,49 @@ struct Mesh {
   void add_quad(std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
     faces.push_back(Face{{a, b, c, d}, 4});
   }
+  /// Drops the vertices and faces added after there were `vertices` and `faces` (a step
+  /// undone). Streak attributes are not touched (the engines that undo steps do not fill them).
+  void truncate(std::size_t vertices, std::size_t face_count_kept) {
+    positions.resize(vertices);
+    time.resize(vertices);
+    alpha.resize(vertices);
+    s.resize(vertices);
+    error.resize(vertices);
+    front_id.resize(vertices);
+    step.resize(vertices);
+    faces.resize(face_count_kept);
+  }
+  /// Removes the vertices no face uses, keeping the others' order.
+  void remove_unused_vertices() {
+    std::vector<std::int32_t> index(positions.size(), -1);
+    for (const Face& f : faces)
+      for (std::size_t k = 0; k < f.size; ++k) index[static_cast<std::size_t>(f.v[k])] = 0;
+    std::int32_t kept = 0;
+    for (std::size_t v = 0; v < index.size(); ++v) {
+      if (index[v] < 0) continue;
+      const auto to = static_cast<std::size_t>(kept);
+      index[v] = kept++;
+      positions[to] = positions[v];
+      time[to] = time[v];
+      alpha[to] = alpha[v];
+      s[to] = s[v];
+      error[to] = error[v];
+      front_id[to] = front_id[v];
+      step[to] = step[v];
+    }
+    truncate(static_cast<std::size_t>(kept), faces.size());
+    for (Face& f : faces)
+      for (std::size_t k = 0; k < f.size; ++k) f.v[k] = index[static_cast<std::size_t>(f.v[k])];
+  }
 };
+
+/// Area vector of a face (normal times area): half the cross product of the diagonals for a
+/// quad, of two edges for a triangle.
+inline Vec3 area_vector(const Mesh& mesh, const Face& face) {
+  const auto& p = mesh.positions;
+  const auto at = [&](std::size_t k) { return p[static_cast<std::size_t>(face.v[k])]; };
+  if (face.is_quad()) return 0.5 * (at(2) - at(0)).cross(at(3) - at(1));
+  return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
+}
 
 }  // namespace orthofront

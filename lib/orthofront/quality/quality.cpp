@@ -207,16 +207,6 @@ bool has_repeated_index(const Face& face) {
   return false;
 }
 
-/// Area vector (normal times area): half the cross product of the diagonals for a quad, of two
-/// edges for a triangle.
-Vec3 area_vector(const Mesh& mesh, const Face& face) {
-  const auto& p = mesh.positions;
-  if (face.is_quad()) {
-    return 0.5 * (p[face.v[2]] - p[face.v[0]]).cross(p[face.v[3]] - p[face.v[1]]);
-  }
-  return 0.5 * (p[face.v[1]] - p[face.v[0]]).cross(p[face.v[2]] - p[face.v[0]]);
-}
-
 /// Boundary vertices lying strictly inside a boundary edge they are not an endpoint of. Edges go
 /// into a uniform grid (cell ~ mean boundary edge length) and each vertex tests only its cell, so
 /// the cost grows with the boundary size, not its square.

@@ -1,0 +1,80 @@
+// The fold guard's check on hand-made strips: a strip that turns back over the previous one, a
+// crease sharper than 90° between two faces of one strip, and strips that only bend.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "orthofront/engine/fold_guard.h"
+
+using namespace orthofront;
+
+namespace {
+
+constexpr double kDegree = 3.141592653589793 / 180;
+
+/// The point at distance 1 from (1, y, 0) turned by `crease` degrees from +x towards +z.
+Vec3 creased(double y, double crease) {
+  return Vec3(1 + std::cos(crease * kDegree), y, std::sin(crease * kDegree));
+}
+
+/// Rows 0 and 1 of a strip made by the previous step: vertices 0 1 2 (y = 0) and 3 4 5 (y = 1),
+/// quads (0 1 4 3) and (1 2 5 4); the first in the z = 0 plane (normal +z), the second turned up
+/// by `crease` degrees about the column x = 1.
+Mesh previous_strip(double crease = 0) {
+  Mesh m;
+  for (const double y : {0.0, 1.0}) {
+    m.add_vertex(Vec3(0, y, 0), 0, 0, 0, 0, 0, 0);
+    m.add_vertex(Vec3(1, y, 0), 0, 0, 0.5, 0, 0, 0);
+    m.add_vertex(creased(y, crease), 0, 0, 1, 0, 0, 0);
+  }
+  m.add_quad(0, 1, 4, 3);
+  m.add_quad(1, 2, 5, 4);
+  return m;
+}
+
+/// The next row (vertices 6 7 8 at the given points) stitched to row 1 with two quads.
+void add_next_row(Mesh& m, const Vec3& a, const Vec3& b, const Vec3& c) {
+  for (const Vec3& p : {a, b, c}) m.add_vertex(p, 1, 1, 0, 0, 0, 2);
+  m.add_quad(3, 4, 7, 6);
+  m.add_quad(4, 5, 8, 7);
+}
+
+std::vector<std::int32_t> check(Mesh& m, const Vec3& a, const Vec3& b, const Vec3& c) {
+  FoldGuard guard;
+  guard.rebuild(m);  // rows 0-1 are the surface so far
+  const std::size_t first_face = m.face_count(), first_vertex = m.vertex_count();
+  add_next_row(m, a, b, c);
+  return guard.folded_vertices(m, first_face, first_vertex);
+}
+
+}  // namespace
+
+TEST_CASE("the fold guard passes strips that bend by less than 90 degrees", "[engine][fold]") {
+  Mesh flat = previous_strip();
+  CHECK(check(flat, Vec3(0, 2, 0), Vec3(1, 2, 0), Vec3(2, 2, 0)).empty());
+  // Bent up by 80° across row 1, and creased by 80° at the middle column.
+  Mesh bent = previous_strip();
+  const double c = std::cos(80 * kDegree), s = std::sin(80 * kDegree);
+  CHECK(check(bent, Vec3(0, 1 + c, s), Vec3(1, 1 + c, s), Vec3(2, 1 + c, s)).empty());
+  Mesh sharp = previous_strip(80);
+  CHECK(check(sharp, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 80)).empty());
+}
+
+TEST_CASE("the fold guard finds a strip turned back over the previous one", "[engine][fold]") {
+  // Row 2 lies between rows 0 and 1, slightly above: the new quads face -z over the old ones.
+  Mesh m = previous_strip();
+  const std::vector<std::int32_t> folded =
+      check(m, Vec3(0, 0.5, 0.01), Vec3(1, 0.5, 0.01), Vec3(2, 0.5, 0.01));
+  // The folded edges are old (row 1): the new corners of the folded faces stand on the fold.
+  CHECK(folded == std::vector<std::int32_t>{6, 7, 8});
+}
+
+TEST_CASE("the fold guard finds a crease sharper than 90 degrees inside a strip",
+          "[engine][fold]") {
+  // The front turns by 100° at the column x = 1 on both rows: the new end of the folded column
+  // edge (4, 7), vertex 7, stands on the fold. (The previous strip's own crease is not this
+  // step's to undo.)
+  Mesh m = previous_strip(100);
+  CHECK(check(m, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 100)) == std::vector<std::int32_t>{7});
+}
