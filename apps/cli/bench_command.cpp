@@ -73,12 +73,13 @@ nlohmann::json row_json(const SurfaceReport& r) {
 
 void print_row(const char* name, const char* method, const SurfaceReport& r) {
   const StageTimes& t = r.times;
-  std::printf("%-10s %-10s %8zu %9.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.2f %6.1f %6.1f %6.1f\n",
+  std::printf("%-10s %-10s %8zu %9.2f %7.2f %7.2f %7.2f %7.2f %7.2f %9.2f %6.1f %6.1f %6.1f %6zu\n",
               name, method, r.vertices, 1e3 * t.total, 1e3 * t.alpha, 1e3 * t.rip,
               1e3 * t.advance, 1e3 * t.adapt, 1e3 * t.stitch,
               t.total > 0 ? 1e-6 * static_cast<double>(r.vertices) / t.total : 0.0,
               t.total > 0 ? 100.0 * (1.0 - t.advance / t.total) : 0.0,
-              100.0 * r.quality.quad_share, 100.0 * r.quality.quad_angles_within_10);
+              100.0 * r.quality.quad_share, 100.0 * r.quality.quad_angles_within_10,
+              r.quality.folds);
 }
 
 /// Nanoseconds per vertex of AlphaSolver::solve on front-like systems of n vertices.
@@ -129,9 +130,9 @@ void add_bench_command(CLI::App& app) {
     std::printf("Table 1 rows, fastest of %d runs; times in ms; Mv/s = million vertices per "
                 "second; out%% = share of time outside stream-line integration (advance)\n",
                 args->repeats);
-    std::printf("%-10s %-10s %8s %9s %7s %7s %7s %7s %7s %9s %6s %6s %6s\n", "row", "method",
-                "vertices", "total", "alpha", "rip", "advance", "adapt", "stitch", "Mv/s",
-                "out%", "quad%", "ang10%");
+    std::printf("%-10s %-10s %8s %9s %7s %7s %7s %7s %7s %9s %6s %6s %6s %6s\n", "row",
+                "method", "vertices", "total", "alpha", "rip", "advance", "adapt", "stitch",
+                "Mv/s", "out%", "quad%", "ang10%", "folds");
     nlohmann::json out = {{"repeats", args->repeats}, {"rows", nlohmann::json::array()}};
     for (const BenchRow& row : rows) {
       const auto field = make_analytic_field(row.field);
@@ -140,12 +141,16 @@ void add_bench_command(CLI::App& app) {
       o.edge = row.edge;
       o.max_steps = row.steps;
       const SurfaceResult orthogonal = best_run(*field, seed, o, args->repeats);
+      // The same engine without the fold guard: what the guard costs (or saves).
+      o.fold_guard = false;
+      const SurfaceResult unguarded = best_run(*field, seed, o, args->repeats);
       o.method = Method::timeline;
       // The timeline baseline refines without bound where Lorenz speeds up: cap it at 2x (and
       // run it once: its Lorenz row takes seconds).
       o.max_vertices = 2 * std::max<std::size_t>(orthogonal.report.vertices, 1000);
       const SurfaceResult timeline = best_run(*field, seed, o, 1);
       print_row(row.name, "orthogonal", orthogonal.report);
+      print_row("", "no guard", unguarded.report);
       print_row("", "timeline", timeline.report);
       std::printf("%-10s %-10s %8d %9d   (the paper's Table 1, 2013 hardware)\n", "", "paper",
                   row.paper_vertices, static_cast<int>(row.paper_ms));
@@ -155,6 +160,7 @@ void add_bench_command(CLI::App& app) {
                              {"edge", row.edge},
                              {"steps", row.steps},
                              {"orthogonal", row_json(orthogonal.report)},
+                             {"orthogonal_without_fold_guard", row_json(unguarded.report)},
                              {"timeline", row_json(timeline.report)},
                              {"paper", {{"vertices", row.paper_vertices},
                                         {"total_ms", row.paper_ms}}}});

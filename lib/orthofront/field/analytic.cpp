@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_registry.h"
 #include "orthofront/field/field_spec.h"
 
 namespace orthofront {
@@ -43,13 +44,6 @@ class AnalyticField final : public Field3 {
   Box<3> box_;
   std::string description_;
 };
-
-Box<3> make_box(double x0, double x1, double y0, double y1, double z0, double z1) {
-  Box<3> box;
-  box.lo = Vec3(x0, y0, z0);
-  box.hi = Vec3(x1, y1, z1);
-  return box;
-}
 
 // --- models ----------------------------------------------------------------------------------
 
@@ -197,17 +191,8 @@ struct Abc {
 // --- registry --------------------------------------------------------------------------------
 
 using Kind = ParameterKind;
-using ParamSpec = ParameterSpec;
 
-using Factory = std::unique_ptr<Field3> (*)(std::span<const double> p, std::string description);
-
-struct FieldSpec {
-  const char* name;
-  const char* formula;
-  const char* domain;
-  std::vector<ParamSpec> params;
-  Factory make;
-};
+using FieldSpec = FieldEntry<Field3>;
 
 template <class Model>
 std::unique_ptr<Field3> wrap(const Model& model, const Box<3>& box, std::string description) {
@@ -312,33 +297,12 @@ const std::vector<FieldSpec>& registry() {
 }  // namespace
 
 const std::vector<AnalyticFieldInfo>& analytic_fields() {
-  static const std::vector<AnalyticFieldInfo> infos = [] {
-    std::vector<AnalyticFieldInfo> result;
-    for (const FieldSpec& field : registry()) {
-      AnalyticFieldInfo info{field.name, field.formula, field.domain, {}};
-      for (const ParamSpec& param : field.params) {
-        info.parameters.push_back({param.name, param.default_value, param.help});
-      }
-      result.push_back(std::move(info));
-    }
-    return result;
-  }();
+  static const std::vector<AnalyticFieldInfo> infos = describe_fields(registry());
   return infos;
 }
 
 std::unique_ptr<Field3> make_analytic_field(std::string_view spec) {
-  const std::string_view name = field_spec_name(spec);
-  const FieldSpec* field = nullptr;
-  for (const FieldSpec& candidate : registry()) {
-    if (name == candidate.name) field = &candidate;
-  }
-  if (field == nullptr) {
-    throw InvalidArgument("unknown analytic field '" + std::string(name) +
-                          "'; known fields: " + field_names(registry()));
-  }
-  ParsedParameters parsed =
-      parse_field_parameters(spec, "analytic field", field->name, field->params);
-  return field->make(parsed.values, std::move(parsed.description));
+  return make_field(registry(), spec, "analytic field", "known fields");
 }
 
 }  // namespace orthofront

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_registry.h"
 #include "orthofront/field/field_spec.h"
 
 namespace orthofront {
@@ -206,24 +207,8 @@ struct MovingSpiral {
 // --- registry (the spec syntax of make_analytic_field) ----------------------------------------
 
 using Kind = ParameterKind;
-using ParamSpec = ParameterSpec;
 
-using Factory = std::unique_ptr<UnsteadyField> (*)(std::span<const double> p, std::string d);
-
-struct FieldSpec {
-  const char* name;
-  const char* formula;
-  const char* domain;
-  std::vector<ParamSpec> params;
-  Factory make;
-};
-
-Box<3> make_box(double x0, double x1, double y0, double y1, double z0, double z1) {
-  Box<3> box;
-  box.lo = Vec3(x0, y0, z0);
-  box.hi = Vec3(x1, y1, z1);
-  return box;
-}
+using FieldSpec = FieldEntry<UnsteadyField>;
 
 template <class Model>
 std::unique_ptr<UnsteadyField> wrap(const Model& model, int dimension, const Box<3>& box,
@@ -293,42 +278,20 @@ const std::vector<FieldSpec>& registry() {
   return fields;
 }
 
-const FieldSpec* find(std::string_view name) {
-  for (const FieldSpec& candidate : registry())
-    if (name == candidate.name) return &candidate;
-  return nullptr;
-}
 
 }  // namespace
 
 const std::vector<AnalyticFieldInfo>& unsteady_fields() {
-  static const std::vector<AnalyticFieldInfo> infos = [] {
-    std::vector<AnalyticFieldInfo> result;
-    for (const FieldSpec& field : registry()) {
-      AnalyticFieldInfo info{field.name, field.formula, field.domain, {}};
-      for (const ParamSpec& param : field.params)
-        info.parameters.push_back({param.name, param.default_value, param.help});
-      result.push_back(std::move(info));
-    }
-    return result;
-  }();
+  static const std::vector<AnalyticFieldInfo> infos = describe_fields(registry());
   return infos;
 }
 
 bool is_unsteady_field_name(std::string_view spec) {
-  return find(field_spec_name(spec)) != nullptr;
+  return find_field(registry(), field_spec_name(spec)) != nullptr;
 }
 
 std::unique_ptr<UnsteadyField> make_unsteady_field(std::string_view spec) {
-  const std::string_view name = field_spec_name(spec);
-  const FieldSpec* field = find(name);
-  if (field == nullptr) {
-    throw InvalidArgument("unknown unsteady field '" + std::string(name) +
-                          "'; known unsteady fields: " + field_names(registry()));
-  }
-  ParsedParameters parsed =
-      parse_field_parameters(spec, "unsteady field", field->name, field->params);
-  return field->make(parsed.values, std::move(parsed.description));
+  return make_field(registry(), spec, "unsteady field", "known unsteady fields");
 }
 
 }  // namespace orthofront
