@@ -311,8 +311,11 @@ void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
       s.options.insertion = Insertion::cubic;
     } else if (s.insertion == "linear") {
       s.options.insertion = Insertion::linear;
+    } else if (s.insertion == "previous-row") {
+      s.options.insertion = Insertion::previous_row;
     } else {
-      d.fail(at, "must be \"streamline\", \"cubic\" or \"linear\", got \"" + s.insertion + "\"");
+      d.fail(at, "must be \"streamline\", \"previous-row\", \"cubic\" or \"linear\", got \"" +
+                     s.insertion + "\"");
     }
   }
   if (s.kind == SurfaceKind::streak) {

@@ -40,10 +40,13 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_option("--negative-alpha", o.negative_alpha, "clamp (default) or keep (may fold)")
       ->transform(choices<NegativeAlpha>({{"clamp", NegativeAlpha::clamp},
                                           {"keep", NegativeAlpha::keep}}));
-  c.add_option("--insertion", o.insertion, "Where split vertices go: streamline, cubic, linear")
+  c.add_option("--insertion", o.insertion,
+               "Where split vertices go: streamline (integrated from the seed), previous-row "
+               "(from the previous front), cubic, linear")
       ->transform(choices<Insertion>({{"streamline", Insertion::streamline},
                                       {"cubic", Insertion::cubic},
-                                      {"linear", Insertion::linear}}));
+                                      {"linear", Insertion::linear},
+                                      {"previous-row", Insertion::previous_row}}));
   c.add_option("--row-skip", o.row_skip,
                "Squareness: slow vertices keep their mesh vertex (off, vertex, run)")
       ->transform(choices<RowSkip>(

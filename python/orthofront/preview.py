@@ -20,6 +20,7 @@ import json
 import os
 import random
 import shutil
+import socket
 import subprocess
 import sys
 import time
@@ -27,6 +28,23 @@ import time
 import numpy as np
 
 DEFAULT_COLORS = ("time", "age", "alpha", "s")
+
+
+def _wait_for_x_socket(number, seconds=10.0):
+    """Waits until the server's socket takes connections: a client that connects as soon as the
+    server has named its display now and then finds nothing there ("bad X server connection")."""
+    path = "/tmp/.X11-unix/X" + number
+    deadline = time.monotonic() + seconds
+    while True:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+            try:
+                probe.connect(path)
+                return
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("Xvfb named display :%s but %s takes no connections"
+                                       % (number, path))
+        time.sleep(0.05)
 
 
 @contextlib.contextmanager
@@ -56,6 +74,7 @@ def display():
         server.wait()  # that number was taken: try another
     if not number:
         raise RuntimeError("Xvfb did not start")
+    _wait_for_x_socket(number)
     os.environ["DISPLAY"] = ":" + number
     try:
         yield os.environ["DISPLAY"]

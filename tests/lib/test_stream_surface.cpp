@@ -98,6 +98,31 @@ TEST_CASE("saddle3d: every vertex lies on the exact surface y z = 0.2", "[engine
   CHECK(worst < worst_cubic);
 }
 
+TEST_CASE("previous-row insertion: one step's integration, no fallback, near the exact surface",
+          "[engine][insertion]") {
+  const auto field = make_analytic_field("saddle3d");
+  const SurfaceResult exact = run(*field, line(-1, 2, 0.1, 1, 2, 0.1), 20, 0.1, 200);
+  StreamSurfaceOptions o;
+  o.insertion = Insertion::previous_row;
+  const SurfaceResult r = run(*field, line(-1, 2, 0.1, 1, 2, 0.1), 20, 0.1, 200, o);
+  REQUIRE(r.mesh.vertex_count() > 1000);
+  // The default integrates every inserted vertex from the seed, and succeeds here.
+  CHECK(exact.report.streamline_insertions > 50);
+  CHECK(exact.report.previous_row_insertions == 0);
+  CHECK(exact.report.insertion_fallbacks == 0);
+  CHECK(r.report.previous_row_insertions > 50);
+  CHECK(r.report.streamline_insertions == 0);
+  CHECK(r.report.insertion_fallbacks == 0);
+  // Cheaper: a step's integration instead of one from the seed.
+  CHECK(r.report.field_evaluations < exact.report.field_evaluations);
+  // Not exact: the previous front's interpolation error is carried (and the saddle grows it):
+  // measured 6.6e-4 against 3e-10 from the seed and 7.0e-4 for the cubic point.
+  double worst = 0;
+  for (const Vec3& p : r.mesh.positions) worst = std::max(worst, std::abs(p.y() * p.z() - 0.2));
+  INFO("max |y z - 0.2| = " << worst);
+  CHECK(worst < 2e-3);
+}
+
 TEST_CASE("sinus: every vertex lies on the stream line of its seed parameter", "[engine][exact]") {
   // Along a stream line of v = (5 sin^7 y + y, 1, 0): x - y^2/2 - 5 ∫_0^y sin^7 = x at y = 0.
   const auto field = make_analytic_field("sinus");

@@ -81,6 +81,7 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::fallback_far_from_front,
     &SurfaceReport::fold_rips,
     &SurfaceReport::folds_left,
+    &SurfaceReport::previous_row_insertions,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <string>
 
 #include "orthofront/engine/fold_guard.h"
@@ -52,6 +53,8 @@ const char* to_string(Insertion mode) {
       return "cubic";
     case Insertion::streamline:
       return "streamline";
+    case Insertion::previous_row:
+      return "previous-row";
   }
   return "?";
 }
@@ -747,7 +750,7 @@ class Engine {
       StageTimer timer(report_.times.adapt);
       merge_short(f);
       std::vector<char> cut;
-      if (split_long(f, step, cut)) {
+      if (split_long(f, old, step, cut)) {
         parts = split(std::move(f), std::vector<char>(cut.size(), 1), cut);
       } else {
         parts.push_back(std::move(f));
@@ -869,7 +872,13 @@ class Engine {
     double lambda = 0, s = 0, t = 0;
     Vec<N> x = Vec<N>::Zero();
     int evaluations = 0;
-    enum class Outcome : unsigned char { seed, streamline, fallback, interpolated } outcome{};
+    enum class Outcome : unsigned char {
+      seed,
+      streamline,
+      previous_row,
+      fallback,
+      interpolated
+    } outcome{};
     bool left_domain = false;  ///< a fallback whose stream line left the domain or met no data
   };
 
@@ -888,7 +897,7 @@ class Engine {
   /// into a cycle that emits new mesh vertices exactly on the previous step's), and with a mesh
   /// vertex every few 1e-6 along the stream line (T-junctions). No surface lies between such
   /// ends: the surface tears there, as at a rip.
-  bool split_long(Front<N>& f, int step, std::vector<char>& cut) {
+  bool split_long(Front<N>& f, const Front<N>* old, int step, std::vector<char>& cut) {
     const std::size_t n = f.v.size();
     const double limit = opt_.split_factor * opt_.edge;
     const std::size_t segments = f.closed ? n : n - 1;
@@ -936,7 +945,7 @@ class Engine {
     for_range(
         jobs_.size(), 2,
         [&](std::size_t b, std::size_t e) {
-          for (std::size_t k = b; k < e; ++k) insertion_point(f, jobs_[k]);
+          for (std::size_t k = b; k < e; ++k) insertion_point(f, old, jobs_[k]);
         },
         1);
     std::vector<FrontVertex<N>> out;
@@ -951,6 +960,7 @@ class Engine {
         const InsertionJob& job = jobs_[next_job];
         report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
         if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
+        if (job.outcome == InsertionJob::Outcome::previous_row) ++report_.previous_row_insertions;
         if (job.outcome == InsertionJob::Outcome::fallback) {
           ++report_.insertion_fallbacks;
           ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
@@ -977,8 +987,38 @@ class Engine {
     return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
   }
 
+  /// Follows the stream line from `start` for `duration`, then moves it along itself onto the
+  /// front: the plane through the cubic guess normal to the flow. On success (inside, within a
+  /// quarter segment of the guess) sets job.x and job.t; `status` tells why it failed otherwise.
+  bool shoot(const Front<N>& f, std::size_t i, std::size_t j, const Vec<N>& guess,
+             const Vec<N>& start, double duration, InsertionJob& job, FieldStatus& status) const {
+    const double seg = (f.v[j].x - f.v[i].x).norm();
+    IntegrationResult<N> r = integrate_dopri5(field_, start, duration, tol_);
+    job.evaluations += r.evaluations;
+    double time = job.t;
+    for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
+      Vec<N> w;
+      if (field_.velocity(r.x, w) != FieldStatus::inside) break;
+      const double ww = w.squaredNorm();
+      if (!(ww > 0)) break;
+      const double delta = (guess - r.x).dot(w) / ww;
+      if (std::abs(delta) * std::sqrt(ww) < 1e-6 * seg) break;
+      // A Newton step longer than the segment means the stream line runs nearly parallel to
+      // the front here (or the flow is slow): give up instead of integrating for ages.
+      if (std::abs(delta) * std::sqrt(ww) > seg) break;
+      r = integrate_dopri5(field_, r.x, delta, tol_);
+      job.evaluations += r.evaluations + 1;
+      time += delta;
+    }
+    status = r.status;
+    if (r.status != FieldStatus::inside || !((r.x - guess).norm() < 0.25 * seg)) return false;
+    job.t = time;
+    job.x = r.x;
+    return true;
+  }
+
   /// Fills job.x (and job.t when the point is put on its true stream line). Thread-safe.
-  void insertion_point(const Front<N>& f, InsertionJob& job) const {
+  void insertion_point(const Front<N>& f, const Front<N>* old, InsertionJob& job) const {
     using Outcome = typename InsertionJob::Outcome;
     const std::size_t i = job.segment;
     const std::size_t j = (i + 1) % f.v.size();
@@ -989,36 +1029,34 @@ class Engine {
       return;
     }
     const Vec<N> guess = cubic_point(f, i, job.lambda);
-    if (opt_.insertion == Insertion::streamline) {
-      // The stream line of parameter s, followed for the interpolated time, then moved along
-      // itself onto the front: the plane through the cubic guess normal to the flow.
-      const double seg = (f.v[j].x - f.v[i].x).norm();
-      IntegrationResult<N> r =
-          integrate_dopri5(field_, seed_.point(s - std::floor(s)), job.t, tol_);
-      job.evaluations += r.evaluations;
-      double time = job.t;
-      for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
-        Vec<N> w;
-        if (field_.velocity(r.x, w) != FieldStatus::inside) break;
-        const double ww = w.squaredNorm();
-        if (!(ww > 0)) break;
-        const double delta = (guess - r.x).dot(w) / ww;
-        if (std::abs(delta) * std::sqrt(ww) < 1e-6 * seg) break;
-        // A Newton step longer than the segment means the stream line runs nearly parallel to
-        // the front here (or the flow is slow): give up instead of integrating for ages.
-        if (std::abs(delta) * std::sqrt(ww) > seg) break;
-        r = integrate_dopri5(field_, r.x, delta, tol_);
-        job.evaluations += r.evaluations + 1;
-        time += delta;
+    if (opt_.insertion == Insertion::streamline || opt_.insertion == Insertion::previous_row) {
+      // The previous front's point between the ends' origins (on their stream lines to within
+      // the interpolation) and the time left to this front, where the ends came from neighbours.
+      std::optional<std::pair<Vec<N>, double>> row_start;
+      if (old && f.v[i].origin >= 0 && f.v[j].origin >= 0) {
+        const auto oi = static_cast<std::size_t>(f.v[i].origin);
+        const auto oj = static_cast<std::size_t>(f.v[j].origin);
+        const std::size_t n_old = old->v.size();
+        if (oj == oi + 1 || (old->closed && oj == (oi + 1) % n_old))
+          row_start.emplace(cubic_point(*old, oi, job.lambda),
+                            job.t - (old->v[oi].t + job.lambda * (old->v[oj].t - old->v[oi].t)));
       }
-      if (r.status == FieldStatus::inside && (r.x - guess).norm() < 0.25 * seg) {
-        job.outcome = Outcome::streamline;
-        job.t = time;
-        job.x = r.x;
-        return;
+      FieldStatus status = FieldStatus::inside;
+      // streamline: from the seed (exact), then from the previous row where that fails;
+      // previous-row: from the previous row (one step's integration), else from the seed.
+      const bool row_first = opt_.insertion == Insertion::previous_row && row_start;
+      for (int attempt = 0; attempt < 2; ++attempt) {
+        const bool from_row = (attempt == 0) == row_first;
+        if (from_row && !row_start) break;
+        const Vec<N> start = from_row ? row_start->first : seed_.point(s - std::floor(s));
+        if (shoot(f, i, j, guess, start, from_row ? row_start->second : job.t, job, status)) {
+          job.outcome = from_row ? Outcome::previous_row : Outcome::streamline;
+          return;
+        }
+        if (opt_.insertion == Insertion::previous_row && !row_first) break;
       }
       job.outcome = Outcome::fallback;
-      job.left_domain = r.status != FieldStatus::inside;
+      job.left_domain = status != FieldStatus::inside;
       job.x = guess;
       return;
     }

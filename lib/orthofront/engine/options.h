@@ -24,7 +24,13 @@ enum class Insertion {
   linear,      ///< midpoint of the new segment (the paper)
   cubic,       ///< Catmull-Rom point on the new front
   streamline,  ///< on the true stream line: the seed point at the interpolated parameter,
-               ///< integrated over the interpolated time (falls back to cubic on failure)
+               ///< integrated over the interpolated time; where that fails, as previous_row;
+               ///< cubic where both fail
+  previous_row,  ///< on the stream line through the Catmull-Rom point of the previous front
+                 ///< between the ends' origins, integrated over the interpolated step time:
+                 ///< one step's integration instead of one from the seed, exact to within the
+                 ///< previous front's interpolation (from the seed where the ends' origins are
+                 ///< not neighbours there; cubic on failure)
 };
 
 enum class RowSkip {

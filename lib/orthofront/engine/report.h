@@ -65,6 +65,9 @@ struct SurfaceReport {
   std::size_t lag_raised_alpha = 0;    ///< vertex-steps whose α the lag bound raised
   std::size_t splits = 0, merges = 0;
   std::size_t streamline_insertions = 0, insertion_fallbacks = 0;
+  /// Insertions on the stream line through the previous front's interpolated point (the
+  /// previous-row mode, and the streamline mode where the seed's stream line failed).
+  std::size_t previous_row_insertions = 0;
   /// Why a stream-line insertion fell back to the cubic point (the two add up to
   /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
   /// quarter of the segment or more away from the front.
