@@ -26,6 +26,8 @@ CASES = [
      "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400"),
     ("square cylinder 3928", "square-cylinder-2d/sqflow2D-3928.nrrd",
      "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400"),
+    ("square cylinder recirculation", "square-cylinder-2d/sqflow2D-1608.nrrd",
+     "--seed line:0.8,-0.6,0:0.8,0.6,0 --seed-count 20 --edge 0.02 --steps 3000"),
 ]
 
 
@@ -42,7 +44,8 @@ def run(binary, field, args, guard, work):
 
 def row(name, guard, r):
     c, q, t = r["counts"], r["quality"], r["times_s"]
-    inserted = c["streamline_insertions"] + c["insertion_fallbacks"]
+    inserted = (c["streamline_insertions"] + c["previous_row_insertions"] +
+                c["insertion_fallbacks"])
     return {
         "case": name, "fold_guard": guard, "vertices": c["vertices"],
         "quads_pct": 100.0 * c["quads"] / max(1, c["faces"]),
@@ -53,6 +56,7 @@ def row(name, guard, r):
         "clamped_pct": 100.0 * c["clamped_alpha"] / max(1, c["vertex_steps"]),
         "clamped_by_cause": c["clamped_alpha_by_cause"],
         "fallback_pct": 100.0 * c["insertion_fallbacks"] / max(1, inserted),
+        "previous_row_insertions": c["previous_row_insertions"],
         "fallbacks_by_cause": c["insertion_fallbacks_by_cause"],
         "skipped_pct": 100.0 * c["skipped_vertex_steps"] / max(1, c["vertex_steps"]),
         "times_s": {k: t[k] for k in ("total", "alpha", "advance", "adapt", "stitch", "quality")
