@@ -41,6 +41,14 @@ enum class RowSkip {
 
 enum class IntegratorKind { dopri5, rk4 };
 
+/// The option names the command line, job files and reports use.
+const char* to_string(Method method);
+const char* to_string(MuMode mode);
+const char* to_string(NegativeAlpha mode);
+const char* to_string(Insertion mode);
+const char* to_string(RowSkip mode);
+const char* to_string(IntegratorKind kind);
+
 struct StreamSurfaceOptions {
   Method method = Method::orthogonal;
   double edge = 0.1;       ///< target edge length ℓ, world units

@@ -20,12 +20,6 @@ enum class StopReason {
 };
 
 const char* to_string(StopReason reason);
-const char* to_string(Method method);
-const char* to_string(MuMode mode);
-const char* to_string(NegativeAlpha mode);
-const char* to_string(Insertion mode);
-const char* to_string(RowSkip mode);
-const char* to_string(IntegratorKind kind);
 
 /// Seconds spent per stage (wall clock, summed over steps).
 struct StageTimes {
