@@ -1017,7 +1017,6 @@ class Engine {
           job.outcome = from_row ? Outcome::previous_row : Outcome::streamline;
           return;
         }
-        if (opt_.insertion == Insertion::previous_row && !row_first) break;
       }
       job.outcome = Outcome::fallback;
       job.left_domain = status != FieldStatus::inside;

@@ -58,7 +58,7 @@ struct Mesh {
   }
   /// Drops the vertices and faces added after there were `vertices` and `faces` (a step
   /// undone). Streak attributes are not touched (the engines that undo steps do not fill them).
-  void truncate(std::size_t vertices, std::size_t face_count_kept) {
+  void truncate(std::size_t vertices, std::size_t kept_faces) {
     positions.resize(vertices);
     time.resize(vertices);
     alpha.resize(vertices);
@@ -66,7 +66,7 @@ struct Mesh {
     error.resize(vertices);
     front_id.resize(vertices);
     step.resize(vertices);
-    faces.resize(face_count_kept);
+    faces.resize(kept_faces);
   }
   /// Removes the vertices no face uses, keeping the others' order.
   void remove_unused_vertices() {
