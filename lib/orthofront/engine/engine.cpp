@@ -748,8 +748,6 @@ class Engine {
     std::vector<Front<N>> pieces;
     pieces.push_back(std::move(part));
     for (int round = 0;; ++round) {
-      // The part as split_long left it, before emit_moved renews mesh vertices and anchors.
-      const std::vector<Front<N>> pristine = pieces;
       const std::size_t vertices = mesh_.vertex_count(), faces = mesh_.face_count();
       const std::size_t skipped = report_.skipped_vertex_steps;
       std::vector<std::int32_t> folded;
@@ -772,14 +770,23 @@ class Engine {
       std::sort(folded.begin(), folded.end());
       std::vector<Front<N>> next;
       for (std::size_t p = 0; p < pieces.size(); ++p) {
-        const Front<N>& linked = pieces[p];
+        Front<N>& linked = pieces[p];
         std::vector<char> keep(linked.v.size(), 1), cut(linked.v.size(), 0);
-        for (std::size_t i = 0; i < linked.v.size(); ++i)
-          if (std::binary_search(folded.begin(), folded.end(), linked.v[i].mesh)) {
+        for (std::size_t i = 0; i < linked.v.size(); ++i) {
+          FrontVertex<N>& fv = linked.v[i];
+          if (std::binary_search(folded.begin(), folded.end(), fv.mesh)) {
             keep[i] = 0;
             ++report_.fold_rips;
           }
-        for (auto& piece : split(Front<N>(pristine[p]), keep, cut)) next.push_back(std::move(piece));
+          // A mesh vertex emit_moved gave it this round is gone: it stands for its origin's again
+          // (it was a copy of that vertex before; inserted vertices are older than `vertices`).
+          if (fv.origin >= 0 && fv.mesh >= 0 && static_cast<std::size_t>(fv.mesh) >= vertices) {
+            const FrontVertex<N>& from = old.v[static_cast<std::size_t>(fv.origin)];
+            fv.mesh = from.mesh;
+            fv.anchor = from.anchor;
+          }
+        }
+        for (auto& piece : split(std::move(pieces[p]), keep, cut)) next.push_back(std::move(piece));
       }
       pieces = std::move(next);
     }

@@ -6,12 +6,6 @@ namespace orthofront {
 
 namespace {
 
-std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
-  const auto lo = static_cast<std::uint64_t>(std::min(a, b));
-  const auto hi = static_cast<std::uint64_t>(std::max(a, b));
-  return lo << 32 | hi;
-}
-
 /// Unit normal of a face; zero for a face without area (no orientation to compare).
 Vec3 unit_normal(const Mesh& mesh, const Face& face) {
   const Vec3 area = area_vector(mesh, face);
@@ -30,18 +24,73 @@ void for_each_edge(const Face& face, Visit&& visit) {
 
 }  // namespace
 
+void FoldGuard::EdgeLists::clear() {
+  ++generation_;
+  entries_.clear();
+  free_ = kNone;
+}
+
+std::uint32_t FoldGuard::EdgeLists::head(std::int32_t v) const {
+  const auto i = static_cast<std::size_t>(v);
+  return i < head_.size() && generation_of_head_[i] == generation_ ? head_[i] : kNone;
+}
+
+std::uint32_t& FoldGuard::EdgeLists::head_slot(std::int32_t v) {
+  const auto i = static_cast<std::size_t>(v);
+  if (i >= head_.size()) {
+    const std::size_t size = std::max(i + 1, 2 * head_.size());
+    head_.resize(size, kNone);
+    generation_of_head_.resize(size, 0);
+  }
+  if (generation_of_head_[i] != generation_) {
+    generation_of_head_[i] = generation_;
+    head_[i] = kNone;
+  }
+  return head_[i];
+}
+
+void FoldGuard::EdgeLists::add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward,
+                               const Vec3& normal) {
+  const auto [lo, hi] = ordered(a, b);
+  std::uint32_t& first = head_slot(lo);
+  std::uint32_t e = free_;
+  if (e != kNone) {
+    free_ = entries_[e].next;
+  } else {
+    e = static_cast<std::uint32_t>(entries_.size());
+    entries_.emplace_back();
+  }
+  entries_[e] = Entry{normal, hi, face, forward, first};
+  first = e;
+}
+
+bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
+  const auto [lo, hi] = ordered(a, b);
+  if (head(lo) == kNone) return false;
+  for (std::uint32_t* link = &head_slot(lo); *link != kNone; link = &entries_[*link].next) {
+    const std::uint32_t e = *link;
+    if (entries_[e].other != hi) continue;
+    *link = entries_[e].next;
+    entries_[e].next = free_;
+    free_ = e;
+    return true;
+  }
+  return false;
+}
+
 void FoldGuard::rebuild(const Mesh& mesh) {
   open_.clear();
   accept(mesh, 0);
 }
 
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
-  for (std::size_t f = first_face; f < mesh.faces.size(); ++f)
+  for (std::size_t f = first_face; f < mesh.faces.size(); ++f) {
+    const Vec3 normal = unit_normal(mesh, mesh.faces[f]);
     for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
-      const auto [it, added] =
-          open_.try_emplace(edge_key(a, b), EdgeFace{static_cast<std::uint32_t>(f), a < b});
-      if (!added) open_.erase(it);  // its second face: inside the surface now
+      // An edge's second face puts it inside the surface.
+      if (!open_.remove(a, b)) open_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
     });
+  }
 }
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
@@ -50,33 +99,30 @@ std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size
   const std::size_t end = mesh.faces.size();
   if (first_face >= end) return out;
   strip_.clear();
-  for (std::size_t f = first_face; f < end; ++f)
+  normals_.resize(end - first_face);
+  for (std::size_t f = first_face; f < end; ++f) {
+    const Vec3& normal = normals_[f - first_face] = unit_normal(mesh, mesh.faces[f]);
     for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
-      strip_.emplace(edge_key(a, b), EdgeFace{static_cast<std::uint32_t>(f), a < b});
+      strip_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
     });
+  }
   const auto is_new = [&](std::int32_t v) {
     return v >= 0 && static_cast<std::size_t>(v) >= first_new_vertex;
   };
   for (std::size_t f = first_face; f < end; ++f) {
     const Face& face = mesh.faces[f];
-    const Vec3 n0 = unit_normal(mesh, face);
+    const Vec3& n0 = normals_[f - first_face];
     if (n0.squaredNorm() == 0) continue;
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
-      const std::uint64_t key = edge_key(a, b);
-      const auto folds_over = [&](const EdgeFace& other) {
+      const auto folds_over = [&](const EdgeLists::Entry& other) {
         if (other.face == f) return false;
-        const Vec3 n1 = unit_normal(mesh, mesh.faces[other.face]);
+        const Vec3& n1 = other.normal;
         // Consistent neighbours walk the edge in opposite directions; undo a flip so that only
         // geometry decides, as the quality measure does.
         const double dot = other.forward == (a < b) ? -n0.dot(n1) : n0.dot(n1);
         return n1.squaredNorm() > 0 && dot < 0;
       };
-      bool folded = false;
-      const auto [lo, hi] = strip_.equal_range(key);
-      for (auto it = lo; it != hi && !folded; ++it) folded = folds_over(it->second);
-      if (const auto it = open_.find(key); !folded && it != open_.end())
-        folded = folds_over(it->second);
-      if (!folded) return;
+      if (!strip_.any_of(a, b, folds_over) && !open_.any_of(a, b, folds_over)) return;
       const std::size_t before = out.size();
       for (const std::int32_t v : {a, b})
         if (is_new(v)) out.push_back(v);

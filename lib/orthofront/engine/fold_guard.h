@@ -4,7 +4,6 @@
 /// neighbour being another face of that strip or a face of the surface so far.
 #include <cstddef>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "orthofront/mesh/mesh.h"
@@ -26,14 +25,53 @@ class FoldGuard {
   void accept(const Mesh& mesh, std::size_t first_face);
 
  private:
-  struct EdgeFace {
-    std::uint32_t face;
-    bool forward;  ///< the face walks the edge from its lower to its higher vertex index
+  /// Faces on undirected edges, listed with the edge's lower vertex: a list head per mesh vertex
+  /// and pooled entries, so a step allocates nothing once the pool has grown (a hash map's node
+  /// per edge made the guard cost more than the rest of stitching).
+  class EdgeLists {
+   public:
+    struct Entry {
+      Vec3 normal;           ///< the face's unit normal (zero for a face without area)
+      std::int32_t other;    ///< the edge's higher vertex
+      std::uint32_t face;
+      bool forward;          ///< the face walks the edge from its lower to its higher vertex
+      std::uint32_t next;    ///< next entry of the same lower vertex (kNone: last)
+    };
+    static constexpr std::uint32_t kNone = 0xffffffffu;
+
+    /// Forgets every edge (O(1): list heads of an older generation read as empty).
+    void clear();
+    void add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward, const Vec3& normal);
+    /// Removes one entry of edge (a, b); false when there is none.
+    bool remove(std::int32_t a, std::int32_t b);
+    /// Calls visit(entry) for each entry of edge (a, b) until it returns true; returns whether
+    /// one did.
+    template <class Visit>
+    bool any_of(std::int32_t a, std::int32_t b, Visit&& visit) const {
+      const auto [lo, hi] = ordered(a, b);
+      for (std::uint32_t e = head(lo); e != kNone; e = entries_[e].next)
+        if (entries_[e].other == hi && visit(entries_[e])) return true;
+      return false;
+    }
+
+   private:
+    static std::pair<std::int32_t, std::int32_t> ordered(std::int32_t a, std::int32_t b) {
+      return a < b ? std::pair{a, b} : std::pair{b, a};
+    }
+    std::uint32_t head(std::int32_t v) const;
+    std::uint32_t& head_slot(std::int32_t v);
+
+    std::vector<std::uint32_t> head_, generation_of_head_;
+    std::uint32_t generation_ = 1;
+    std::vector<Entry> entries_;
+    std::uint32_t free_ = kNone;  ///< removed entries, chained through `next`
   };
+
   /// Edges of accepted faces that have one face so far: the surface's boundary, which holds
   /// every edge a new strip can share with it (the front's rows among them).
-  std::unordered_map<std::uint64_t, EdgeFace> open_;
-  std::unordered_multimap<std::uint64_t, EdgeFace> strip_;  ///< scratch: the faces checked
+  EdgeLists open_;
+  EdgeLists strip_;  ///< scratch: the faces checked
+  std::vector<Vec3> normals_;  ///< scratch: their unit normals
 };
 
 }  // namespace orthofront
