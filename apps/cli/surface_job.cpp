@@ -63,10 +63,12 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
                           " (--max-vertices, or half of --memory at ~300 B a vertex)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
   check_stream_seed(*field, seed, job);
-  if (!show_progress) return build_stream_surface(*field, seed, job.options);
+  // SIGINT/SIGTERM also stop a step's long integrations, not only the next step.
+  const StopRequest stop = [] { return interrupted(); };
+  if (!show_progress) return build_stream_surface(*field, seed, job.options, {}, {}, stop);
   ProgressBar bar(job.field, job.options.max_vertices);
   return build_stream_surface(*field, seed, job.options,
-                              [&](const Progress& p) { return bar.update(p); });
+                              [&](const Progress& p) { return bar.update(p); }, {}, stop);
 }
 
 std::string summarize(const SurfaceJob& job, const SurfaceReport& r) {

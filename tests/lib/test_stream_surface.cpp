@@ -1,6 +1,7 @@
 // End-to-end checks of the stream-surface engine on analytic fields: exact surfaces, decay of the
 // orthogonality error, ripping, mesh validity, unit invariance, closed fronts.
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <set>
@@ -77,6 +78,27 @@ void require_valid(const SurfaceResult& r) {
   CHECK(q.inconsistent_edges == 0);
   for (const Vec3& p : r.mesh.positions) REQUIRE(p.allFinite());
 }
+
+/// v = (1, a sin(k x), 0): straight on average, wiggling fast along x, so DOPRI5 needs thousands
+/// of evaluations for one front step of one vertex.
+class Wiggle final : public Field3 {
+ public:
+  static constexpr double a = 1.0, k = 3e4;
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override {
+    ++evaluations;
+    v = Vec3(1, a * std::sin(k * x.x()), 0);
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
+    velocity(x, v);
+    j.setZero();
+    j(1, 0) = a * k * std::cos(k * x.x());
+    return FieldStatus::inside;
+  }
+  Box<3> domain() const override { return Box<3>{Vec3(-10, -10, -10), Vec3(10, 10, 10)}; }
+  std::string describe() const override { return "wiggle"; }
+  mutable std::atomic<long> evaluations{0};
+};
 
 }  // namespace
 
@@ -306,6 +328,46 @@ TEST_CASE("a spiral source has no closed orthogonal front: the front is opened a
   CHECK(r.report.closed_front_opened);
   CHECK_FALSE(r.report.message.empty());
   require_valid(r);
+}
+
+TEST_CASE("a stop request ends long integrations inside a front step", "[engine][stop]") {
+  Wiggle field;
+  StreamSurfaceOptions o;
+  o.edge = 0.1;
+  o.max_steps = 3;
+  const Seed<3> seed = make_seed(line(0, 0, -0.5, 0, 0, 0.5), 11);
+  const SurfaceResult full = build_stream_surface<3>(field, seed, o);
+  const long full_evaluations = field.evaluations.exchange(0);
+  REQUIRE(full.report.stop_reason == StopReason::steps);
+  // Thousands of evaluations per vertex and step: what a stop between steps cannot cut short.
+  REQUIRE(full_evaluations > 11L * 3 * kStopCheckEvaluations);
+
+  std::atomic<int> asked{0};
+  const SurfaceResult stopped = build_stream_surface<3>(field, seed, o, {}, {}, [&] {
+    ++asked;
+    return true;
+  });
+  const long stopped_evaluations = field.evaluations.exchange(0);
+  CHECK(asked.load() >= 1);
+  CHECK(stopped.report.stop_reason == StopReason::cancelled);
+  CHECK_FALSE(stopped.report.complete);
+  CHECK(stopped.report.steps == 1);
+  // The first integration to reach a check stops; the other vertices of the step do not start.
+  CHECK(stopped_evaluations < 2 * kStopCheckEvaluations + 200);
+  CHECK(stopped.report.no_data_hits == 0);
+  // What was built is a valid mesh: the seed row, and faces only between finished rows.
+  CHECK(stopped.mesh.vertex_count() >= 11);
+  for (const Face& f : stopped.mesh.faces)
+    for (int c = 0; c < f.size; ++c)
+      CHECK(static_cast<std::size_t>(f.v[static_cast<std::size_t>(c)]) <
+            stopped.mesh.vertex_count());
+
+  // The time budget is asked there too.
+  StreamSurfaceOptions budget = o;
+  budget.time_budget_seconds = 0;
+  const SurfaceResult r = build_stream_surface<3>(field, seed, budget);
+  CHECK(r.report.stop_reason == StopReason::time_budget);
+  CHECK(field.evaluations.load() < 2 * kStopCheckEvaluations + 200);
 }
 
 TEST_CASE("the engine stops for the reason it reports", "[engine][stop]") {

@@ -2,6 +2,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -69,7 +70,7 @@ void for_range(std::size_t n, std::size_t threshold, const Body& body, std::size
                     [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
 }
 
-enum class VertexState : unsigned char { ok, outside, no_data, zero_speed };
+enum class VertexState : unsigned char { ok, outside, no_data, zero_speed, interrupted };
 
 }  // namespace
 
@@ -83,7 +84,10 @@ class Engine {
     tol_.absolute = opt_.tolerance * opt_.edge;
     tol_.relative = opt_.tolerance;
     h_star_ = -std::log(1.0 - opt_.damping);
+    integration_stop_ = [this] { return stop_requested(); };
   }
+
+  void set_stop_request(StopRequest request) { stop_request_ = std::move(request); }
 
   /// Lays the seed as the first front.
   void begin() {
@@ -171,6 +175,11 @@ class Engine {
     }
     fronts_ = std::move(next);
     died_outside_ = fronts_.empty() && exits_this_step_ > 0;
+    if (stopping_) {
+      // Integrations stopped part-way: the fronts end where they got to (a valid mesh).
+      reason_ = stopped_by_budget_ ? StopReason::time_budget : StopReason::cancelled;
+      if (reason_ == StopReason::cancelled) report_.complete = false;
+    }
     step_record_.fronts = fronts_.size();
     for (const auto& f : fronts_) step_record_.front_vertices += f.v.size();
     step_record_.orthogonality_mean = ortho_count_ ? ortho_sum_ / ortho_count_ : 0.0;
@@ -465,15 +474,19 @@ class Engine {
           const double tau = alpha_[i] * h;
           FrontVertex<N> fv = f.v[i];
           fv.origin = static_cast<std::int32_t>(i);
-          if (tau != 0) {
+          if (stopping_.load(std::memory_order_relaxed)) {
+            keep[i] = 0;  // the run stops: this stream line ends at its last mesh vertex
+            state_[i] = VertexState::interrupted;
+          } else if (tau != 0) {
             const IntegrationResult<N> r = integrate(fv.x, tau);
             evaluations[i] = r.evaluations;
             fv.x = r.x;
             fv.t += r.reached;
             if (r.status != FieldStatus::inside) keep[i] = 0;
-            state_[i] = r.status == FieldStatus::outside  ? VertexState::outside
-                        : r.status == FieldStatus::inside ? VertexState::ok
-                                                          : VertexState::no_data;
+            state_[i] = r.interrupted                     ? VertexState::interrupted
+                        : r.status == FieldStatus::outside ? VertexState::outside
+                        : r.status == FieldStatus::inside  ? VertexState::ok
+                                                           : VertexState::no_data;
           }
           nf.v[i] = fv;
         }
@@ -673,7 +686,18 @@ class Engine {
   IntegrationResult<N> integrate(const Vec<N>& x, double tau) const {
     if (opt_.integrator == IntegratorKind::rk4)
       return integrate_rk4(field_, x, tau, opt_.rk4_substeps);
-    return integrate_dopri5(field_, x, tau, tol_);
+    return integrate_dopri5(field_, x, tau, tol_, 0, &integration_stop_);
+  }
+
+  /// Whether the caller's stop request or the time budget ends the run inside a step: asked by
+  /// long integrations (runge_kutta.h) from worker threads; once true, stays true.
+  bool stop_requested() const {
+    if (stopping_.load(std::memory_order_relaxed)) return true;
+    const bool budget = elapsed() > opt_.time_budget_seconds;
+    if (!budget && !(stop_request_ && stop_request_())) return false;
+    if (budget) stopped_by_budget_ = true;
+    stopping_ = true;
+    return true;
   }
 
   bool too_short(const Front<N>& f) const {
@@ -964,7 +988,7 @@ class Engine {
   bool shoot(const Front<N>& f, std::size_t i, std::size_t j, const Vec<N>& guess,
              const Vec<N>& start, double duration, InsertionJob& job, FieldStatus& status) const {
     const double seg = (f.v[j].x - f.v[i].x).norm();
-    IntegrationResult<N> r = integrate_dopri5(field_, start, duration, tol_);
+    IntegrationResult<N> r = integrate_dopri5(field_, start, duration, tol_, 0, &integration_stop_);
     job.evaluations += r.evaluations;
     double time = job.t;
     for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
@@ -977,7 +1001,7 @@ class Engine {
       // A Newton step longer than the segment means the stream line runs nearly parallel to
       // the front here (or the flow is slow): give up instead of integrating for ages.
       if (std::abs(delta) * std::sqrt(ww) > seg) break;
-      r = integrate_dopri5(field_, r.x, delta, tol_);
+      r = integrate_dopri5(field_, r.x, delta, tol_, 0, &integration_stop_);
       job.evaluations += r.evaluations + 1;
       time += delta;
     }
@@ -1321,6 +1345,10 @@ class Engine {
   double ortho_sum_ = 0;
   std::size_t ortho_count_ = 0;
   std::size_t exits_this_step_ = 0;
+  StopRequest stop_request_;
+  StopRequest integration_stop_;  ///< stop_requested(), as the integrators take it
+  mutable std::atomic<bool> stopping_{false};
+  mutable std::atomic<bool> stopped_by_budget_{false};
   // Per-front scratch, reused between fronts and steps.
   std::vector<Vec<N>> vel_;
   std::vector<double> speed_, alpha_, p_, q_, r_, aln_, kernel_, seg_err_;
@@ -1363,6 +1391,10 @@ void SurfaceBuilder<N>::cancel() {
   engine_->cancel();
 }
 template <int N>
+void SurfaceBuilder<N>::set_stop_request(StopRequest request) {
+  engine_->set_stop_request(std::move(request));
+}
+template <int N>
 FrontSnapshot SurfaceBuilder<N>::front() {
   return engine_->front();
 }
@@ -1390,8 +1422,9 @@ template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
                                    const ProgressCallback& progress,
-                                   const FrontHook& before_step) {
+                                   const FrontHook& before_step, const StopRequest& stop) {
   SurfaceBuilder<N> builder(field, seed, options);
+  builder.set_stop_request(stop);
   while (builder.next()) {
     if (before_step && !before_step(builder.front())) {
       builder.cancel();
@@ -1408,9 +1441,11 @@ SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
 
 template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                const StreamSurfaceOptions&,
-                                               const ProgressCallback&, const FrontHook&);
+                                               const ProgressCallback&, const FrontHook&,
+                                               const StopRequest&);
 template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                const StreamSurfaceOptions&,
-                                               const ProgressCallback&, const FrontHook&);
+                                               const ProgressCallback&, const FrontHook&,
+                                               const StopRequest&);
 
 }  // namespace orthofront

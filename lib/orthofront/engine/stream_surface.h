@@ -7,6 +7,7 @@
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
 #include "orthofront/field/field.h"
+#include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/mesh/mesh.h"
 #include "orthofront/seed/seed.h"
 
@@ -37,18 +38,23 @@ struct SurfaceResult {
 /// Builds the stream surface of `field` from `seed`.
 /// The mesh holds 3D positions (the first three coordinates when N = 4).
 /// Throws InvalidArgument for unusable options or a seed with fewer than two vertices inside
-/// the domain.
+/// the domain. `stop` (thread-safe) is asked inside long stream-line integrations too, so a
+/// DOPRI5 crawling towards its evaluation cap does not hold up a cancel; the surface then ends
+/// where its fronts got to (stop reason cancelled, report incomplete).
 template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
                                    const ProgressCallback& progress = {},
-                                   const FrontHook& before_step = {});
+                                   const FrontHook& before_step = {},
+                                   const StopRequest& stop = {});
 
 extern template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                       const StreamSurfaceOptions&,
-                                                      const ProgressCallback&, const FrontHook&);
+                                                      const ProgressCallback&, const FrontHook&,
+                                                      const StopRequest&);
 extern template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                       const StreamSurfaceOptions&,
-                                                      const ProgressCallback&, const FrontHook&);
+                                                      const ProgressCallback&, const FrontHook&,
+                                                      const StopRequest&);
 
 }  // namespace orthofront

@@ -47,6 +47,10 @@ class SurfaceBuilder {
   void step();
   /// Stops the surface (reason: cancelled, report incomplete).
   void cancel();
+  /// Asked inside long integrations of a step (thread-safe); true ends the step where its
+  /// integrations got to and then the surface, as cancel() does. The time budget is checked
+  /// there too.
+  void set_stop_request(StopRequest request);
 
   /// The front that the next step advances, N coordinates per vertex (valid until step()).
   FrontSnapshot front();

@@ -4,6 +4,7 @@
 /// integrates x' = α_i v(x) over [0, h], which is the same curve with τ = α_i h.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "orthofront/field/field.h"
 
@@ -15,10 +16,17 @@ struct IntegrationResult {
   FieldStatus status = FieldStatus::inside;    ///< inside when the whole span was integrated
   double reached = 0;                          ///< signed time actually integrated
   int evaluations = 0;
+  bool interrupted = false;  ///< a stop request ended it (status no_data)
 };
 
 /// Field evaluations after which one DOPRI5 integration gives up (status no_data).
 inline constexpr int kMaxEvaluations = 1'000'000;
+
+/// Asked by a DOPRI5 integration every kStopCheckEvaluations field evaluations (so never by the
+/// short ones of a front step); true ends it at once. Called from worker threads: it must be
+/// thread-safe (reading an atomic or a sig_atomic_t flag, a clock).
+using StopRequest = std::function<bool()>;
+inline constexpr int kStopCheckEvaluations = 4096;
 
 struct Tolerance {
   double absolute = 1e-9;  ///< world units (the engine scales it with ℓ)
@@ -55,7 +63,8 @@ IntegrationResult<N> integrate_rk4(const Field<N>& field, const Vec<N>& x0, doub
 /// line stops just before the boundary with that status.
 template <int N>
 IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, double tau,
-                                      const Tolerance& tol, double first_step = 0) {
+                                      const Tolerance& tol, double first_step = 0,
+                                      const StopRequest* stop = nullptr) {
   // Butcher tableau of Dormand & Prince (1980).
   constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
   constexpr double a21 = 1.0 / 5;
@@ -87,7 +96,17 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
   }
   double done = 0;
   int rejections_in_row = 0;
+  int next_stop_check = kStopCheckEvaluations;
   while (done < span) {
+    if (stop && out.evaluations >= next_stop_check) {
+      next_stop_check += kStopCheckEvaluations;
+      if ((*stop)()) {
+        out.status = FieldStatus::no_data;
+        out.interrupted = true;
+        out.reached = dir * done;
+        return out;
+      }
+    }
     // The last step lands exactly on the span end, so rounding can never leave a sliver of
     // time that no step size covers (done + h == done would loop forever).
     bool last = false;
