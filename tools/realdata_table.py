@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Stream surfaces on the shared real data sets, each with the fold guard and without it (the
-engine as it was before the guard), side by side: quads, angles, edge spread, folds, non-manifold
-edges, T-junctions, why α was clamped and insertions fell back, and time by stage.
+"""Stream surfaces on the shared real data sets in three variants side by side: without the fold
+guard and the stall cut (the engine as it was before them), with the guard only, and the default
+(both): quads, angles, edge spread, folds, non-manifold edges, T-junctions, fold rips and stall
+cuts, why α was clamped and insertions fell back, and time by stage.
 
     tools/realdata_table.py [--binary build/apps/orthofront] [--data ../shared/datasets]
                             [--json table.json]
@@ -14,6 +15,13 @@ import os
 import subprocess
 import sys
 import tempfile
+
+# (name, extra stream options)
+VARIANTS = [
+    ("before", "--no-fold-guard --stall-steps 0"),
+    ("guard", "--stall-steps 0"),
+    ("default", ""),
+]
 
 CASES = [
     ("tornado, seed across the core", "tornado/1.vec",
@@ -31,28 +39,29 @@ CASES = [
 ]
 
 
-def run(binary, field, args, guard, work):
+def run(binary, field, args, variant, work):
     out = os.path.join(work, "surface.vtp")
     report = os.path.join(work, "surface.json")
     command = [binary, "stream", "--field", field, "--out", out, "--report", report, "--quiet"]
-    command += args.split() + ([] if guard else ["--no-fold-guard"])
+    command += args.split() + variant.split()
     env = dict(os.environ, ORTHOFRONT_HISTOGRAMS="0")
     subprocess.run(command, check=True, env=env)
     with open(report) as f:
         return json.load(f)
 
 
-def row(name, guard, r):
+def row(name, variant, r):
     c, q, t = r["counts"], r["quality"], r["times_s"]
     inserted = (c["streamline_insertions"] + c["previous_row_insertions"] +
                 c["insertion_fallbacks"])
     return {
-        "case": name, "fold_guard": guard, "vertices": c["vertices"],
+        "case": name, "variant": variant, "vertices": c["vertices"],
         "quads_pct": 100.0 * c["quads"] / max(1, c["faces"]),
         "angles_within_10_pct": 100.0 * q["quad_angles_within_10deg"],
         "edge_spread": q["edge_spread_median"], "folds": q["folds"],
         "non_manifold_edges": q["non_manifold_edges"], "t_junctions": q["t_junctions"],
         "degenerate_faces": q["degenerate_faces"], "fold_rips": c["fold_rips"],
+        "stall_cuts": c["stall_cuts"],
         "clamped_pct": 100.0 * c["clamped_alpha"] / max(1, c["vertex_steps"]),
         "clamped_by_cause": c["clamped_alpha_by_cause"],
         "fallback_pct": 100.0 * c["insertion_fallbacks"] / max(1, inserted),
@@ -72,8 +81,8 @@ def main():
     parser.add_argument("--json", help="also write the rows here")
     a = parser.parse_args()
     rows = []
-    header = ("case", "guard", "verts", "quads%", "ang±10%", "spread", "folds", "nm", "tj",
-              "degen", "rips", "clamp%", "fallb%", "skip%", "total s", "alpha", "advance",
+    header = ("case", "variant", "verts", "quads%", "ang±10%", "spread", "folds", "nm", "tj",
+              "degen", "rips", "stall", "clamp%", "fallb%", "skip%", "total s", "alpha", "advance",
               "adapt", "stitch", "quality")
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
@@ -83,21 +92,21 @@ def main():
             if not os.path.exists(field):
                 print("| %s | skipped: %s not found |" % (name, field))
                 continue
-            for guard in (False, True):
-                x = row(name, guard, run(a.binary, field, args, guard, work))
+            for variant, options in VARIANTS:
+                x = row(name, variant, run(a.binary, field, args, options, work))
                 rows.append(x)
                 t = x["times_s"]
-                print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %.1f | %.1f | "
+                print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %d | %.1f | %.1f | "
                       "%.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |" % (
-                          name, "on" if guard else "off", x["vertices"], x["quads_pct"],
+                          name, variant, x["vertices"], x["quads_pct"],
                           x["angles_within_10_pct"], x["edge_spread"], x["folds"],
                           x["non_manifold_edges"], x["t_junctions"], x["degenerate_faces"],
-                          x["fold_rips"], x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
+                          x["fold_rips"], x["stall_cuts"], x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
                           t.get("total", 0), t.get("alpha", 0), t.get("advance", 0),
                           t.get("adapt", 0), t.get("stitch", 0), t.get("quality", 0)))
     print()
     for x in rows:
-        if x["fold_guard"]:
+        if x["variant"] == "default":
             print("%s: clamped α by cause %s; insertion fallbacks by cause %s" % (
                 x["case"], json.dumps(x["clamped_by_cause"]), json.dumps(x["fallbacks_by_cause"])))
     if a.json:

@@ -13,7 +13,7 @@ namespace orthofront::cli {
 namespace {
 
 // 2: the report stores clamped-α and insertion-fallback counts by cause.
-constexpr std::uint32_t kFormat = 2;
+constexpr std::uint32_t kFormat = 3;
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 
 std::string read_file(const std::filesystem::path& path) {

@@ -57,6 +57,10 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_flag("!--no-rip", o.rip, "Never rip the front at saddles");
   c.add_flag("!--no-fold-guard", o.fold_guard,
              "Keep strips whose faces fold over a neighbour instead of ripping the front there");
+  c.add_option("--stall-steps", o.stall_steps,
+               "A front vertex that kept its mesh vertex this many steps (it stopped advancing) "
+               "leaves the front; 0: never")
+      ->check(CLI::NonNegativeNumber);
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},
                                            {"rk4", IntegratorKind::rk4}}));

@@ -82,6 +82,7 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::fold_rips,
     &SurfaceReport::folds_left,
     &SurfaceReport::previous_row_insertions,
+    &SurfaceReport::stall_cuts,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

@@ -365,6 +365,7 @@ class Engine {
                      std::vector<Front<N>>& next) {
     const std::size_t n = f.v.size();
     if (n < 2) return;
+    if (cut_stalled(f, step, queue)) return;
     vel_.resize(n);
     speed_.resize(n);
     alpha_.assign(n, 1.0);
@@ -509,6 +510,26 @@ class Engine {
         next.push_back(std::move(piece));
       }
     }
+  }
+
+  /// Takes the vertices that stopped advancing (StreamSurfaceOptions::stall_steps) out of the
+  /// front; the parts left go back to `queue`. Returns whether any was.
+  bool cut_stalled(Front<N>& f, int step, std::vector<Front<N>>& queue) {
+    if (opt_.stall_steps <= 0 || opt_.method != Method::orthogonal || step <= opt_.stall_steps)
+      return false;
+    const std::size_t n = f.v.size();
+    std::vector<char> keep(n, 1), cut(n, 0);
+    bool any = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int32_t m = f.v[i].mesh;
+      if (m < 0 || step - mesh_.step[static_cast<std::size_t>(m)] <= opt_.stall_steps) continue;
+      keep[i] = 0;
+      any = true;
+      ++report_.stall_cuts;
+    }
+    if (!any) return false;
+    for (auto& part : split(std::move(f), keep, cut)) queue.push_back(std::move(part));
+    return true;
   }
 
   /// The lag bound: vertices behind the lead along lag_axis have their α raised towards the

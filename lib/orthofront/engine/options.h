@@ -78,6 +78,11 @@ struct StreamSurfaceOptions {
   double lag_ramp = 1.0;
 
   bool rip = true;
+  /// A front vertex whose mesh vertex is more than this many steps old leaves the front: it moved
+  /// less than skip_fraction·ℓ in all of them while the front's fastest vertex moved about ℓ a
+  /// step, so it has stopped advancing (a wall, a recirculation bubble); its stream line ends
+  /// there, as at a rip, and the rest of the front goes on. 0: never (orthogonal method only).
+  int stall_steps = 50;
   /// Undo a strip whose faces fold over a neighbour (normals more than 90° apart) and take the
   /// vertices on the fold out of the front, which ends their stream lines there (orthogonal
   /// method only; the timeline baseline is left as the paper has it).

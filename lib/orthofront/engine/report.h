@@ -70,6 +70,9 @@ struct SurfaceReport {
   /// stitched to them folded over a neighbour (local rips), and fold vertices it left in place
   /// after its last try.
   std::size_t fold_rips = 0, folds_left = 0;
+  /// Front vertices taken out because they had stopped advancing (StreamSurfaceOptions::
+  /// stall_steps).
+  std::size_t stall_cuts = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
   std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
   std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;

@@ -1,0 +1,115 @@
+// Fronts that stop advancing: vertices that kept their mesh vertex for stall_steps steps leave the
+// front, and a front running into a no-slip wall of zero vectors (how real data marks solids)
+// gives a valid surface without folds.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <memory>
+
+#include "orthofront/engine/stream_surface.h"
+#include "orthofront/field/analytic.h"
+#include "orthofront/field/grid_field.h"
+#include "orthofront/field/sample_field.h"
+#include "orthofront/seed/seed.h"
+
+using namespace orthofront;
+
+namespace {
+
+void require_valid(const SurfaceResult& r) {
+  const QualityReport& q = r.report.quality;
+  CHECK(q.non_manifold_edges == 0);
+  CHECK(q.degenerate_faces == 0);
+  CHECK(q.t_junctions == 0);
+  CHECK(q.folds == 0);
+  CHECK(q.inconsistent_edges == 0);
+  for (const Vec3& p : r.mesh.positions) REQUIRE(p.allFinite());
+}
+
+/// Stagnation flow onto a no-slip wall at y = 0: v = (2 x y, -y², 0) above it (divergence free,
+/// zero on the wall), exactly zero inside it (y <= 0).
+class WallStagnation final : public Field3 {
+ public:
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override {
+    const double y = std::max(x.y(), 0.0);
+    v = Vec3(2 * x.x() * y, -y * y, 0);
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
+    velocity(x, v);
+    j.setZero();
+    if (x.y() > 0) {
+      j(0, 0) = 2 * x.y();
+      j(0, 1) = 2 * x.x();
+      j(1, 1) = -2 * x.y();
+    }
+    return FieldStatus::inside;
+  }
+  Box<3> domain() const override { return Box<3>{Vec3(-2, -0.5, -0.5), Vec3(2, 1.5, 0.5)}; }
+  std::string describe() const override { return "wall stagnation"; }
+};
+
+}  // namespace
+
+TEST_CASE("a front running into a no-slip wall of zero vectors folds nowhere",
+          "[engine][fold][stall]") {
+  SampleOptions sampling;
+  sampling.resolution = {41, 41, 11};
+  const auto grid = std::make_shared<const VectorGrid>(sample_field(WallStagnation(), sampling));
+  const GridField field(grid);  // zero vectors mark the wall's cells as no data, as in real data
+  // Tilted across z so the surface is not a plane.
+  const Seed<3> seed =
+      make_seed(SeedCurve::line(Vec3(-1, 1.2, -0.3), Vec3(1, 1.2, 0.3)), 21);
+  StreamSurfaceOptions o;
+  o.edge = 0.05;
+  o.max_steps = 600;
+  const SurfaceResult r = build_stream_surface<3>(field, seed, o);
+  INFO("vertices " << r.report.vertices << ", steps " << r.report.steps << ", stall cuts "
+                   << r.report.stall_cuts << ", no-data hits " << r.report.no_data_hits
+                   << ", fold rips " << r.report.fold_rips);
+  CHECK(r.report.vertices > 2000);
+  // The front reaches the wall's cells: they cut it.
+  CHECK(r.report.no_data_hits > 0);
+  require_valid(r);
+  CHECK(r.report.folds_left == 0);
+}
+
+TEST_CASE("vertices that stop advancing leave the front; the surface stays valid",
+          "[engine][stall]") {
+  // The planar saddle (the bench's row): the front halves stall at the stagnation point, where
+  // the surface rips.
+  const auto saddle = make_analytic_field("saddle");
+  const Seed<3> seed = make_seed(SeedCurve::line(Vec3(-1, 1, 0), Vec3(1, 1, 0)), 20);
+  StreamSurfaceOptions o;
+  o.edge = 0.02;
+  o.max_steps = 240;
+  o.stall_steps = 0;
+  const SurfaceResult kept = build_stream_surface<3>(*saddle, seed, o);
+  CHECK(kept.report.stall_cuts == 0);
+  require_valid(kept);
+
+  for (const int window : {50, 10}) {
+    o.stall_steps = window;
+    const SurfaceResult cut = build_stream_surface<3>(*saddle, seed, o);
+    INFO("window " << window << ": " << cut.report.stall_cuts << " cuts, "
+                   << cut.report.skipped_vertex_steps << " of " << cut.report.vertex_steps
+                   << " vertex-steps skipped (" << kept.report.skipped_vertex_steps << " of "
+                   << kept.report.vertex_steps << " without)");
+    CHECK(cut.report.stall_cuts >= 1);
+    require_valid(cut);
+    // Fewer vertex-steps spent on vertices that wait.
+    CHECK(cut.report.skipped_vertex_steps < kept.report.skipped_vertex_steps);
+    // No mesh vertex was kept by a front vertex for longer than the window: every face joins
+    // rows at most window + 1 steps apart.
+    int widest = 0;
+    for (const Face& f : cut.mesh.faces) {
+      int lo = 1 << 30, hi = -1;
+      for (int c = 0; c < f.size; ++c) {
+        const int s = cut.mesh.step[static_cast<std::size_t>(f.v[static_cast<std::size_t>(c)])];
+        lo = std::min(lo, s);
+        hi = std::max(hi, s);
+      }
+      widest = std::max(widest, hi - lo);
+    }
+    CHECK(widest <= window + 1);
+  }
+}
