@@ -1,0 +1,238 @@
+#include "orthofront/engine/adapt.h"
+
+#include <cmath>
+#include <optional>
+#include <utility>
+
+#include "orthofront/engine/for_range.h"
+
+namespace orthofront {
+
+template <int N>
+FrontAdapter<N>::FrontAdapter(const Field<N>& field, const Seed<N>& seed,
+                              const StreamSurfaceOptions& options, const Tolerance& tolerance,
+                              const StopRequest& stop, Mesh& mesh, SurfaceReport& report)
+    : field_(field), seed_(seed), opt_(options), tol_(tolerance), stop_(stop), mesh_(mesh),
+      report_(report) {}
+
+template <int N>
+void FrontAdapter<N>::merge_short(Front<N>& f) {
+  const std::size_t n = f.v.size();
+  if (n < 3) return;
+  const double limit = opt_.merge_factor * opt_.edge;
+  std::vector<FrontVertex<N>> out;
+  out.reserve(n);
+  out.push_back(f.v[0]);
+  // A vertex that keeps its mesh vertex between two others that keep theirs is not merged:
+  // the three old mesh vertices would close a flat triangle on the previous front.
+  const double still = opt_.row_skip == RowSkip::off ? 0.0 : opt_.skip_fraction * opt_.edge;
+  const auto waiting = [still](const FrontVertex<N>& fv) {
+    return fv.origin >= 0 && (fv.x - fv.anchor).norm() <= still;
+  };
+  // Nor is one between two that did not move at all (α clamped to 0): neither can be given a
+  // new mesh vertex (see renew_across_merges), so every face across the merge would be made of
+  // old mesh vertices only.
+  const auto stuck = [this](const FrontVertex<N>& a, const FrontVertex<N>& b) {
+    return !has_moved(a, opt_.edge) && !has_moved(b, opt_.edge);
+  };
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double joined = (f.v[i].x - out.back().x).norm() + (f.v[i + 1].x - f.v[i].x).norm();
+    // A closed front keeps three vertices at least: with two, both of its segments join the
+    // same two vertices, and the faces stitched to them share both edges (non-manifold).
+    const bool loop_kept = !f.closed || out.size() + (n - 1 - i) >= 3;
+    if (joined < limit && loop_kept &&
+        !(waiting(out.back()) && waiting(f.v[i]) && waiting(f.v[i + 1])) &&
+        !stuck(out.back(), f.v[i + 1])) {
+      ++report_.merges;
+      continue;
+    }
+    out.push_back(f.v[i]);
+  }
+  out.push_back(f.v[n - 1]);
+  if (f.closed && out.size() > 3 && !stuck(out[out.size() - 2], out.front())) {
+    // The closing pair: drop the last vertex when it and its closing segment are short.
+    const double joined =
+        (out.back().x - out[out.size() - 2].x).norm() + (out.front().x - out.back().x).norm();
+    if (joined < limit) {
+      out.pop_back();
+      ++report_.merges;
+    }
+  }
+  f.v = std::move(out);
+}
+
+template <int N>
+bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
+                                 std::vector<char>& cut) {
+  const std::size_t n = f.v.size();
+  const double limit = opt_.split_factor * opt_.edge;
+  const std::size_t segments = f.closed ? n : n - 1;
+  jobs_.clear();
+  std::vector<char> unresolved(n, 0);
+  bool any_cut = false;
+  const auto seed_point = [this](double s) {
+    return seed_.point(seed_.closed ? s - std::floor(s) : s);
+  };
+  for (std::size_t i = 0; i < segments; ++i) {
+    const std::size_t j = (i + 1) % n;
+    const double length = (f.v[j].x - f.v[i].x).norm();
+    if (!(length > limit)) continue;
+    const int pieces = static_cast<int>(std::ceil(length / opt_.edge));
+    double s_next = f.v[j].s;
+    if (f.closed && j == 0) s_next += 1.0;  // wrap the seed parameter on the closing segment
+    const std::size_t first = jobs_.size();
+    Vec<N> previous = seed_point(f.v[i].s);
+    const Vec<N> last = seed_point(s_next);
+    bool resolved = true;
+    for (int k = 1; k < pieces && resolved; ++k) {
+      InsertionJob job;
+      job.segment = i;
+      job.lambda = static_cast<double>(k) / pieces;
+      job.s = f.v[i].s + job.lambda * (s_next - f.v[i].s);
+      job.t = f.v[i].t + job.lambda * (f.v[j].t - f.v[i].t);
+      const Vec<N> p = seed_point(job.s);
+      resolved = p != previous && p != last;
+      previous = p;
+      jobs_.push_back(job);
+    }
+    if (!resolved) {
+      jobs_.resize(first);
+      unresolved[i] = 1;
+      any_cut = true;
+    }
+  }
+  cut.clear();
+  if (jobs_.empty()) {
+    if (any_cut) cut = std::move(unresolved);
+    return any_cut;
+  }
+  // Each insertion integrates a stream line from the seed: independent and costly, so they run
+  // in parallel; the mesh vertices are then emitted in front order, as a serial run would.
+  for_range(
+      jobs_.size(), 2,
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t k = b; k < e; ++k) insertion_point(f, old, jobs_[k]);
+      },
+      1);
+  std::vector<FrontVertex<N>> out;
+  out.reserve(n + jobs_.size());
+  if (any_cut) cut.reserve(n + jobs_.size());
+  std::size_t next_job = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    out.push_back(f.v[i]);
+    if (any_cut) cut.push_back(unresolved[i]);
+    const std::size_t j = (i + 1) % n;
+    for (; next_job < jobs_.size() && jobs_[next_job].segment == i; ++next_job) {
+      const InsertionJob& job = jobs_[next_job];
+      report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
+      if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
+      if (job.outcome == InsertionJob::Outcome::previous_row) ++report_.previous_row_insertions;
+      if (job.outcome == InsertionJob::Outcome::fallback) {
+        ++report_.insertion_fallbacks;
+        ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
+      }
+      FrontVertex<N> nv;
+      nv.s = job.s;
+      nv.t = job.t;
+      nv.x = job.x;
+      nv.anchor = nv.x;
+      nv.origin = -1;
+      const double a =
+          mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
+      nv.mesh = emit_vertex(mesh_, nv, seed_.closed, a, f.id, step);
+      out.push_back(nv);
+      if (any_cut) cut.push_back(0);
+      ++report_.splits;
+    }
+  }
+  f.v = std::move(out);
+  return any_cut;
+}
+
+template <int N>
+double FrontAdapter<N>::alpha_or_zero(const FrontVertex<N>& fv) const {
+  return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
+}
+
+template <int N>
+bool FrontAdapter<N>::shoot(const Front<N>& f, std::size_t i, std::size_t j,
+                            const Vec<N>& guess, const Vec<N>& start, double duration,
+                            InsertionJob& job, FieldStatus& status) const {
+  const double seg = (f.v[j].x - f.v[i].x).norm();
+  IntegrationResult<N> r = integrate_dopri5(field_, start, duration, tol_, 0, &stop_);
+  job.evaluations += r.evaluations;
+  double time = job.t;
+  for (int iteration = 0; iteration < 4 && r.status == FieldStatus::inside; ++iteration) {
+    Vec<N> w;
+    if (field_.velocity(r.x, w) != FieldStatus::inside) break;
+    const double ww = w.squaredNorm();
+    if (!(ww > 0)) break;
+    const double delta = (guess - r.x).dot(w) / ww;
+    if (std::abs(delta) * std::sqrt(ww) < 1e-6 * seg) break;
+    // A Newton step longer than the segment means the stream line runs nearly parallel to
+    // the front here (or the flow is slow): give up instead of integrating for ages.
+    if (std::abs(delta) * std::sqrt(ww) > seg) break;
+    r = integrate_dopri5(field_, r.x, delta, tol_, 0, &stop_);
+    job.evaluations += r.evaluations + 1;
+    time += delta;
+  }
+  status = r.status;
+  if (r.status != FieldStatus::inside || !((r.x - guess).norm() < 0.25 * seg)) return false;
+  job.t = time;
+  job.x = r.x;
+  return true;
+}
+
+template <int N>
+void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
+                                      InsertionJob& job) const {
+  using Outcome = typename InsertionJob::Outcome;
+  const std::size_t i = job.segment;
+  const std::size_t j = (i + 1) % f.v.size();
+  const double s = job.s;
+  if (job.t == 0) {
+    job.x = seed_.point(s - std::floor(s));
+    job.outcome = Outcome::seed;
+    return;
+  }
+  const Vec<N> guess = cubic_point(f, i, job.lambda);
+  if (opt_.insertion == Insertion::streamline || opt_.insertion == Insertion::previous_row) {
+    // The previous front's point between the ends' origins (on their stream lines to within
+    // the interpolation) and the time left to this front, where the ends came from neighbours.
+    std::optional<std::pair<Vec<N>, double>> row_start;
+    if (old && f.v[i].origin >= 0 && f.v[j].origin >= 0) {
+      const auto oi = static_cast<std::size_t>(f.v[i].origin);
+      const auto oj = static_cast<std::size_t>(f.v[j].origin);
+      const std::size_t n_old = old->v.size();
+      if (oj == oi + 1 || (old->closed && oj == (oi + 1) % n_old))
+        row_start.emplace(cubic_point(*old, oi, job.lambda),
+                          job.t - (old->v[oi].t + job.lambda * (old->v[oj].t - old->v[oi].t)));
+    }
+    FieldStatus status = FieldStatus::inside;
+    // streamline: from the seed (exact), then from the previous row where that fails;
+    // previous-row: from the previous row (one step's integration), else from the seed.
+    const bool row_first = opt_.insertion == Insertion::previous_row && row_start;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      const bool from_row = (attempt == 0) == row_first;
+      if (from_row && !row_start) break;
+      const Vec<N> start = from_row ? row_start->first : seed_.point(s - std::floor(s));
+      if (shoot(f, i, j, guess, start, from_row ? row_start->second : job.t, job, status)) {
+        job.outcome = from_row ? Outcome::previous_row : Outcome::streamline;
+        return;
+      }
+    }
+    job.outcome = Outcome::fallback;
+    job.left_domain = status != FieldStatus::inside;
+    job.x = guess;
+    return;
+  }
+  job.outcome = Outcome::interpolated;
+  job.x = opt_.insertion == Insertion::cubic
+              ? guess
+              : Vec<N>(f.v[i].x + job.lambda * (f.v[j].x - f.v[i].x));
+}
+
+template class FrontAdapter<3>;
+template class FrontAdapter<4>;
+
+}  // namespace orthofront

@@ -1,0 +1,89 @@
+#pragma once
+/// Adapt (paper §5): merge short front segments, split long ones with vertices on their true
+/// stream lines (insertion), and cut segments that no stream line can fill.
+#include <cstddef>
+#include <vector>
+
+#include "orthofront/engine/front.h"
+#include "orthofront/engine/options.h"
+#include "orthofront/engine/report.h"
+#include "orthofront/field/field.h"
+#include "orthofront/integrate/runge_kutta.h"
+#include "orthofront/mesh/mesh.h"
+#include "orthofront/seed/seed.h"
+
+namespace orthofront {
+
+template <int N>
+class FrontAdapter {
+ public:
+  /// Inserted vertices become mesh vertices of `mesh`; counts go to `report`. `stop` is handed
+  /// to the insertions' integrations. All are owned by the engine and outlive this.
+  FrontAdapter(const Field<N>& field, const Seed<N>& seed, const StreamSurfaceOptions& options,
+               const Tolerance& tolerance, const StopRequest& stop, Mesh& mesh,
+               SurfaceReport& report);
+
+  /// Merges segments shorter than merge_factor·ℓ into their neighbours (not where that would
+  /// stitch faces of old mesh vertices only; see the body).
+  void merge_short(Front<N>& f);
+
+  /// Splits segments longer than split_factor·ℓ with vertices on the stream lines of seed
+  /// parameters between those of their ends. Where the seed parameter cannot tell those stream
+  /// lines apart any more (some of them would start from the seed point of an end or of another
+  /// insertion on the segment), the segment is cut instead: cut[k] != 0 after vertex k of the
+  /// returned front (split_front's convention); returns whether any segment was cut.
+  ///
+  /// Near a separating stream line, neighbouring stream lines diverge exponentially and
+  /// insertions halve the seed interval between front vertices every step or so, until it is
+  /// below the resolution of a double (abc: about 23 steps). Vertices inserted after that share
+  /// the seed parameter and so the stream line of an end: the front runs along that one stream
+  /// line, and every vertex inserted there stays on it, moving only along it. The front then
+  /// grows a fold of zero width that stitch fills with zero-area faces (with α < 0 kept it settles
+  /// into a cycle that emits new mesh vertices exactly on the previous step's), and with a mesh
+  /// vertex every few 1e-6 along the stream line (T-junctions). No surface lies between such
+  /// ends: the surface tears there, as at a rip.
+  bool split_long(Front<N>& f, const Front<N>* old, int step, std::vector<char>& cut);
+
+ private:
+  /// A vertex to insert at fraction λ of segment i, and where it went.
+  struct InsertionJob {
+    std::size_t segment = 0;
+    double lambda = 0, s = 0, t = 0;
+    Vec<N> x = Vec<N>::Zero();
+    int evaluations = 0;
+    enum class Outcome : unsigned char {
+      seed,
+      streamline,
+      previous_row,
+      fallback,
+      interpolated
+    } outcome{};
+    bool left_domain = false;  ///< a fallback whose stream line left the domain or met no data
+  };
+
+  /// The α of the mesh vertex a front vertex stands for (0 for none).
+  double alpha_or_zero(const FrontVertex<N>& fv) const;
+
+  /// Follows the stream line from `start` for `duration`, then moves it along itself onto the
+  /// front: the plane through the cubic guess normal to the flow. On success (inside, within a
+  /// quarter segment of the guess) sets job.x and job.t; `status` tells why it failed otherwise.
+  bool shoot(const Front<N>& f, std::size_t i, std::size_t j, const Vec<N>& guess,
+             const Vec<N>& start, double duration, InsertionJob& job, FieldStatus& status) const;
+
+  /// Fills job.x (and job.t when the point is put on its true stream line). Thread-safe.
+  void insertion_point(const Front<N>& f, const Front<N>* old, InsertionJob& job) const;
+
+  const Field<N>& field_;
+  const Seed<N>& seed_;
+  const StreamSurfaceOptions& opt_;
+  const Tolerance& tol_;
+  const StopRequest& stop_;
+  Mesh& mesh_;
+  SurfaceReport& report_;
+  std::vector<InsertionJob> jobs_;  ///< scratch, reused between fronts and steps
+};
+
+extern template class FrontAdapter<3>;
+extern template class FrontAdapter<4>;
+
+}  // namespace orthofront

@@ -1,0 +1,204 @@
+#include "orthofront/engine/alpha_step.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+
+#include "orthofront/engine/for_range.h"
+
+namespace orthofront {
+
+template <int N>
+AlphaStep<N>::AlphaStep(const Field<N>& field, const StreamSurfaceOptions& options, Mesh& mesh,
+                        SurfaceReport& report, StepRecord& record)
+    : field_(field), opt_(options), mesh_(mesh), report_(report), record_(record) {
+  h_star_ = -std::log(1.0 - opt_.damping);
+}
+
+template <int N>
+void AlphaStep<N>::begin_step() {
+  ortho_sum_ = 0;
+  ortho_count_ = 0;
+}
+
+template <int N>
+double AlphaStep<N>::orthogonality_mean() const {
+  return ortho_count_ ? ortho_sum_ / static_cast<double>(ortho_count_) : 0.0;
+}
+
+template <int N>
+typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<N>>& vel,
+                                                  std::vector<double>& speed,
+                                                  std::vector<double>& alpha,
+                                                  std::vector<char>& cut) {
+  damping_infeasible_ = false;
+  const std::size_t n = f.v.size();
+  const std::size_t segments = f.closed ? n : n - 1;
+  p_.resize(segments);
+  q_.resize(segments);
+  r_.resize(segments);
+  seg_ok_.assign(segments, 1);
+  seg_err_.resize(segments);
+  for_range(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+    Vec<N> vm;
+    Mat<N> jm;
+    for (std::size_t i = b; i < e; ++i) {
+      const std::size_t j = (i + 1) % n;
+      const Vec<N> d = f.v[j].x - f.v[i].x;
+      const Vec<N> mid = 0.5 * (f.v[i].x + f.v[j].x);
+      if (field_.velocity_jacobian(mid, vm, jm) != FieldStatus::inside) {
+        seg_ok_[i] = 0;
+        continue;
+      }
+      p_[i] = 0.5 * d.dot(jm * vel[i]) - vel[i].dot(vm);
+      q_[i] = 0.5 * d.dot(jm * vel[j]) + vel[j].dot(vm);
+      r_[i] = d.dot(vm);
+      const double denom = d.norm() * vm.norm();
+      seg_err_[i] = denom > 0 ? std::abs(r_[i]) / denom : 0.0;
+    }
+  });
+  report_.field_evaluations += segments;
+  bool any_bad = false;
+  for (std::size_t i = 0; i < segments; ++i)
+    if (!seg_ok_[i]) {
+      cut[i] = 1;
+      any_bad = true;
+    }
+  if (any_bad) return Outcome::cut;
+  for (std::size_t i = 0; i < segments; ++i) {
+    ortho_sum_ += seg_err_[i];
+    ++ortho_count_;
+    record_.orthogonality_max = std::max(record_.orthogonality_max, seg_err_[i]);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (f.v[i].x == f.v[i].anchor && f.v[i].mesh >= 0) {
+      // Vertex error: mean |cos| of the adjacent segments.
+      const std::size_t a = f.closed ? (i + n - 1) % n : (i == 0 ? 0 : i - 1);
+      const std::size_t b = f.closed ? i : std::min(i, segments - 1);
+      mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (seg_err_[a] + seg_err_[b]);
+    }
+
+  if (f.closed) {
+    double log_product = 0;
+    bool negative = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double ratio = -p_[i] / q_[i];
+      negative = negative != (ratio < 0);
+      log_product += std::log(std::abs(ratio));
+    }
+    if (std::abs(log_product) > std::abs(report_.closed_log_product))
+      report_.closed_log_product = log_product;
+    std::size_t drop = 0;
+    for (std::size_t i = 1; i < n; ++i)
+      if (std::abs(r_[i]) < std::abs(r_[drop])) drop = i;
+    // Rotate so the dropped equation joins the last and the first vertex.
+    const auto shift = static_cast<long>((drop + 1) % n);
+    std::rotate(f.v.begin(), f.v.begin() + shift, f.v.end());
+    std::rotate(vel.begin(), vel.begin() + shift, vel.end());
+    std::rotate(speed.begin(), speed.begin() + shift, speed.end());
+    std::rotate(p_.begin(), p_.begin() + shift, p_.end());
+    std::rotate(q_.begin(), q_.begin() + shift, q_.end());
+    std::rotate(r_.begin(), r_.begin() + shift, r_.end());
+    if (negative || std::abs(log_product) > opt_.closed_log_product_limit) {
+      // No closed orthogonal front exists here (e.g. a spiral): open the front at the
+      // dropped segment instead of folding the mesh.
+      f.closed = false;
+      report_.closed_front_opened = true;
+      report_.message = "closed front opened: ln|prod(-p/q)| = " + std::to_string(log_product) +
+                        (negative ? " (negative product)" : "") +
+                        "; no closed flow-orthogonal front exists for this seed";
+    }
+  }
+  const std::size_t m = n - 1;
+  aln_.resize(n);
+  kernel_.resize(n);
+  const AlphaSolver::Result res =
+      solver_.solve(std::span<const double>(p_.data(), m), std::span<const double>(q_.data(), m),
+                    std::span<const double>(r_.data(), m), aln_, kernel_);
+  if (!res.ok) {
+    // Singular system (e.g. a segment of zero length): fall back to uniform advance.
+    std::fill(alpha.begin(), alpha.end(), 1.0);
+    return Outcome::solved;
+  }
+  double mu = opt_.mu;
+  if (opt_.mu_mode == MuMode::damping) {
+    const DampingChoice choice = choose_damping_mu(
+        aln_, kernel_, std::span<const double>(speed.data(), n), opt_.edge / h_star_);
+    damping_infeasible_ = !choice.feasible;
+    if (!choice.feasible) ++report_.infeasible_damping_steps;
+    // An unbounded μ means the kernel vanishes on every moving vertex: advance along α^L.
+    mu = std::isfinite(choice.mu) ? choice.mu : 0.0;
+  }
+  for (std::size_t i = 0; i < n; ++i) alpha[i] = aln_[i] + mu * kernel_[i];
+  return Outcome::solved;
+}
+
+template <int N>
+void AlphaStep<N>::measure_orthogonality(const Front<N>& f, const std::vector<Vec<N>>& vel) {
+  const std::size_t n = f.v.size();
+  const std::size_t segments = f.closed ? n : n - 1;
+  for (std::size_t i = 0; i < segments; ++i) {
+    const std::size_t j = (i + 1) % n;
+    const Vec<N> d = f.v[j].x - f.v[i].x;
+    const Vec<N> vm = 0.5 * (vel[i] + vel[j]);
+    const double denom = d.norm() * vm.norm();
+    const double err = denom > 0 ? std::abs(d.dot(vm)) / denom : 0.0;
+    ortho_sum_ += err;
+    ++ortho_count_;
+    record_.orthogonality_max = std::max(record_.orthogonality_max, err);
+  }
+}
+
+template <int N>
+void AlphaStep<N>::clamp_negative(const Front<N>& f, std::vector<double>& alpha,
+                                  const std::vector<double>& speed) {
+  const std::size_t n = f.v.size();
+  double slow = -1;  // the slow-flow threshold, computed at the first clamp
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(alpha[i] < 0)) continue;
+    ++report_.negative_alpha;
+    if (opt_.negative_alpha != NegativeAlpha::clamp) continue;
+    alpha[i] = 0;
+    ++report_.clamped_alpha;
+    if (slow < 0) slow = opt_.rip_speed_fraction * median_of(speed);
+    if (speed[i] < slow)
+      ++report_.clamped_slow_flow;
+    else if (!f.closed && (i == 0 || i + 1 == n))
+      ++report_.clamped_front_end;
+    else if (damping_infeasible_)
+      ++report_.clamped_infeasible_step;
+    else
+      ++report_.clamped_ahead;
+  }
+}
+
+template <int N>
+void AlphaStep<N>::raise_lagging(const Front<N>& f, std::vector<double>& alpha) {
+  const std::size_t n = f.v.size();
+  double lead = -std::numeric_limits<double>::infinity();
+  double alpha_max = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    lead = std::max(lead, f.v[i].x[opt_.lag_axis]);
+    alpha_max = std::max(alpha_max, alpha[i]);
+  }
+  const double ramp = std::clamp(opt_.lag_ramp, 0.0, 1.0) * opt_.max_lag;
+  const double start = opt_.max_lag - ramp;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double lag = lead - f.v[i].x[opt_.lag_axis];
+    if (lag <= start || alpha[i] >= alpha_max) continue;
+    double w = 1.0;
+    if (ramp > 0 && lag < opt_.max_lag) {
+      const double u = (lag - start) / ramp;
+      w = u * u * (3 - 2 * u);  // smoothstep: no kink where the ramp begins or ends
+    }
+    alpha[i] += w * (alpha_max - alpha[i]);
+    ++report_.lag_raised_alpha;
+  }
+}
+
+template class AlphaStep<3>;
+template class AlphaStep<4>;
+
+}  // namespace orthofront

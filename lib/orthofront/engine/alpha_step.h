@@ -1,0 +1,76 @@
+#pragma once
+/// The α step (paper §4): per-vertex speed factors α_i that make the advanced front orthogonal to
+/// the flow, with the damping choice of μ, a closed front's rotation, negative-α clamping (by
+/// cause) and the lag bound of path surfaces.
+#include <cstddef>
+#include <vector>
+
+#include "orthofront/engine/front.h"
+#include "orthofront/engine/options.h"
+#include "orthofront/engine/report.h"
+#include "orthofront/field/field.h"
+#include "orthofront/mesh/mesh.h"
+#include "orthofront/solve/alpha_solver.h"
+
+namespace orthofront {
+
+template <int N>
+class AlphaStep {
+ public:
+  enum class Outcome { solved, cut };
+
+  /// Counts go to `report`, per-step figures to `record`, vertex errors to `mesh` (all owned by
+  /// the engine and outliving this).
+  AlphaStep(const Field<N>& field, const StreamSurfaceOptions& options, Mesh& mesh,
+            SurfaceReport& report, StepRecord& record);
+
+  /// The largest front step in α-time that damping allows: h* = -ln(1 - κ).
+  double h_star() const { return h_star_; }
+
+  /// Starts a step's orthogonality tally.
+  void begin_step();
+  /// Mean |cos(front tangent, v)| over the segments seen this step.
+  double orthogonality_mean() const;
+
+  /// Builds the equations p_i α_i + q_i α_{i+1} = -r_i from the velocities `vel` (speeds
+  /// `speed`) and solves them into `alpha`. A segment whose midpoint has no flow marks cut[i] and
+  /// returns `cut`. A closed front drops its equation of smallest |r| and is rotated (with `vel`
+  /// and `speed`) so that it becomes the closing segment; where no closed orthogonal front exists
+  /// it is opened there.
+  Outcome solve(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>& speed,
+                std::vector<double>& alpha, std::vector<char>& cut);
+
+  /// The timeline baseline's orthogonality figures (it solves nothing).
+  void measure_orthogonality(const Front<N>& f, const std::vector<Vec<N>>& vel);
+
+  /// α < 0 becomes 0 (NegativeAlpha::clamp), counted by cause: slow flow, the end of an open
+  /// front, an infeasible damping step (the last solve's), or ahead of its neighbours.
+  void clamp_negative(const Front<N>& f, std::vector<double>& alpha,
+                      const std::vector<double>& speed);
+
+  /// The lag bound: vertices behind the lead along lag_axis have their α raised towards the
+  /// front's largest α, smoothly from lag (1 - lag_ramp)·max_lag to all of it at max_lag, so they
+  /// keep pace instead of falling further behind while neighbours' α differ little (a step in α
+  /// between neighbours tilts the front and folds it; see StreamSurfaceOptions::max_lag).
+  void raise_lagging(const Front<N>& f, std::vector<double>& alpha);
+
+ private:
+  const Field<N>& field_;
+  const StreamSurfaceOptions& opt_;
+  Mesh& mesh_;
+  SurfaceReport& report_;
+  StepRecord& record_;
+  double h_star_ = 0;
+  bool damping_infeasible_ = false;  ///< the last solve's damping target could not be met
+  double ortho_sum_ = 0;
+  std::size_t ortho_count_ = 0;
+  AlphaSolver solver_;
+  // Scratch, reused between fronts and steps.
+  std::vector<double> p_, q_, r_, aln_, kernel_, seg_err_;
+  std::vector<char> seg_ok_;
+};
+
+extern template class AlphaStep<3>;
+extern template class AlphaStep<4>;
+
+}  // namespace orthofront
