@@ -6,50 +6,23 @@
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "orthofront/error.h"
+#include "orthofront/seed/seed_check.h"
 
 namespace orthofront::cli {
 
-void check_stream_seed(const Field3& field_ref, const Seed<3>& seed, const SurfaceJob& job) {
-  const Field3* field = &field_ref;
-  std::size_t inside = 0, no_data = 0, outside = 0, still = 0;
-  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero(), first_still = Vec3::Zero();
+void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job) {
+  SeedSurvey survey;
   for (double s : seed.parameters) {
-    Vec3 v;
+    Vec3 v = Vec3::Zero();
     const Vec3 x = seed.point(s);
-    const FieldStatus status = field->velocity(x, v);
-    if (status == FieldStatus::inside) {
-      ++inside;
-      if (v.squaredNorm() == 0 && still++ == 0) first_still = x;
-    } else if (status == FieldStatus::no_data) {
-      if (no_data++ == 0) first_no_data = x;
-    } else if (outside++ == 0) {
-      first_outside = x;
-    }
+    survey.add(x, field.velocity(x, v), v);
   }
-  const auto point = [](const Vec3& x) {
-    char text[128];
-    std::snprintf(text, sizeof text, "(%g, %g, %g)", x.x(), x.y(), x.z());
-    return std::string(text);
-  };
-  const std::string vertices_inside = std::to_string(inside) + " of " +
-                                      std::to_string(seed.parameters.size()) + " seed vertices";
-  if (inside < 2) {
-    // Inside the domain but without data (NaN, fill values, zero vectors) is not "outside".
-    if (no_data > 0 && no_data + inside == seed.parameters.size())
-      throw InvalidArgument("seed '" + job.seed + "' lies where field '" + job.field +
-                            "' has no data (NaN, fill values or zero vectors; e.g. at the point " +
-                            point(first_no_data) + "; " + field->describe() + ")");
-    throw InvalidArgument("seed '" + job.seed + "' lies outside the domain of field '" +
-                          job.field + "' (" + vertices_inside + " inside, at least 2 needed; " +
-                          "e.g. the point " + point(first_outside) + " is outside; " +
-                          field->describe() + ")");
-  }
-  // A flow that stands still along the whole seed moves no front: nothing to build.
-  if (still == inside)
-    throw InvalidArgument("field '" + job.field + "' has zero velocity at every vertex of seed '" +
-                          job.seed + "' inside its domain (" + vertices_inside +
-                          " inside; e.g. at the point " + point(first_still) +
-                          "): no flow to build a surface from");
+  SeedContext context;
+  context.seed = "seed '" + job.seed + "'";
+  context.field = "field '" + job.field + "'";
+  context.domain = describe_box(field.domain(), 3);
+  context.about = field.describe();
+  require_seed_inside(survey, context, true);
 }
 
 SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {

@@ -14,6 +14,7 @@
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
 #include "orthofront/integrate/runge_kutta.h"
+#include "orthofront/seed/seed_check.h"
 
 namespace orthofront {
 
@@ -497,15 +498,17 @@ class Engine {
     }
     // Vertices outside the domain or in no-data cells cut the seed into several fronts.
     std::vector<char> keep(f.v.size(), 1);
-    std::size_t inside = 0;
+    SeedSurvey survey;
     for (std::size_t i = 0; i < f.v.size(); ++i) {
-      Vec<N> v;
-      keep[i] = field_.velocity(f.v[i].x, v) == FieldStatus::inside;
-      inside += keep[i] ? 1 : 0;
+      Vec<N> v = Vec<N>::Zero();
+      const FieldStatus status = field_.velocity(f.v[i].x, v);
+      keep[i] = status == FieldStatus::inside;
+      survey.add(f.v[i].x.template head<3>(), status, v.template head<3>());
     }
-    if (inside < 2)
-      throw InvalidArgument("seed curve has " + std::to_string(inside) +
-                            " vertices inside the field's domain; at least 2 are needed");
+    SeedContext context;
+    context.field = "field '" + field_.describe() + "'";
+    context.dimension = std::min(N, 3);
+    require_seed_inside(survey, context, false);
     std::vector<Front<N>> out;
     std::vector<char> cut(f.v.size(), 0);
     for (auto& part : split(std::move(f), keep, cut)) {

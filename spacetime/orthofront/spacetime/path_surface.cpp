@@ -11,6 +11,7 @@
 
 #include "orthofront/error.h"
 #include "orthofront/seed/seed.h"
+#include "orthofront/seed/seed_check.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/spacetime/lifted_field.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -106,60 +107,31 @@ std::pair<double, std::string> choose_time_scale(const UnsteadyField& flow, cons
 }
 
 // At least 2 seed vertices must lie inside the domain, with data, at t0 (the engine's own check
-// says less): the message names the seed, the field, t0 and the domain, and tells a seed where
-// the field has no data (NaN, fill values, zero vectors) from one outside.
+// knows neither the time nor the names).
 void check_seed(const UnsteadyField& flow, const Seed<3>& seed, const PathSurfaceOptions& o) {
   const int d = flow.dimension();
-  std::size_t inside = 0, no_data = 0;
-  Vec3 first_outside = Vec3::Zero(), first_no_data = Vec3::Zero();
-  bool any_outside = false;
+  SeedSurvey survey;
   for (double s : seed.parameters) {
-    Vec3 v;
+    Vec3 v = Vec3::Zero();
     const Vec3 x = seed.point(s);
-    const FieldStatus status = flow.velocity(x, o.t0, v);
-    if (status == FieldStatus::inside) {
-      ++inside;
-    } else if (status == FieldStatus::no_data) {
-      if (no_data++ == 0) first_no_data = x;
-    } else if (!any_outside) {
-      any_outside = true;
-      first_outside = x;
-    }
+    survey.add(x, flow.velocity(x, o.t0, v), v);
   }
-  if (inside >= 2) return;
-  const auto number = [](double value) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%g", value);
-    return std::string(text);
-  };
-  const auto point = [&](const Vec3& x) {
-    std::string text = "(";
-    for (int a = 0; a < d; ++a) text += (a ? ", " : "") + number(x[a]);
-    return text + ")";
-  };
-  const Box<3> box = flow.domain();
-  std::string domain;
-  for (int a = 0; a < d; ++a)
-    domain += (a ? " x [" : "[") + number(box.lo[a]) + ", " + number(box.hi[a]) + "]";
+  char t0[32];
+  std::snprintf(t0, sizeof t0, "%g", o.t0);
+  SeedContext context;
+  context.seed = o.seed_name.empty() ? "the seed curve" : "seed '" + o.seed_name + "'";
+  context.field = "field '" + (o.field_name.empty() ? flow.describe() : o.field_name) + "'";
+  context.when = std::string(" at t0 = ") + t0;
+  context.domain = describe_box(flow.domain(), d);
   const TimeRange times = flow.time_range();
-  if (std::isfinite(times.begin) || std::isfinite(times.end))
-    domain += ", t in [" + number(times.begin) + ", " + number(times.end) + "]";
-  const std::string seed_text =
-      o.seed_name.empty() ? "the seed curve" : "seed '" + o.seed_name + "'";
-  const std::string field_text =
-      "field '" + (o.field_name.empty() ? flow.describe() : o.field_name) + "'";
-  const std::string about = o.field_name.empty() ? "" : "; " + flow.describe();
-  if (no_data > 0 && !any_outside)
-    throw InvalidArgument(seed_text + " lies where " + field_text + " has no data at t0 = " +
-                          number(o.t0) + " (NaN, fill values or zero vectors; " +
-                          std::to_string(inside) + " of " + std::to_string(seed.parameters.size()) +
-                          " seed vertices with data, at least 2 needed; e.g. at the point " +
-                          point(first_no_data) + "; domain " + domain + about + ")");
-  throw InvalidArgument(seed_text + " lies outside the domain of " + field_text + " at t0 = " +
-                        number(o.t0) + " (" + std::to_string(inside) + " of " +
-                        std::to_string(seed.parameters.size()) +
-                        " seed vertices inside, at least 2 needed; e.g. the point " +
-                        point(first_outside) + " is outside the domain " + domain + about + ")");
+  if (std::isfinite(times.begin) || std::isfinite(times.end)) {
+    char range[80];
+    std::snprintf(range, sizeof range, ", t in [%g, %g]", times.begin, times.end);
+    context.domain += range;
+  }
+  context.about = o.field_name.empty() ? "" : flow.describe();
+  context.dimension = d;
+  require_seed_inside(survey, context, false);
 }
 
 struct Run {

@@ -1,3 +1,4 @@
+#include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/streak_surface.h"
 
 #include "orthofront/spacetime/bulk_flow_map.h"
@@ -586,10 +587,20 @@ StreakReport StreakBuilder::run() {
                         : static_cast<int>(std::clamp(std::ceil(seed_.length() / o_.edge), 1.0, 1e6)) + 1;
   seed_params_ = seed_.sample(count);
   report_.seed_count = seed_params_.size();
+  SeedSurvey survey;
+  for (const double s : seed_params_) {
+    Vec3 v = Vec3::Zero();
+    const Vec3 x = seed_point(s);
+    survey.add(x, flow_.velocity(x, o_.release_begin, v), v);
+  }
+  SeedContext context;
+  context.seed = seed_name();
+  context.field = "field '" + field_name() + "'";
+  context.when = " at t = " + number(o_.release_begin);
+  context.domain = describe_box(flow_.domain(), flow_.dimension());
+  context.dimension = flow_.dimension();
+  require_seed_inside(survey, context, false);
   const double median = seed_speed_median(seed_params_);
-  if (median < 0)
-    throw InvalidArgument(seed_name() + " lies outside the domain of " + field_name() +
-                          " at t = " + number(o_.release_begin) + " (or where it has no data)");
   const double span = o_.release_end - o_.release_begin;
   double step = o_.release_step > 0 ? o_.release_step : (median > 0 ? o_.edge / median : span / 100);
   const double rows = std::clamp(std::round(span / step), 1.0, 1e7);
