@@ -290,6 +290,13 @@ TEST_CASE("quality: degenerate faces", "[quality]") {
   const Mesh tiny = grid(2, 2, [](int i, int j) { return Vec3(1e-8 * i, 1e-8 * j, 0); });
   CHECK(measure_quality(tiny).degenerate_faces == 0);
 
+  // ... relative to the face's own edges: a tiny, well-shaped face among large ones is fine too
+  // (a face near a critical point), a needle of the same area is not.
+  Mesh mixed = grid(4, 4, [](int i, int j) { return Vec3(i, j, 0); });
+  mixed.add_triangle(add(mixed, 10, 0), add(mixed, 10 + 1e-7, 0), add(mixed, 10, 1e-7));
+  mixed.add_triangle(add(mixed, 20, 0), add(mixed, 21, 0), add(mixed, 20.5, 1e-14));
+  CHECK(measure_quality(mixed).degenerate_faces == 1);
+
   Mesh thin;
   thin.add_triangle(add(thin, 0, 0), add(thin, 1, 0), add(thin, 0.5, 1e-7));
   CHECK(measure_quality(thin).degenerate_faces == 0);

@@ -72,7 +72,7 @@ class StripStitcher {
 
   /// Whether the face add_face would write for these corners has (near) zero area: below
   /// 1e-9 ℓ², far above rounding and far below any face worth keeping (quality counts a face
-  /// degenerate below 1e-12 of the mean squared edge). Corners that collapse to fewer than three
+  /// degenerate below 1e-12 of its longest edge squared). Corners that collapse to fewer than three
   /// write no face, which is not degenerate.
   bool flat_face(std::array<std::int32_t, 4> ids, int count) const;
 

@@ -325,10 +325,6 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   const std::vector<Edge> edges = build_edges(mesh);
 
   // Degenerate faces and unit normals (zero where degenerate, which keeps them out of folds).
-  double mean_sq_edge = 0;
-  for (const Edge& edge : edges) mean_sq_edge += (p[edge.b] - p[edge.a]).squaredNorm();
-  if (!edges.empty()) mean_sq_edge /= static_cast<double>(edges.size());
-  const double min_area = options.degenerate_area * mean_sq_edge;
   std::vector<Vec3> normals(mesh.faces.size(), Vec3::Zero());
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& face = mesh.faces[f];
@@ -336,9 +332,12 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
       ++r.degenerate_faces;
       continue;
     }
+    double longest_sq = 0;
+    for (int i = 0; i < face.size; ++i)
+      longest_sq = std::max(longest_sq, (p[face.v[(i + 1) % face.size]] - p[face.v[i]]).squaredNorm());
     const Vec3 area = area_vector(mesh, face);
     const double norm = area.norm();
-    if (!(norm >= min_area) || norm == 0) {
+    if (!(norm > options.degenerate_area * longest_sq) || norm == 0) {
       ++r.degenerate_faces;
       continue;
     }

@@ -18,7 +18,10 @@ struct QualityOptions {
   int edge_bins = 40;                    ///< edge-ratio histogram over [-1, 1]
   int triangle_bins = 18;                ///< triangle min-angle histogram over [0°, 90°]
   double fold_cos = 0.0;                 ///< adjacent faces with normal dot below this are folds
-  double degenerate_area = 1e-12;        ///< relative to the mean squared edge length
+  /// A face is degenerate when it repeats a vertex, or its area is at most this share of its own
+  /// longest edge squared (a sliver or needle whatever its size; a small well-shaped face, as
+  /// near a critical point, is not degenerate).
+  double degenerate_area = 1e-12;
 };
 
 struct QualityReport {
