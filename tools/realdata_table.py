@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Stream surfaces on the shared real data sets in three variants side by side: without the fold
-guard and the stall cut (the engine as it was before them), with the guard only, and the default
-(both): quads, angles, edge spread, folds, non-manifold edges, T-junctions, fold rips and stall
-cuts, why α was clamped and insertions fell back, and time by stage.
+guard, the stall cut and gap closing (the engine as it was before them), with the guard only, and
+the default (all three): quads, angles, edge spread, folds, non-manifold edges, T-junctions, fold
+rips, stall cuts, gap faces, boundary edges, why α was clamped and insertions fell back, and time
+by stage.
 
     tools/realdata_table.py [--binary build/apps/orthofront] [--data ../shared/datasets]
                             [--json table.json]
@@ -18,8 +19,8 @@ import tempfile
 
 # (name, extra stream options)
 VARIANTS = [
-    ("before", "--no-fold-guard --stall-steps 0"),
-    ("guard", "--stall-steps 0"),
+    ("before", "--no-fold-guard --stall-steps 0 --no-close-gaps"),
+    ("guard", "--stall-steps 0 --no-close-gaps"),
     ("default", ""),
 ]
 
@@ -32,6 +33,8 @@ CASES = [
      "--seed line:0,-0.03,0.02:0,0.03,0.02 --seed-count 20 --edge 0.004 --steps 100"),
     ("square cylinder 1608", "square-cylinder-2d/sqflow2D-1608.nrrd",
      "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400"),
+    ("square cylinder 1608, gaps within 4 l", "square-cylinder-2d/sqflow2D-1608.nrrd",
+     "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400 --gap-distance 4"),
     ("square cylinder 3928", "square-cylinder-2d/sqflow2D-3928.nrrd",
      "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400"),
     ("square cylinder recirculation", "square-cylinder-2d/sqflow2D-1608.nrrd",
@@ -61,7 +64,8 @@ def row(name, variant, r):
         "edge_spread": q["edge_spread_median"], "folds": q["folds"],
         "non_manifold_edges": q["non_manifold_edges"], "t_junctions": q["t_junctions"],
         "degenerate_faces": q["degenerate_faces"], "fold_rips": c["fold_rips"],
-        "stall_cuts": c["stall_cuts"],
+        "stall_cuts": c["stall_cuts"], "gap_faces": c["gaps_closed"]["faces"],
+        "boundary_edges": q["boundary_edges"],
         "clamped_pct": 100.0 * c["clamped_alpha"] / max(1, c["vertex_steps"]),
         "clamped_by_cause": c["clamped_alpha_by_cause"],
         "fallback_pct": 100.0 * c["insertion_fallbacks"] / max(1, inserted),
@@ -82,7 +86,7 @@ def main():
     a = parser.parse_args()
     rows = []
     header = ("case", "variant", "verts", "quads%", "ang±10%", "spread", "folds", "nm", "tj",
-              "degen", "rips", "stall", "clamp%", "fallb%", "skip%", "total s", "alpha", "advance",
+              "degen", "rips", "stall", "gap faces", "boundary", "clamp%", "fallb%", "skip%", "total s", "alpha", "advance",
               "adapt", "stitch", "quality")
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
@@ -96,12 +100,13 @@ def main():
                 x = row(name, variant, run(a.binary, field, args, options, work))
                 rows.append(x)
                 t = x["times_s"]
-                print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %d | %.1f | %.1f | "
+                print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %d | %d | %d | %.1f | %.1f | "
                       "%.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |" % (
                           name, variant, x["vertices"], x["quads_pct"],
                           x["angles_within_10_pct"], x["edge_spread"], x["folds"],
                           x["non_manifold_edges"], x["t_junctions"], x["degenerate_faces"],
-                          x["fold_rips"], x["stall_cuts"], x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
+                          x["fold_rips"], x["stall_cuts"], x["gap_faces"], x["boundary_edges"],
+                          x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
                           t.get("total", 0), t.get("alpha", 0), t.get("advance", 0),
                           t.get("adapt", 0), t.get("stitch", 0), t.get("quality", 0)))
     print()

@@ -57,6 +57,11 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_flag("!--no-rip", o.rip, "Never rip the front at saddles");
   c.add_flag("!--no-fold-guard", o.fold_guard,
              "Keep strips whose faces fold over a neighbour instead of ripping the front there");
+  c.add_flag("!--no-close-gaps", o.close_gaps,
+             "Leave the gap open where a torn surface's halves run side by side again");
+  c.add_option("--gap-distance", o.gap_distance,
+               "Close gaps whose sides come within this many edge lengths of each other")
+      ->check(CLI::PositiveNumber);
   c.add_option("--stall-steps", o.stall_steps,
                "A front vertex that kept its mesh vertex this many steps (it stopped advancing) "
                "leaves the front; 0: never")

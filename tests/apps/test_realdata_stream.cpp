@@ -141,3 +141,31 @@ TEST_CASE("the fold guard on real data: the tornado across its core, the square 
   CHECK(wake.quality.non_manifold_edges == 0);
   CHECK(wake.quality.degenerate_faces == 0);
 }
+
+TEST_CASE("the gap behind the square cylinder closes where its sides come within the distance",
+          "[apps][stream][realdata][gaps]") {
+  const fs::path cylinder =
+      fs::path(ORTHOFRONT_DATASETS_DIR) / "square-cylinder-2d" / "sqflow2D-1608.nrrd";
+  if (!fs::exists(cylinder)) {
+    WARN("skipped: " << cylinder.string() << " not found");
+    return;
+  }
+  // The seed is cut where it meets the cylinder; its halves run on side by side 3 to 4 ℓ apart.
+  const std::string seed = "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400";
+  const Surface open = stream(cylinder, seed + " --no-close-gaps", "cylinder-gap-open");
+  const Surface within_l = stream(cylinder, seed, "cylinder-gap-default");
+  const Surface closed = stream(cylinder, seed + " --gap-distance 4", "cylinder-gap-closed");
+  // Within ℓ (the default) the sides never come: nothing changes.
+  CHECK(within_l.quality.faces == open.quality.faces);
+  CHECK(within_l.report["counts"]["gaps_closed"]["faces"].get<std::size_t>() == 0);
+  // Within 4 ℓ most of the wake's gap closes: 183 faces; the boundary loses 352 edges.
+  const auto& gaps = closed.report["counts"]["gaps_closed"];
+  CHECK(gaps["faces"].get<std::size_t>() > 150);
+  CHECK(closed.quality.faces == open.quality.faces + gaps["faces"].get<std::size_t>());
+  CHECK(closed.quality.boundary_edges + 300 < open.quality.boundary_edges);
+  CHECK(closed.quality.folds == 0);
+  CHECK(closed.quality.non_manifold_edges == 0);
+  CHECK(closed.quality.t_junctions == 0);
+  CHECK(closed.quality.degenerate_faces == 0);
+  CHECK(closed.quality.inconsistent_edges == 0);
+}

@@ -1,8 +1,10 @@
 // The fold guard's check on hand-made strips: a strip that turns back over the previous one, a
 // crease sharper than 90° between two faces of one strip, and strips that only bend.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <tuple>
 #include <vector>
 
 #include "orthofront/engine/fold_guard.h"
@@ -77,4 +79,22 @@ TEST_CASE("the fold guard finds a crease sharper than 90 degrees inside a strip"
   // step's to undo.)
   Mesh m = previous_strip(100);
   CHECK(check(m, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 100)) == std::vector<std::int32_t>{7});
+}
+
+TEST_CASE("the fold guard's boundary is the mesh's boundary, edge for edge", "[engine][fold]") {
+  Mesh m = previous_strip(30);
+  add_next_row(m, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 30));
+  FoldGuard guard;
+  guard.rebuild(m);
+  const auto key = [](const BoundaryEdge& e) { return std::tuple(e.from, e.to, e.face); };
+  const auto sorted = [&](std::vector<BoundaryEdge> edges) {
+    std::sort(edges.begin(), edges.end(),
+              [&](const BoundaryEdge& a, const BoundaryEdge& b) { return key(a) < key(b); });
+    std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t>> out;
+    for (const auto& e : edges) out.push_back(key(e));
+    return out;
+  };
+  const auto from_guard = sorted(guard.boundary());
+  CHECK(from_guard.size() == 8);  // a 2 x 2 sheet of quads
+  CHECK(from_guard == sorted(boundary_edges(m)));
 }

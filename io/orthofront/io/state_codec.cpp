@@ -83,6 +83,9 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::folds_left,
     &SurfaceReport::previous_row_insertions,
     &SurfaceReport::stall_cuts,
+    &SurfaceReport::gap_stretches,
+    &SurfaceReport::gap_faces,
+    &SurfaceReport::gaps_refused,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

@@ -14,6 +14,7 @@
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
 #include "orthofront/integrate/runge_kutta.h"
+#include "orthofront/mesh/close_gaps.h"
 #include "orthofront/seed/seed_check.h"
 
 namespace orthofront {
@@ -179,6 +180,19 @@ class Engine {
 
   SurfaceResult finish() {
     // (Decided by the report, which a saved state keeps: a resumed run ends with the same mesh.)
+    if constexpr (N == 3) {
+      if (opt_.close_gaps && opt_.method == Method::orthogonal) {
+        StageTimer timer(report_.times.stitch);
+        // The fold guard kept the boundary as it stitched: no pass over every face.
+        const double distance = opt_.gap_distance * opt_.edge;
+        const GapClosing gaps =
+            fold_guard_on() ? close_gaps(mesh_, distance, 2 * opt_.edge, fold_guard_.boundary())
+                            : close_gaps(mesh_, distance, 2 * opt_.edge);
+        report_.gap_stretches = gaps.stretches;
+        report_.gap_faces = gaps.faces;
+        report_.gaps_refused = gaps.refused;
+      }
+    }
     if (report_.fold_rips > 0) mesh_.remove_unused_vertices();
     report_.stop_reason = reason_;
     report_.steps = step_;

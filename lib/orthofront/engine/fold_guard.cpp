@@ -78,6 +78,15 @@ bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
   return false;
 }
 
+std::vector<BoundaryEdge> FoldGuard::boundary() const {
+  std::vector<BoundaryEdge> out;
+  open_.for_each([&](std::int32_t lo, const EdgeLists::Entry& e) {
+    const auto face = static_cast<std::int32_t>(e.face);
+    out.push_back(e.forward ? BoundaryEdge{lo, e.other, face} : BoundaryEdge{e.other, lo, face});
+  });
+  return out;
+}
+
 void FoldGuard::rebuild(const Mesh& mesh) {
   open_.clear();
   accept(mesh, 0);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "orthofront/mesh/close_gaps.h"
 #include "orthofront/mesh/mesh.h"
 
 namespace orthofront {
@@ -23,6 +24,9 @@ class FoldGuard {
 
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
+
+  /// The accepted surface's boundary edges (those with one face), as their faces walk them.
+  std::vector<BoundaryEdge> boundary() const;
 
  private:
   /// Faces on undirected edges, listed with the edge's lower vertex: a list head per mesh vertex
@@ -44,6 +48,13 @@ class FoldGuard {
     void add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward, const Vec3& normal);
     /// Removes one entry of edge (a, b); false when there is none.
     bool remove(std::int32_t a, std::int32_t b);
+    /// Calls visit(lower vertex, entry) for every entry.
+    template <class Visit>
+    void for_each(Visit&& visit) const {
+      for (std::size_t v = 0; v < head_.size(); ++v)
+        for (std::uint32_t e = head(static_cast<std::int32_t>(v)); e != kNone; e = entries_[e].next)
+          visit(static_cast<std::int32_t>(v), entries_[e]);
+    }
     /// Calls visit(entry) for each entry of edge (a, b) until it returns true; returns whether
     /// one did.
     template <class Visit>

@@ -83,6 +83,11 @@ struct StreamSurfaceOptions {
   /// step, so it has stopped advancing (a wall, a recirculation bubble); its stream line ends
   /// there, as at a rip, and the rest of the front goes on. 0: never (orthogonal method only).
   int stall_steps = 50;
+  /// Stream surfaces: where the surface tore (a rip, an obstacle, a no-data cut) and its halves
+  /// run side by side again downstream, zip their boundaries together where they come within
+  /// gap_distance·ℓ of each other over at least 2ℓ (mesh/close_gaps.h), once the surface is built.
+  bool close_gaps = true;
+  double gap_distance = 1.0;
   /// Undo a strip whose faces fold over a neighbour (normals more than 90° apart) and take the
   /// vertices on the fold out of the front, which ends their stream lines there (orthogonal
   /// method only; the timeline baseline is left as the paper has it).

@@ -73,6 +73,9 @@ struct SurfaceReport {
   /// Front vertices taken out because they had stopped advancing (StreamSurfaceOptions::
   /// stall_steps).
   std::size_t stall_cuts = 0;
+  /// Gaps closed (StreamSurfaceOptions::close_gaps): boundary stretches zipped together, the
+  /// faces that took, and stretches left open because a face there would fold or be flat.
+  std::size_t gap_stretches = 0, gap_faces = 0, gaps_refused = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
   std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
   std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;

@@ -1,0 +1,354 @@
+#include "orthofront/mesh/close_gaps.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+namespace orthofront {
+
+namespace {
+
+constexpr std::int32_t kNone = -1;
+constexpr std::int32_t kAmbiguous = -2;  ///< a pinch: more than one boundary edge leaves or enters
+
+/// The mesh's boundary as chains of vertices: each boundary edge a → b runs as its one face
+/// walks it, so a chain walks the boundary with the surface on the same side throughout.
+struct Boundary {
+  std::vector<std::int32_t> next, prev;  ///< boundary successor / predecessor per vertex
+  std::vector<std::int32_t> owner;       ///< the face of the edge v → next[v]
+  std::vector<std::int32_t> chain, index;  ///< chain of a vertex and its place there (-1: none)
+  std::vector<double> arc;                 ///< arc length from the chain's first vertex
+  std::vector<std::vector<std::int32_t>> chains;
+  std::vector<char> closed;
+  std::vector<double> length;  ///< a chain's length (with the closing edge when closed)
+  std::vector<std::int32_t> vertices;  ///< every vertex on a boundary edge, in index order
+};
+
+Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges) {
+  const std::size_t nv = mesh.vertex_count();
+  Boundary bd;
+  bd.next.assign(nv, kNone);
+  bd.prev.assign(nv, kNone);
+  bd.owner.assign(nv, kNone);
+  std::vector<std::int32_t> vertices;
+  for (const BoundaryEdge& e : edges) {
+    const auto ua = static_cast<std::size_t>(e.from), ub = static_cast<std::size_t>(e.to);
+    if (bd.next[ua] == kNone && bd.prev[ua] == kNone) vertices.push_back(e.from);
+    if (bd.next[ub] == kNone && bd.prev[ub] == kNone) vertices.push_back(e.to);
+    bd.next[ua] = bd.next[ua] == kNone ? e.to : kAmbiguous;
+    bd.prev[ub] = bd.prev[ub] == kNone ? e.from : kAmbiguous;
+    bd.owner[ua] = e.face;
+  }
+  // Chains are numbered in vertex order, whatever order the edges came in.
+  std::sort(vertices.begin(), vertices.end());
+  bd.chain.assign(nv, -1);
+  bd.index.assign(nv, -1);
+  bd.arc.assign(nv, 0.0);
+  const auto usable = [&](std::int32_t v) {
+    return v >= 0 && bd.next[static_cast<std::size_t>(v)] >= 0;
+  };
+  const auto walk = [&](std::int32_t start) {
+    const auto id = static_cast<std::int32_t>(bd.chains.size());
+    std::vector<std::int32_t> chain;
+    double s = 0;
+    std::int32_t v = start;
+    bool closed = false;
+    while (true) {
+      const auto uv = static_cast<std::size_t>(v);
+      bd.chain[uv] = id;
+      bd.index[uv] = static_cast<std::int32_t>(chain.size());
+      bd.arc[uv] = s;
+      chain.push_back(v);
+      const std::int32_t w = bd.next[uv];
+      if (w < 0) break;
+      s += (mesh.positions[static_cast<std::size_t>(w)] - mesh.positions[uv]).norm();
+      if (w == start) {
+        closed = true;
+        break;
+      }
+      if (bd.chain[static_cast<std::size_t>(w)] >= 0 || bd.prev[static_cast<std::size_t>(w)] < 0)
+        break;  // runs into a pinch: the chain ends here
+      if (!usable(w)) {
+        const auto uw = static_cast<std::size_t>(w);  // the chain's last vertex has no successor
+        bd.chain[uw] = id;
+        bd.index[uw] = static_cast<std::int32_t>(chain.size());
+        bd.arc[uw] = s;
+        chain.push_back(w);
+        break;
+      }
+      v = w;
+    }
+    bd.chains.push_back(std::move(chain));
+    bd.closed.push_back(closed);
+    bd.length.push_back(s);
+  };
+  // Open chains first (from vertices without a single predecessor), then the closed loops.
+  for (const std::int32_t v : vertices)
+    if (usable(v) && bd.prev[static_cast<std::size_t>(v)] < 0 &&
+        bd.chain[static_cast<std::size_t>(v)] < 0)
+      walk(v);
+  for (const std::int32_t v : vertices)
+    if (usable(v) && bd.chain[static_cast<std::size_t>(v)] < 0) walk(v);
+  bd.vertices = std::move(vertices);
+  return bd;
+}
+
+/// Unit normal of a face (zero without area).
+Vec3 unit_normal(const Mesh& mesh, const Face& face) {
+  const Vec3 a = area_vector(mesh, face);
+  const double n = a.norm();
+  return n > 0 ? Vec3(a / n) : Vec3::Zero();
+}
+
+Face make_face(std::array<std::int32_t, 4> ids, int count) {
+  Face f;
+  for (int k = 0; k < count; ++k) {
+    const std::int32_t id = ids[static_cast<std::size_t>(k)];
+    bool seen = false;
+    for (int l = 0; l < f.size; ++l) seen = seen || f.v[static_cast<std::size_t>(l)] == id;
+    if (!seen) f.v[f.size++] = id;
+  }
+  return f;
+}
+
+}  // namespace
+
+std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh) {
+  const std::size_t nv = mesh.vertex_count();
+  // Face edges bucketed by their lower vertex (a counting sort, O(V + F)); an edge that occurs
+  // once in its bucket is a boundary edge.
+  std::vector<std::uint32_t> bucket(nv + 1, 0);
+  for (const Face& face : mesh.faces)
+    for (std::size_t k = 0; k < face.size; ++k) {
+      const std::int32_t a = face.v[k], b = face.v[(k + 1) % face.size];
+      if (a != b) ++bucket[static_cast<std::size_t>(std::min(a, b)) + 1];
+    }
+  for (std::size_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
+  std::vector<BoundaryEdge> uses(bucket[nv]);
+  std::vector<std::uint32_t> fill(bucket.begin(), bucket.end() - 1);
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Face& face = mesh.faces[f];
+    for (std::size_t k = 0; k < face.size; ++k) {
+      const std::int32_t a = face.v[k], b = face.v[(k + 1) % face.size];
+      if (a != b)
+        uses[fill[static_cast<std::size_t>(std::min(a, b))]++] =
+            BoundaryEdge{a, b, static_cast<std::int32_t>(f)};
+    }
+  }
+  std::vector<BoundaryEdge> out;
+  for (std::size_t lo = 0; lo < nv; ++lo)
+    for (std::uint32_t u = bucket[lo]; u < bucket[lo + 1]; ++u) {
+      const std::int32_t hi = std::max(uses[u].from, uses[u].to);
+      std::size_t twins = 0;
+      for (std::uint32_t w = bucket[lo]; w < bucket[lo + 1]; ++w)
+        twins += std::max(uses[w].from, uses[w].to) == hi ? 1 : 0;
+      if (twins == 1) out.push_back(uses[u]);
+    }
+  return out;
+}
+
+GapClosing close_gaps(Mesh& mesh, double distance, double min_length) {
+  return close_gaps(mesh, distance, min_length, boundary_edges(mesh));
+}
+
+GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
+                      const std::vector<BoundaryEdge>& boundary) {
+  GapClosing out;
+  if (!(distance > 0) || mesh.faces.empty()) return out;
+  const Boundary bd = find_boundary(mesh, boundary);
+  const auto& p = mesh.positions;
+  const auto at = [&](std::int32_t v) -> const Vec3& { return p[static_cast<std::size_t>(v)]; };
+
+  // Boundary directions, and the vertices in a grid of cells `distance` wide.
+  const std::size_t nv = mesh.vertex_count();
+  // The directions of the boundary edges into and out of a boundary vertex.
+  const auto unit = [](const Vec3& d) { return d.norm() > 0 ? Vec3(d.normalized()) : Vec3::Zero(); };
+  const auto directions = [&](std::size_t v) {
+    std::array<Vec3, 2> d{Vec3::Zero(), Vec3::Zero()};
+    if (bd.prev[v] >= 0) d[0] = unit(p[v] - at(bd.prev[v]));
+    if (bd.next[v] >= 0) d[1] = unit(at(bd.next[v]) - p[v]);
+    return d;
+  };
+  using CellKey = std::uint64_t;
+  const auto cell_of = [&](const Vec3& x, int dx, int dy, int dz) {
+    const auto c = [&](double u, int d) {
+      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(u / distance)) + d +
+                                        (1 << 20)) & 0x1fffff;
+    };
+    return c(x.x(), dx) << 42 | c(x.y(), dy) << 21 | c(x.z(), dz);
+  };
+  std::unordered_map<CellKey, std::vector<std::int32_t>> cells;
+  for (const std::int32_t v : bd.vertices)
+    if (bd.chain[static_cast<std::size_t>(v)] >= 0)
+      cells[cell_of(at(v), 0, 0, 0)].push_back(v);
+
+  // Each boundary vertex's partner across a gap: the nearest boundary vertex closer than
+  // `distance`, running the other way (a boundary edge at each that point against each other:
+  // at a corner one of the two does), and not its own neighbour along the boundary.
+  const auto antiparallel = [&](std::size_t v, std::size_t w) {
+    for (const Vec3& dv : directions(v))
+      for (const Vec3& dw : directions(w))
+        if (dv.dot(dw) < -0.5) return true;
+    return false;
+  };
+  std::vector<std::int32_t> partner(nv, kNone);
+  for (const std::int32_t boundary_vertex : bd.vertices) {
+    const auto v = static_cast<std::size_t>(boundary_vertex);
+    if (bd.chain[v] < 0) continue;
+    double best = distance;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find(cell_of(p[v], dx, dy, dz));
+          if (it == cells.end()) continue;
+          for (const std::int32_t w : it->second) {
+            const auto uw = static_cast<std::size_t>(w);
+            const double d = (p[uw] - p[v]).norm();
+            if (w == static_cast<std::int32_t>(v) || !(d < best)) continue;
+            if (!antiparallel(v, uw)) continue;
+            if (bd.chain[uw] == bd.chain[v]) {
+              const auto c = static_cast<std::size_t>(bd.chain[v]);
+              double along = std::abs(bd.arc[uw] - bd.arc[v]);
+              if (bd.closed[c]) along = std::min(along, bd.length[c] - along);
+              if (along < 4 * distance) continue;
+            }
+            best = d;
+            partner[v] = w;
+          }
+        }
+  }
+
+  // Runs of consecutive vertices along a chain whose partners run backwards along one chain.
+  std::vector<char> used(nv, 0);
+  const std::size_t original_faces = mesh.faces.size();
+  for (std::size_t c = 0; c < bd.chains.size(); ++c) {
+    const auto& chain = bd.chains[c];
+    const std::size_t n = chain.size();
+    // Backward steps of the partner along its chain (cyclic on a closed chain).
+    const auto back_steps = [&](std::int32_t from, std::int32_t to) -> long {
+      const auto cf = static_cast<std::size_t>(bd.chain[static_cast<std::size_t>(from)]);
+      if (bd.chain[static_cast<std::size_t>(to)] != static_cast<std::int32_t>(cf)) return -1;
+      long d = bd.index[static_cast<std::size_t>(from)] - bd.index[static_cast<std::size_t>(to)];
+      const auto m = static_cast<long>(bd.chains[cf].size());
+      if (bd.closed[cf]) d = ((d % m) + m) % m;
+      return d;
+    };
+    std::size_t k = 0;
+    while (k < n) {
+      if (partner[static_cast<std::size_t>(chain[k])] < 0) {
+        ++k;
+        continue;
+      }
+      std::size_t e = k;
+      while (e + 1 < n) {
+        const std::int32_t q0 = partner[static_cast<std::size_t>(chain[e])];
+        const std::int32_t q1 = partner[static_cast<std::size_t>(chain[e + 1])];
+        if (q1 < 0) break;
+        const long d = back_steps(q0, q1);
+        if (d < 0 || d > 8) break;
+        ++e;
+      }
+      const std::size_t first = k;
+      k = e + 1;
+      if (e == first) continue;
+      // A = chain[first .. e]; C = the partners' chain walked backwards from partner(A first).
+      std::vector<std::int32_t> a(chain.begin() + static_cast<long>(first),
+                                  chain.begin() + static_cast<long>(e) + 1);
+      const std::int32_t c_first = partner[static_cast<std::size_t>(a.front())];
+      const std::int32_t c_last = partner[static_cast<std::size_t>(a.back())];
+      std::vector<std::int32_t> cside{c_first};
+      for (std::int32_t v = c_first; v != c_last;) {
+        v = bd.prev[static_cast<std::size_t>(v)];
+        if (v < 0 || cside.size() > 4 * a.size() + 8) break;
+        cside.push_back(v);
+      }
+      if (cside.back() != c_last || cside.size() < 2) continue;
+      const auto arc_of = [&](const std::vector<std::int32_t>& side) {
+        double s = 0;
+        for (std::size_t i = 0; i + 1 < side.size(); ++i) s += (at(side[i + 1]) - at(side[i])).norm();
+        return s;
+      };
+      if (arc_of(a) < min_length || arc_of(cside) < min_length) continue;
+      bool taken = false;
+      for (const auto v : a) taken = taken || used[static_cast<std::size_t>(v)];
+      for (const auto v : cside) taken = taken || used[static_cast<std::size_t>(v)];
+      for (const auto v : a)
+        taken = taken || std::find(cside.begin(), cside.end(), v) != cside.end();
+      if (taken) continue;
+
+      // Faces between A (a_i → a_{i+1} boundary edges) and C (c_{j+1} → c_j boundary edges),
+      // each walking its boundary edges backwards, as stitch's zipper places them.
+      std::vector<Face> strip;
+      std::vector<std::int32_t> across;  ///< per new face: the old face across its A or C edge
+      std::vector<std::int32_t> across_c;
+      std::size_t i = 0, j = 0;
+      const std::size_t ma = a.size() - 1, mc = cside.size() - 1;
+      const auto owner_a = [&](std::size_t ia) { return bd.owner[static_cast<std::size_t>(a[ia])]; };
+      const auto owner_c = [&](std::size_t jc) {
+        return bd.owner[static_cast<std::size_t>(cside[jc + 1])];
+      };
+      while (i < ma || j < mc) {
+        const std::size_t ra = ma - i, rc = mc - j;
+        bool advance_a = ra > 0, advance_c = rc > 0;
+        if (ra > 0 && rc > 0 && ra != rc) {
+          if (ra > rc)
+            advance_c = (at(a[i + 1]) - at(cside[j])).norm() > (at(a[i + 1]) - at(cside[j + 1])).norm();
+          else
+            advance_a = (at(cside[j + 1]) - at(a[i])).norm() > (at(cside[j + 1]) - at(a[i + 1])).norm();
+        }
+        if (advance_a && advance_c) {
+          strip.push_back(make_face({a[i + 1], a[i], cside[j], cside[j + 1]}, 4));
+          across.push_back(owner_a(i));
+          across_c.push_back(owner_c(j));
+          ++i, ++j;
+        } else if (advance_a) {
+          strip.push_back(make_face({a[i + 1], a[i], cside[j], -1}, 3));
+          across.push_back(owner_a(i));
+          across_c.push_back(kNone);
+          ++i;
+        } else {
+          strip.push_back(make_face({a[i], cside[j], cside[j + 1], -1}, 3));
+          across.push_back(kNone);
+          across_c.push_back(owner_c(j));
+          ++j;
+        }
+      }
+      // Refuse a strip with a flat face or one that folds over its neighbours.
+      bool fine = true;
+      Vec3 previous = Vec3::Zero();
+      for (std::size_t f = 0; f < strip.size() && fine; ++f) {
+        if (strip[f].size < 3) {
+          fine = false;
+          break;
+        }
+        const Vec3 area = area_vector(mesh, strip[f]);
+        if (!(area.norm() > 1e-9 * distance * distance)) {
+          fine = false;
+          break;
+        }
+        const Vec3 normal = area.normalized();
+        for (const std::int32_t old : {across[f], across_c[f]})
+          if (old >= 0 && normal.dot(unit_normal(mesh, mesh.faces[static_cast<std::size_t>(old)])) < 0)
+            fine = false;
+        if (previous.squaredNorm() > 0 && normal.dot(previous) < 0) fine = false;
+        previous = normal;
+      }
+      if (!fine) {
+        ++out.refused;
+        continue;
+      }
+      for (const auto v : a) used[static_cast<std::size_t>(v)] = 1;
+      for (const auto v : cside) used[static_cast<std::size_t>(v)] = 1;
+      mesh.faces.insert(mesh.faces.end(), strip.begin(), strip.end());
+      ++out.stretches;
+    }
+  }
+  out.faces = mesh.faces.size() - original_faces;
+  return out;
+}
+
+}  // namespace orthofront
