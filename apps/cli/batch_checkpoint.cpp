@@ -12,7 +12,8 @@ namespace orthofront::cli {
 
 namespace {
 
-// 2: the report stores clamped-α and insertion-fallback counts by cause.
+// 2: the report stores clamped-α and insertion-fallback counts by cause; 3: stall cuts, gaps
+// closed and the gap-closing time.
 constexpr std::uint32_t kFormat = 3;
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 

@@ -63,8 +63,8 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
                "Close gaps whose sides come within this many edge lengths of each other")
       ->check(CLI::PositiveNumber);
   c.add_option("--stall-steps", o.stall_steps,
-               "A front vertex that kept its mesh vertex this many steps (it stopped advancing) "
-               "leaves the front; 0: never")
+               "A front vertex that kept its mesh vertex more than this many steps (it stopped "
+               "advancing) leaves the front; 0: never")
       ->check(CLI::NonNegativeNumber);
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},

@@ -34,7 +34,7 @@ TEST_CASE("two strips side by side are zipped into one sheet", "[mesh][gaps]") {
   const QualityReport before = measure_quality(m);
   REQUIRE(before.boundary_edges == 4 * 20 + 4);
 
-  const GapClosing g = close_gaps(m, 0.5, 2.0);
+  const GapReport g = close_gaps(m, 0.5, 2.0);
   CHECK(g.stretches == 1);
   CHECK(g.refused == 0);
   const QualityReport after = measure_quality(m);
@@ -56,7 +56,7 @@ TEST_CASE("a gap wider than the distance stays open; so does one whose faces wou
     Mesh m;
     add_strip(m, 20, -3, -0.5, flat);
     add_strip(m, 20, 0.5, 3, flat);
-    const GapClosing g = close_gaps(m, 0.5, 2.0);
+    const GapReport g = close_gaps(m, 0.5, 2.0);
     CHECK(g.faces == 0);
     CHECK(g.stretches == 0);
   }
@@ -74,7 +74,7 @@ TEST_CASE("a gap wider than the distance stays open; so does one whose faces wou
       const std::int32_t a = base + 2 * i;
       m.add_quad(a, a + 2, a + 3, a + 1);
     }
-    const GapClosing g = close_gaps(m, 0.5, 2.0);
+    const GapReport g = close_gaps(m, 0.5, 2.0);
     CHECK(g.faces == 0);
     CHECK(measure_quality(m).folds == 0);
   }
@@ -82,7 +82,7 @@ TEST_CASE("a gap wider than the distance stays open; so does one whose faces wou
     Mesh m;
     add_strip(m, 20, -3, -0.2, flat);
     add_strip(m, 20, 0.2, 3, flat);
-    const GapClosing g = close_gaps(m, 0.5, 25.0);
+    const GapReport g = close_gaps(m, 0.5, 25.0);
     CHECK(g.faces == 0);
   }
 }
@@ -102,7 +102,7 @@ TEST_CASE("strips of different spacing are zipped with triangles, without T-junc
     const std::int32_t a = base + 2 * i;
     m.add_quad(a, a + 2, a + 3, a + 1);
   }
-  const GapClosing g = close_gaps(m, 0.6, 2.0);
+  const GapReport g = close_gaps(m, 0.6, 2.0);
   CHECK(g.stretches == 1);
   CHECK(g.faces >= 40);
   const QualityReport q = measure_quality(m);
@@ -112,4 +112,35 @@ TEST_CASE("strips of different spacing are zipped with triangles, without T-junc
   CHECK(q.t_junctions == 0);
   CHECK(q.degenerate_faces == 0);
   CHECK(q.boundary_edges == 20 + 40 + 2 * 2 + 2);
+}
+
+TEST_CASE("a gap on one closed boundary loop closes whatever the vertex numbering",
+          "[mesh][gaps]") {
+  // A U: two strips joined at their far end, so both sides of the gap lie on one boundary loop.
+  Mesh u;
+  const auto flat = [](double) { return 0.0; };
+  add_strip(u, 20, -3, -0.2, flat);
+  add_strip(u, 20, 0.2, 3, flat);
+  u.add_quad(39, 41, 82, 80);  // the gap's last cell, x from 19 to 20, filled
+  REQUIRE(measure_quality(u).boundary_edges == 84);  // two strips of 42, the bridge adds and covers 2
+  REQUIRE(measure_quality(u).inconsistent_edges == 0);
+
+  // The same mesh with a vertex in the middle of a gap side numbered first (the loop's start).
+  Mesh renumbered = u;
+  const std::int32_t middle = 2 * 10 + 1;  // strip A's upper side, x = 10
+  std::swap(renumbered.positions[0], renumbered.positions[static_cast<std::size_t>(middle)]);
+  for (Face& f : renumbered.faces)
+    for (std::size_t k = 0; k < f.size; ++k)
+      f.v[k] = f.v[k] == 0 ? middle : f.v[k] == middle ? 0 : f.v[k];
+
+  const GapReport a = close_gaps(u, 0.5, 2.0);
+  const GapReport b = close_gaps(renumbered, 0.5, 2.0);
+  CHECK(a.faces > 10);
+  CHECK(a.faces == b.faces);
+  CHECK(a.stretches == b.stretches);
+  const QualityReport qa = measure_quality(u), qb = measure_quality(renumbered);
+  CHECK(qa.boundary_edges == qb.boundary_edges);
+  CHECK(qb.non_manifold_edges == 0);
+  CHECK(qb.inconsistent_edges == 0);
+  CHECK(qb.folds == 0);
 }

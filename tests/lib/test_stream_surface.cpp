@@ -342,13 +342,12 @@ TEST_CASE("a stop request ends long integrations inside a front step", "[engine]
   // Thousands of evaluations per vertex and step: what a stop between steps cannot cut short.
   REQUIRE(full_evaluations > 11L * 3 * kStopCheckEvaluations);
 
+  // Asked first before step 1 (go on), then inside that step's integrations (stop).
   std::atomic<int> asked{0};
-  const SurfaceResult stopped = build_stream_surface<3>(field, seed, o, {}, {}, [&] {
-    ++asked;
-    return true;
-  });
+  const SurfaceResult stopped =
+      build_stream_surface<3>(field, seed, o, {}, {}, [&] { return ++asked > 1; });
   const long stopped_evaluations = field.evaluations.exchange(0);
-  CHECK(asked.load() >= 1);
+  CHECK(asked.load() >= 2);
   CHECK(stopped.report.stop_reason == StopReason::cancelled);
   CHECK_FALSE(stopped.report.complete);
   CHECK(stopped.report.steps == 1);
@@ -361,6 +360,14 @@ TEST_CASE("a stop request ends long integrations inside a front step", "[engine]
     for (int c = 0; c < f.size; ++c)
       CHECK(static_cast<std::size_t>(f.v[static_cast<std::size_t>(c)]) <
             stopped.mesh.vertex_count());
+
+  // Between steps it is asked too (whatever the integrator): stopped before the first step.
+  StreamSurfaceOptions rk4 = o;
+  rk4.integrator = IntegratorKind::rk4;
+  const SurfaceResult at_once = build_stream_surface<3>(field, seed, rk4, {}, {}, [] { return true; });
+  CHECK(at_once.report.stop_reason == StopReason::cancelled);
+  CHECK(at_once.report.steps == 0);
+  field.evaluations = 0;
 
   // The time budget is asked there too.
   StreamSurfaceOptions budget = o;

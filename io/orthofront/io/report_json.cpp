@@ -127,6 +127,7 @@ nlohmann::json to_json(const SurfaceReport& r) {
         {"advance", r.times.advance},
         {"adapt", r.times.adapt},
         {"stitch", r.times.stitch},
+        {"gaps", r.times.gaps},
         {"quality", r.times.quality},
         {"total", r.times.total}}},
       {"quality", to_json(r.quality)},

@@ -89,7 +89,7 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,
-    &StageTimes::stitch, &StageTimes::quality, &StageTimes::total};
+    &StageTimes::stitch, &StageTimes::quality, &StageTimes::total, &StageTimes::gaps};
 constexpr double StepRecord::*kStepFigures[] = {&StepRecord::h_min, &StepRecord::h_max,
                                                 &StepRecord::orthogonality_mean,
                                                 &StepRecord::orthogonality_max};

@@ -127,7 +127,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
       report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
       if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
       if (job.outcome == InsertionJob::Outcome::previous_row) ++report_.previous_row_insertions;
-      if (job.outcome == InsertionJob::Outcome::fallback) {
+      if (job.outcome == InsertionJob::Outcome::fallback && !job.interrupted) {
         ++report_.insertion_fallbacks;
         ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
       }
@@ -177,6 +177,7 @@ bool FrontAdapter<N>::shoot(const Front<N>& f, std::size_t i, std::size_t j,
     time += delta;
   }
   status = r.status;
+  job.interrupted = job.interrupted || r.interrupted;
   if (r.status != FieldStatus::inside || !((r.x - guess).norm() < 0.25 * seg)) return false;
   job.t = time;
   job.x = r.x;

@@ -59,6 +59,7 @@ class FrontAdapter {
       interpolated
     } outcome{};
     bool left_domain = false;  ///< a fallback whose stream line left the domain or met no data
+    bool interrupted = false;  ///< a stop request ended its integration (counted as no fallback)
   };
 
   /// The α of the mesh vertex a front vertex stands for (0 for none).

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "orthofront/engine/adapt.h"
@@ -63,8 +64,9 @@ enum class VertexState : unsigned char { ok, outside, no_data, zero_speed, inter
 
 }  // namespace
 
-/// The driver (paper Figure 4): each step takes every front through velocity → α (alpha_step.h)
-/// → rips (rip.h) → advance → adapt (adapt.h) → stitch (stitch.h, checked by fold_guard.h).
+/// The driver (paper Figure 4): each step takes every front through the stall cut → velocity → α
+/// (alpha_step.h) → rips (rip.h) → advance → adapt (adapt.h) → stitch (stitch.h, checked by
+/// fold_guard.h); the finished surface's gaps are closed (mesh/close_gaps.h).
 template <int N>
 class Engine {
  public:
@@ -179,20 +181,19 @@ class Engine {
   }
 
   SurfaceResult finish() {
-    // (Decided by the report, which a saved state keeps: a resumed run ends with the same mesh.)
-    if constexpr (N == 3) {
-      if (opt_.close_gaps && opt_.method == Method::orthogonal) {
-        StageTimer timer(report_.times.stitch);
-        // The fold guard kept the boundary as it stitched: no pass over every face.
-        const double distance = opt_.gap_distance * opt_.edge;
-        const GapClosing gaps =
-            fold_guard_on() ? close_gaps(mesh_, distance, 2 * opt_.edge, fold_guard_.boundary())
-                            : close_gaps(mesh_, distance, 2 * opt_.edge);
-        report_.gap_stretches = gaps.stretches;
-        report_.gap_faces = gaps.faces;
-        report_.gaps_refused = gaps.refused;
-      }
+    if (opt_.close_gaps && opt_.method == Method::orthogonal) {
+      StageTimer timer(report_.times.gaps);
+      // The fold guard kept the boundary as it stitched (the same edges on a manifold mesh): no
+      // pass over every face.
+      const double distance = opt_.gap_distance * opt_.edge;
+      const GapReport gaps =
+          fold_guard_on() ? close_gaps(mesh_, distance, 2 * opt_.edge, fold_guard_.boundary())
+                          : close_gaps(mesh_, distance, 2 * opt_.edge);
+      report_.gap_stretches = gaps.stretches;
+      report_.gap_faces = gaps.faces;
+      report_.gaps_refused = gaps.refused;
     }
+    // (Decided by the report, which a saved state keeps: a resumed run ends with the same mesh.)
     if (report_.fold_rips > 0) mesh_.remove_unused_vertices();
     report_.stop_reason = reason_;
     report_.steps = step_;
@@ -398,9 +399,9 @@ class Engine {
       }
       return parts;
     }
-    std::vector<Front<N>> linked;
-    for (auto& part : parts) link_guarded(std::move(part), *old, step, first_inserted, linked);
-    return linked;
+    std::vector<Front<N>> pieces;
+    for (auto& part : parts) link_guarded(std::move(part), *old, step, first_inserted, pieces);
+    return pieces;
   }
 
   bool fold_guard_on() const { return opt_.fold_guard && opt_.method == Method::orthogonal; }
@@ -477,6 +478,12 @@ class Engine {
         opt_.merge_factor >= 2 * opt_.split_factor)
       throw InvalidArgument("split/merge factors must satisfy split > 1, 0 < merge < 2 split");
     if (!positive(opt_.tolerance)) throw InvalidArgument("tolerance must be positive");
+    if (!positive(opt_.paper_max_step))
+      throw InvalidArgument("the paper mode's largest step must be positive, got " +
+                            std::to_string(opt_.paper_max_step));
+    if (!positive(opt_.gap_distance))
+      throw InvalidArgument("gap distance must be positive, got " +
+                            std::to_string(opt_.gap_distance));
     if (!seed_.point) throw InvalidArgument("seed curve has no point function");
     if (seed_.parameters.size() < 2)
       throw InvalidArgument("a seed needs at least 2 vertices, got " +
@@ -520,7 +527,7 @@ class Engine {
       survey.add(f.v[i].x.template head<3>(), status, v.template head<3>());
     }
     SeedContext context;
-    context.field = "field '" + field_.describe() + "'";
+    context.about = field_.describe();
     context.dimension = std::min(N, 3);
     require_seed_inside(survey, context, false);
     std::vector<Front<N>> out;
@@ -676,6 +683,10 @@ SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
   SurfaceBuilder<N> builder(field, seed, options);
   builder.set_stop_request(stop);
   while (builder.next()) {
+    if (stop && stop()) {
+      builder.cancel();
+      break;
+    }
     if (before_step && !before_step(builder.front())) {
       builder.cancel();
       break;

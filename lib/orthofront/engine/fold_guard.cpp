@@ -25,7 +25,10 @@ void for_each_edge(const Face& face, Visit&& visit) {
 }  // namespace
 
 void FoldGuard::EdgeLists::clear() {
-  ++generation_;
+  if (++generation_ == 0) {  // wrapped: no old head may read as current
+    std::fill(generation_of_head_.begin(), generation_of_head_.end(), 0u);
+    generation_ = 1;
+  }
   entries_.clear();
   free_ = kNone;
 }

@@ -25,7 +25,8 @@ class FoldGuard {
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
 
-  /// The accepted surface's boundary edges (those with one face), as their faces walk them.
+  /// The accepted surface's boundary edges, as their faces walk them: those with one face (and,
+  /// on a non-manifold mesh, those with an odd number: boundary_edges() leaves those out).
   std::vector<BoundaryEdge> boundary() const;
 
  private:

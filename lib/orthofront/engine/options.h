@@ -79,9 +79,10 @@ struct StreamSurfaceOptions {
 
   bool rip = true;
   /// A front vertex whose mesh vertex is more than this many steps old leaves the front: it moved
-  /// less than skip_fraction·ℓ in all of them while the front's fastest vertex moved about ℓ a
-  /// step, so it has stopped advancing (a wall, a recirculation bubble); its stream line ends
-  /// there, as at a rip, and the rest of the front goes on. 0: never (orthogonal method only).
+  /// less than skip_fraction·ℓ in all of them with row skipping (without: not at all, α clamped
+  /// to 0) while the front's fastest vertex moved about ℓ a step, so it has stopped advancing (a
+  /// wall, a recirculation bubble); its stream line ends there, as at a rip, and the rest of the
+  /// front goes on. 0: never (orthogonal method only; path surfaces turn it off).
   int stall_steps = 50;
   /// Stream surfaces: where the surface tore (a rip, an obstacle, a no-data cut) and its halves
   /// run side by side again downstream, zip their boundaries together where they come within

@@ -28,6 +28,7 @@ struct StageTimes {
   double advance = 0;  ///< stream-line integration of every vertex
   double adapt = 0;    ///< split / merge
   double stitch = 0;   ///< mesh vertices and faces
+  double gaps = 0;     ///< closing gaps behind rips, once the surface is built
   double quality = 0;  ///< final quality measurement
   double total = 0;
 };

@@ -41,9 +41,10 @@ Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges)
     if (bd.next[ub] == kNone && bd.prev[ub] == kNone) vertices.push_back(e.to);
     bd.next[ua] = bd.next[ua] == kNone ? e.to : kAmbiguous;
     bd.prev[ub] = bd.prev[ub] == kNone ? e.from : kAmbiguous;
-    bd.owner[ua] = e.face;
+    bd.owner[ua] = bd.next[ua] == kAmbiguous ? kNone : e.face;
   }
-  // Chains are numbered in vertex order, whatever order the edges came in.
+  // Chains are numbered in vertex order, whatever order the edges came in (a pinch vertex, with
+  // two edges out or in, ends its chains and takes part in no gap).
   std::sort(vertices.begin(), vertices.end());
   bd.chain.assign(nv, -1);
   bd.index.assign(nv, -1);
@@ -151,13 +152,13 @@ std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh) {
   return out;
 }
 
-GapClosing close_gaps(Mesh& mesh, double distance, double min_length) {
+GapReport close_gaps(Mesh& mesh, double distance, double min_length) {
   return close_gaps(mesh, distance, min_length, boundary_edges(mesh));
 }
 
-GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
+GapReport close_gaps(Mesh& mesh, double distance, double min_length,
                       const std::vector<BoundaryEdge>& boundary) {
-  GapClosing out;
+  GapReport out;
   if (!(distance > 0) || mesh.faces.empty()) return out;
   const Boundary bd = find_boundary(mesh, boundary);
   const auto& p = mesh.positions;
@@ -182,8 +183,9 @@ GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
     return c(x.x(), dx) << 42 | c(x.y(), dy) << 21 | c(x.z(), dz);
   };
   std::unordered_map<CellKey, std::vector<std::int32_t>> cells;
+  const auto pinch = [&](std::size_t v) { return bd.next[v] == kAmbiguous || bd.prev[v] == kAmbiguous; };
   for (const std::int32_t v : bd.vertices)
-    if (bd.chain[static_cast<std::size_t>(v)] >= 0)
+    if (bd.chain[static_cast<std::size_t>(v)] >= 0 && !pinch(static_cast<std::size_t>(v)))
       cells[cell_of(at(v), 0, 0, 0)].push_back(v);
 
   // Each boundary vertex's partner across a gap: the nearest boundary vertex closer than
@@ -198,7 +200,7 @@ GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
   std::vector<std::int32_t> partner(nv, kNone);
   for (const std::int32_t boundary_vertex : bd.vertices) {
     const auto v = static_cast<std::size_t>(boundary_vertex);
-    if (bd.chain[v] < 0) continue;
+    if (bd.chain[v] < 0 || pinch(v)) continue;
     double best = distance;
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
@@ -226,7 +228,16 @@ GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
   std::vector<char> used(nv, 0);
   const std::size_t original_faces = mesh.faces.size();
   for (std::size_t c = 0; c < bd.chains.size(); ++c) {
-    const auto& chain = bd.chains[c];
+    // A closed loop is scanned from a vertex without a partner, so that no stretch is split where
+    // the loop's numbering starts (a loop partnered all round is no gap: it is skipped).
+    std::vector<std::int32_t> chain = bd.chains[c];
+    if (bd.closed[c]) {
+      const auto lone = std::find_if(chain.begin(), chain.end(), [&](std::int32_t v) {
+        return partner[static_cast<std::size_t>(v)] < 0;
+      });
+      if (lone == chain.end()) continue;
+      std::rotate(chain.begin(), lone, chain.end());
+    }
     const std::size_t n = chain.size();
     // Backward steps of the partner along its chain (cyclic on a closed chain).
     const auto back_steps = [&](std::int32_t from, std::int32_t to) -> long {
@@ -260,89 +271,89 @@ GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
                                   chain.begin() + static_cast<long>(e) + 1);
       const std::int32_t c_first = partner[static_cast<std::size_t>(a.front())];
       const std::int32_t c_last = partner[static_cast<std::size_t>(a.back())];
-      std::vector<std::int32_t> cside{c_first};
+      std::vector<std::int32_t> c_side{c_first};
       for (std::int32_t v = c_first; v != c_last;) {
         v = bd.prev[static_cast<std::size_t>(v)];
-        if (v < 0 || cside.size() > 4 * a.size() + 8) break;
-        cside.push_back(v);
+        if (v < 0 || c_side.size() > 4 * a.size() + 8) break;
+        c_side.push_back(v);
       }
-      if (cside.back() != c_last || cside.size() < 2) continue;
+      if (c_side.back() != c_last || c_side.size() < 2) continue;
       const auto arc_of = [&](const std::vector<std::int32_t>& side) {
         double s = 0;
         for (std::size_t i = 0; i + 1 < side.size(); ++i) s += (at(side[i + 1]) - at(side[i])).norm();
         return s;
       };
-      if (arc_of(a) < min_length || arc_of(cside) < min_length) continue;
+      if (arc_of(a) < min_length || arc_of(c_side) < min_length) continue;
       bool taken = false;
       for (const auto v : a) taken = taken || used[static_cast<std::size_t>(v)];
-      for (const auto v : cside) taken = taken || used[static_cast<std::size_t>(v)];
+      for (const auto v : c_side) taken = taken || used[static_cast<std::size_t>(v)];
       for (const auto v : a)
-        taken = taken || std::find(cside.begin(), cside.end(), v) != cside.end();
+        taken = taken || std::find(c_side.begin(), c_side.end(), v) != c_side.end();
       if (taken) continue;
 
       // Faces between A (a_i → a_{i+1} boundary edges) and C (c_{j+1} → c_j boundary edges),
       // each walking its boundary edges backwards, as stitch's zipper places them.
       std::vector<Face> strip;
-      std::vector<std::int32_t> across;  ///< per new face: the old face across its A or C edge
-      std::vector<std::int32_t> across_c;
+      // Per new face, the old faces across its edge on A and on C (kNone where it has none).
+      std::vector<std::int32_t> neighbour_on_a, neighbour_on_c;
       std::size_t i = 0, j = 0;
-      const std::size_t ma = a.size() - 1, mc = cside.size() - 1;
+      const std::size_t ma = a.size() - 1, mc = c_side.size() - 1;
       const auto owner_a = [&](std::size_t ia) { return bd.owner[static_cast<std::size_t>(a[ia])]; };
       const auto owner_c = [&](std::size_t jc) {
-        return bd.owner[static_cast<std::size_t>(cside[jc + 1])];
+        return bd.owner[static_cast<std::size_t>(c_side[jc + 1])];
       };
       while (i < ma || j < mc) {
         const std::size_t ra = ma - i, rc = mc - j;
         bool advance_a = ra > 0, advance_c = rc > 0;
         if (ra > 0 && rc > 0 && ra != rc) {
           if (ra > rc)
-            advance_c = (at(a[i + 1]) - at(cside[j])).norm() > (at(a[i + 1]) - at(cside[j + 1])).norm();
+            advance_c = (at(a[i + 1]) - at(c_side[j])).norm() > (at(a[i + 1]) - at(c_side[j + 1])).norm();
           else
-            advance_a = (at(cside[j + 1]) - at(a[i])).norm() > (at(cside[j + 1]) - at(a[i + 1])).norm();
+            advance_a = (at(c_side[j + 1]) - at(a[i])).norm() > (at(c_side[j + 1]) - at(a[i + 1])).norm();
         }
         if (advance_a && advance_c) {
-          strip.push_back(make_face({a[i + 1], a[i], cside[j], cside[j + 1]}, 4));
-          across.push_back(owner_a(i));
-          across_c.push_back(owner_c(j));
+          strip.push_back(make_face({a[i + 1], a[i], c_side[j], c_side[j + 1]}, 4));
+          neighbour_on_a.push_back(owner_a(i));
+          neighbour_on_c.push_back(owner_c(j));
           ++i, ++j;
         } else if (advance_a) {
-          strip.push_back(make_face({a[i + 1], a[i], cside[j], -1}, 3));
-          across.push_back(owner_a(i));
-          across_c.push_back(kNone);
+          strip.push_back(make_face({a[i + 1], a[i], c_side[j], -1}, 3));
+          neighbour_on_a.push_back(owner_a(i));
+          neighbour_on_c.push_back(kNone);
           ++i;
         } else {
-          strip.push_back(make_face({a[i], cside[j], cside[j + 1], -1}, 3));
-          across.push_back(kNone);
-          across_c.push_back(owner_c(j));
+          strip.push_back(make_face({a[i], c_side[j], c_side[j + 1], -1}, 3));
+          neighbour_on_a.push_back(kNone);
+          neighbour_on_c.push_back(owner_c(j));
           ++j;
         }
       }
       // Refuse a strip with a flat face or one that folds over its neighbours.
-      bool fine = true;
+      bool acceptable = true;
       Vec3 previous = Vec3::Zero();
-      for (std::size_t f = 0; f < strip.size() && fine; ++f) {
+      for (std::size_t f = 0; f < strip.size() && acceptable; ++f) {
         if (strip[f].size < 3) {
-          fine = false;
+          acceptable = false;
           break;
         }
         const Vec3 area = area_vector(mesh, strip[f]);
         if (!(area.norm() > 1e-9 * distance * distance)) {
-          fine = false;
+          acceptable = false;
           break;
         }
         const Vec3 normal = area.normalized();
-        for (const std::int32_t old : {across[f], across_c[f]})
+        for (const std::int32_t old : {neighbour_on_a[f], neighbour_on_c[f]})
           if (old >= 0 && normal.dot(unit_normal(mesh, mesh.faces[static_cast<std::size_t>(old)])) < 0)
-            fine = false;
-        if (previous.squaredNorm() > 0 && normal.dot(previous) < 0) fine = false;
+            acceptable = false;
+        if (previous.squaredNorm() > 0 && normal.dot(previous) < 0) acceptable = false;
         previous = normal;
       }
-      if (!fine) {
+      if (!acceptable) {
         ++out.refused;
         continue;
       }
       for (const auto v : a) used[static_cast<std::size_t>(v)] = 1;
-      for (const auto v : cside) used[static_cast<std::size_t>(v)] = 1;
+      for (const auto v : c_side) used[static_cast<std::size_t>(v)] = 1;
       mesh.faces.insert(mesh.faces.end(), strip.begin(), strip.end());
       ++out.stretches;
     }

@@ -19,7 +19,7 @@ struct BoundaryEdge {
 /// The mesh's boundary edges (O(V + F)), in order of their lower vertex.
 std::vector<BoundaryEdge> boundary_edges(const Mesh& mesh);
 
-struct GapClosing {
+struct GapReport {
   std::size_t stretches = 0;  ///< boundary stretches zipped together
   std::size_t faces = 0;      ///< faces added
   std::size_t refused = 0;    ///< stretches left open because a new face would fold or be flat
@@ -32,9 +32,9 @@ struct GapClosing {
 /// quads and triangles, placed as the engine's stitch places them, oriented as their neighbours.
 /// A stretch whose faces would fold over a neighbour (normals more than 90° apart) or have no
 /// area is left open (counted as refused). Vertices are not moved or added.
-GapClosing close_gaps(Mesh& mesh, double distance, double min_length);
+GapReport close_gaps(Mesh& mesh, double distance, double min_length);
 /// The same with the boundary known already (e.g. kept by the fold guard as it stitched).
-GapClosing close_gaps(Mesh& mesh, double distance, double min_length,
+GapReport close_gaps(Mesh& mesh, double distance, double min_length,
                       const std::vector<BoundaryEdge>& boundary);
 
 }  // namespace orthofront

@@ -219,6 +219,10 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       wait_before_ = before_.wait_seconds;
     }
     StreamSurfaceOptions engine = o.engine;
+    // The stall cut and gap closing are the stream surface's: a path surface's front waits by
+    // design (the lag bound holds its lead back), and its mesh lives in space-time.
+    engine.stall_steps = 0;
+    engine.close_gaps = false;
     if (o.max_band > 0) {
       engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
       engine.max_lag = c_ * o.max_band;

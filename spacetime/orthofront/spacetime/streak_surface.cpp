@@ -1,7 +1,4 @@
-#include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/streak_surface.h"
-
-#include "orthofront/spacetime/bulk_flow_map.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,6 +7,7 @@
 #include <cstdio>
 
 #include "orthofront/error.h"
+#include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/streamed_field.h"
 
@@ -595,7 +593,8 @@ StreakReport StreakBuilder::run() {
   }
   SeedContext context;
   context.seed = seed_name();
-  context.field = "field '" + field_name() + "'";
+  context.field = o_.field_name.empty() ? "the field" : "field '" + o_.field_name + "'";
+  context.about = flow_.describe();
   context.when = " at t = " + number(o_.release_begin);
   context.domain = describe_box(flow_.domain(), flow_.dimension());
   context.dimension = flow_.dimension();
