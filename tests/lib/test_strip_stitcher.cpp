@@ -59,7 +59,7 @@ TEST_CASE("rows that advance together are joined by quads", "[engine][stitch]") 
   SurfaceReport report;
   StreamSurfaceOptions o;
   o.edge = 1;
-  StripStitcher<3> stitcher(o, false, mesh, report);
+  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
   const Front<3> old = previous_row(mesh, 5);
   Front<3> f = advanced(old, 1.0);
   stitcher.emit_moved(f, old, 1);
@@ -77,7 +77,7 @@ TEST_CASE("a row with an inserted vertex gets one triangle beside a quad", "[eng
   SurfaceReport report;
   StreamSurfaceOptions o;
   o.edge = 1;
-  StripStitcher<3> stitcher(o, false, mesh, report);
+  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
   const Front<3> old = previous_row(mesh, 3);
   Front<3> f = advanced(old, 1.0);
   // Insert a vertex between 1 and 2 (already a mesh vertex, as split_long makes it).
@@ -99,7 +99,7 @@ TEST_CASE("row skipping: a vertex that moved less than skip_fraction l keeps its
   StreamSurfaceOptions o;
   o.edge = 1;
   o.row_skip = RowSkip::vertex;
-  StripStitcher<3> stitcher(o, false, mesh, report);
+  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
   const Front<3> old = previous_row(mesh, 3);
   Front<3> f = advanced(old, 1.0);
   f.v[2].x.y() = 0.2;  // moved 0.2 < 0.5 ℓ
@@ -120,7 +120,7 @@ TEST_CASE("zipper places a row's extra segments as triangles at the shorter diag
   Mesh mesh;
   SurfaceReport report;
   StreamSurfaceOptions o;
-  StripStitcher<3> stitcher(o, false, mesh, report);
+  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
   // Old chain 0-1 (one segment), new chain 2-3-4 (two), the new one fanned out to the right.
   for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(2, 1, 0)})
     mesh.add_vertex(p, 0, 0, 0, 0, 0, 0);

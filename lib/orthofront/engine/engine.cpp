@@ -6,7 +6,7 @@
 #include <string>
 
 #include "orthofront/engine/adapt.h"
-#include "orthofront/engine/alpha_step.h"
+#include "orthofront/engine/discretization.h"
 #include "orthofront/engine/fold_guard.h"
 #include "orthofront/engine/for_range.h"
 #include "orthofront/engine/rip.h"
@@ -65,8 +65,9 @@ enum class VertexState : unsigned char { ok, outside, no_data, zero_speed, inter
 }  // namespace
 
 /// The driver (paper Figure 4): each step takes every front through the stall cut → velocity → α
-/// (alpha_step.h) → rips (rip.h) → advance → adapt (adapt.h) → stitch (stitch.h, checked by
-/// fold_guard.h); the finished surface's gaps are closed (mesh/close_gaps.h).
+/// (discretization.h: the orthogonal alpha_step.h or the timeline baseline) → rips (rip.h) →
+/// advance → adapt (adapt.h) → stitch (stitch.h, checked by fold_guard.h); the finished surface's
+/// gaps are closed (mesh/close_gaps.h).
 template <int N>
 class Engine {
  public:
@@ -156,7 +157,7 @@ class Engine {
     step_record_ = StepRecord{};
     step_record_.step = step_;
     step_record_.h_min = std::numeric_limits<double>::infinity();
-    alpha_step_.begin_step();
+    discretization_->begin_step();
     exits_this_step_ = 0;
     std::vector<Front<N>> next;
     std::vector<Front<N>> queue = std::move(fronts_);
@@ -175,13 +176,13 @@ class Engine {
     }
     step_record_.fronts = fronts_.size();
     for (const auto& f : fronts_) step_record_.front_vertices += f.v.size();
-    step_record_.orthogonality_mean = alpha_step_.orthogonality_mean();
+    step_record_.orthogonality_mean = discretization_->orthogonality_mean();
     if (!std::isfinite(step_record_.h_min)) step_record_.h_min = 0;
     report_.per_step.push_back(step_record_);
   }
 
   SurfaceResult finish() {
-    if (opt_.close_gaps && opt_.method == Method::orthogonal) {
+    if (opt_.close_gaps && discretization_->safeguarded()) {
       StageTimer timer(report_.times.gaps);
       // The fold guard kept the boundary as it stitched (the same edges on a manifold mesh): no
       // pass over every face.
@@ -225,14 +226,9 @@ class Engine {
       StageTimer timer(report_.times.alpha);
       if (!sample_velocities(f, keep)) return requeue();
       alpha_.assign(n, 1.0);
-      if (opt_.method == Method::timeline) {
-        alpha_step_.measure_orthogonality(f, vel_);
-      } else if (alpha_step_.solve(f, vel_, speed_, alpha_, cut) ==
-                 AlphaStep<N>::Outcome::cut) {
-        return requeue();
-      }
+      if (!discretization_->alpha(f, vel_, speed_, alpha_, cut)) return requeue();
     }
-    if (opt_.method == Method::orthogonal && opt_.rip) {
+    if (discretization_->safeguarded() && opt_.rip) {
       StageTimer timer(report_.times.rip);
       const std::size_t rips = find_rips(alpha_, speed_, f.closed,
                                          {opt_.rip_sharpness, opt_.rip_speed_fraction}, keep);
@@ -261,7 +257,7 @@ class Engine {
   /// Marks (keep[i] = 0) the vertices that stopped advancing: their mesh vertex is more than
   /// stall_steps steps old (StreamSurfaceOptions::stall_steps). Returns whether any was.
   bool find_stalled(const Front<N>& f, int step, std::vector<char>& keep) {
-    if (opt_.stall_steps <= 0 || opt_.method != Method::orthogonal || step <= opt_.stall_steps)
+    if (opt_.stall_steps <= 0 || !discretization_->safeguarded() || step <= opt_.stall_steps)
       return false;
     bool any = false;
     for (std::size_t i = 0; i < f.v.size(); ++i) {
@@ -308,23 +304,12 @@ class Engine {
     return usable;
   }
 
-  /// The front step h in α-time (the orthogonal method: the fastest vertex moves ℓ, at most h*;
-  /// the timeline baseline: its fixed time step), after negative α is clamped and the lag bound
-  /// applied; -1 when no vertex moves. Records α on the mesh vertices the front stands on.
+  /// The front step h in α-time (discretization.h); -1 when no vertex moves. Records α on the
+  /// mesh vertices the front stands on.
   double front_step(const Front<N>& f) {
     const std::size_t n = f.v.size();
-    double h = report_.timeline_step;
-    if (opt_.method == Method::orthogonal) {
-      alpha_step_.clamp_negative(f, alpha_, speed_);
-      if (opt_.lag_axis >= 0 && opt_.lag_axis < N && opt_.max_lag > 0)
-        alpha_step_.raise_lagging(f, alpha_);
-      double max_speed = 0;
-      for (std::size_t i = 0; i < n; ++i)
-        max_speed = std::max(max_speed, std::abs(alpha_[i]) * speed_[i]);
-      if (!(max_speed > 0)) return -1;
-      h = opt_.edge / max_speed;
-      h = std::min(h, opt_.mu_mode == MuMode::damping ? alpha_step_.h_star() : opt_.paper_max_step);
-    }
+    const double h = discretization_->step(f, alpha_, speed_);
+    if (h < 0) return h;
     step_record_.h_min = std::min(step_record_.h_min, h);
     step_record_.h_max = std::max(step_record_.h_max, h);
     for (std::size_t i = 0; i < n; ++i)
@@ -404,7 +389,7 @@ class Engine {
     return pieces;
   }
 
-  bool fold_guard_on() const { return opt_.fold_guard && opt_.method == Method::orthogonal; }
+  bool fold_guard_on() const { return opt_.fold_guard && discretization_->safeguarded(); }
 
   /// Emits and stitches one part; where a face of the strip folds over a neighbour (fold_guard.h)
   /// the strip is undone, the vertices standing on the fold leave the front (a local rip: their
@@ -537,23 +522,8 @@ class Engine {
       for (auto& piece : adapt_and_link(std::move(part), nullptr, 0))
         if (piece.v.size() >= 2) out.push_back(std::move(piece));
     }
-    if (opt_.method == Method::timeline) report_.timeline_step = timeline_step(out);
+    discretization_->begin(out);
     return out;
-  }
-
-  /// The timeline baseline's time step: the option, or ℓ over the seed's median speed.
-  double timeline_step(const std::vector<Front<N>>& fronts) const {
-    if (opt_.timeline_step > 0) return opt_.timeline_step;
-    std::vector<double> speeds;
-    for (const auto& fr : fronts)
-      for (const auto& fv : fr.v) {
-        Vec<N> v;
-        if (field_.velocity(fv.x, v) == FieldStatus::inside) speeds.push_back(v.norm());
-      }
-    const double median = median_of(std::move(speeds));
-    if (!(median > 0))
-      throw InvalidArgument("velocity is zero along the seed; the timeline step is undefined");
-    return opt_.edge / median;
   }
 
   std::vector<Front<N>> split(Front<N>&& f, const std::vector<char>& keep,
@@ -604,9 +574,12 @@ class Engine {
   StepRecord step_record_;
   std::size_t exits_this_step_ = 0;
   // The stages (they keep references to the members above).
-  AlphaStep<N> alpha_step_{field_, opt_, mesh_, report_, step_record_};
+  std::unique_ptr<Discretization<N>> discretization_ =
+      make_discretization(field_, opt_, mesh_, report_, step_record_);
   FrontAdapter<N> adapter_{field_, seed_, opt_, tol_, integration_stop_, mesh_, report_};
-  StripStitcher<N> stitcher_{opt_, seed_.closed, mesh_, report_};
+  // The paper's baseline keeps every row (no row skipping).
+  StripStitcher<N> stitcher_{opt_, discretization_->safeguarded() ? opt_.row_skip : RowSkip::off,
+                             seed_.closed, mesh_, report_};
   FoldGuard fold_guard_;
   // Per-front scratch, reused between fronts and steps.
   std::vector<Vec<N>> vel_;

@@ -41,10 +41,10 @@ void StripStitcher<N>::emit_moved(Front<N>& f, const Front<N>& old, int step) {
     const double distance = (f.v[i].x - f.v[i].anchor).norm();
     // Without row skipping every vertex that moved at all gets a new mesh vertex; one whose α
     // was clamped to 0 did not move and keeps its own (a copy would make a zero-area face).
-    const bool every_row = opt_.row_skip == RowSkip::off || opt_.method == Method::timeline;
+    const bool every_row = row_skip_ == RowSkip::off;
     fresh[i] = every_row ? has_moved(f.v[i], opt_.edge) : distance >= min_move;
   }
-  if (opt_.row_skip == RowSkip::run && opt_.method == Method::orthogonal) smooth_rows(f, fresh);
+  if (row_skip_ == RowSkip::run) smooth_rows(f, fresh);
   for (std::size_t i = 0; i < n; ++i)
     if (fresh[i] && f.v[i].origin >= 0 && lands_on_mesh_vertex(f, old, fresh, i)) fresh[i] = 0;
   renew_across_merges(f, old, fresh);

@@ -19,10 +19,12 @@ template <int N>
 class StripStitcher {
  public:
   /// Mesh vertices and faces go to `mesh`, skipped vertex-steps to `report` (owned by the engine
-  /// and outliving this); `closed_seed` wraps the seed parameter of emitted vertices.
-  StripStitcher(const StreamSurfaceOptions& options, bool closed_seed, Mesh& mesh,
-                SurfaceReport& report)
-      : opt_(options), closed_seed_(closed_seed), mesh_(mesh), report_(report) {}
+  /// and outliving this); `row_skip` is the discretization's (options.row_skip's is ignored);
+  /// `closed_seed` wraps the seed parameter of emitted vertices.
+  StripStitcher(const StreamSurfaceOptions& options, RowSkip row_skip, bool closed_seed,
+                Mesh& mesh, SurfaceReport& report)
+      : opt_(options), row_skip_(row_skip), closed_seed_(closed_seed), mesh_(mesh),
+        report_(report) {}
 
   /// Gives moved vertices new mesh vertices (all of them without row skipping).
   void emit_moved(Front<N>& f, const Front<N>& old, int step);
@@ -89,6 +91,7 @@ class StripStitcher {
                    std::size_t i, std::size_t j, bool triangle, bool on_a) const;
 
   const StreamSurfaceOptions& opt_;
+  RowSkip row_skip_;
   bool closed_seed_;
   Mesh& mesh_;
   SurfaceReport& report_;
