@@ -182,7 +182,8 @@ class Engine {
   }
 
   SurfaceResult finish() {
-    if (opt_.close_gaps && discretization_->safeguarded()) {
+    // Only a surface that tore (its front was cut into parts) has gaps to close.
+    if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
       StageTimer timer(report_.times.gaps);
       // The fold guard kept the boundary as it stitched (the same edges on a manifold mesh): no
       // pass over every face.
