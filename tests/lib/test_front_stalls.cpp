@@ -10,20 +10,12 @@
 #include "orthofront/field/grid_field.h"
 #include "orthofront/field/sample_field.h"
 #include "orthofront/seed/seed.h"
+#include "lib/surface_checks.h"
 
 using namespace orthofront;
+using orthofront::test_support::require_valid;
 
 namespace {
-
-void require_valid(const SurfaceResult& r) {
-  const QualityReport& q = r.report.quality;
-  CHECK(q.non_manifold_edges == 0);
-  CHECK(q.degenerate_faces == 0);
-  CHECK(q.t_junctions == 0);
-  CHECK(q.folds == 0);
-  CHECK(q.inconsistent_edges == 0);
-  for (const Vec3& p : r.mesh.positions) REQUIRE(p.allFinite());
-}
 
 /// Stagnation flow onto a no-slip wall at y = 0: v = (2 x y, -y², 0) above it (divergence free,
 /// zero on the wall), exactly zero inside it (y <= 0).

@@ -13,8 +13,10 @@
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/scaled.h"
 #include "orthofront/seed/seed.h"
+#include "lib/surface_checks.h"
 
 using namespace orthofront;
+using orthofront::test_support::require_valid;
 
 namespace {
 
@@ -67,16 +69,6 @@ int boundary_loops(const Mesh& mesh, bool& simple) {
     }
   }
   return loops;
-}
-
-void require_valid(const SurfaceResult& r) {
-  const QualityReport& q = r.report.quality;
-  CHECK(q.non_manifold_edges == 0);
-  CHECK(q.degenerate_faces == 0);
-  CHECK(q.t_junctions == 0);
-  CHECK(q.folds == 0);
-  CHECK(q.inconsistent_edges == 0);
-  for (const Vec3& p : r.mesh.positions) REQUIRE(p.allFinite());
 }
 
 /// v = (1, a sin(k x), 0): straight on average, wiggling fast along x, so DOPRI5 needs thousands

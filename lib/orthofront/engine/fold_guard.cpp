@@ -6,13 +6,6 @@ namespace orthofront {
 
 namespace {
 
-/// Unit normal of a face; zero for a face without area (no orientation to compare).
-Vec3 unit_normal(const Mesh& mesh, const Face& face) {
-  const Vec3 area = area_vector(mesh, face);
-  const double norm = area.norm();
-  return norm > 0 ? Vec3(area / norm) : Vec3::Zero();
-}
-
 /// Calls visit(a, b) for each edge of a face that joins two different vertices.
 template <class Visit>
 void for_each_edge(const Face& face, Visit&& visit) {

@@ -98,13 +98,6 @@ Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges)
   return bd;
 }
 
-/// Unit normal of a face (zero without area).
-Vec3 unit_normal(const Mesh& mesh, const Face& face) {
-  const Vec3 a = area_vector(mesh, face);
-  const double n = a.norm();
-  return n > 0 ? Vec3(a / n) : Vec3::Zero();
-}
-
 Face make_face(std::array<std::int32_t, 4> ids, int count) {
   Face f;
   for (int k = 0; k < count; ++k) {
@@ -284,11 +277,13 @@ GapReport close_gaps(Mesh& mesh, double distance, double min_length,
         return s;
       };
       if (arc_of(a) < min_length || arc_of(c_side) < min_length) continue;
+      // Neither side may be zipped already, nor may the two sides share a vertex.
       bool taken = false;
-      for (const auto v : a) taken = taken || used[static_cast<std::size_t>(v)];
       for (const auto v : c_side) taken = taken || used[static_cast<std::size_t>(v)];
-      for (const auto v : a)
-        taken = taken || std::find(c_side.begin(), c_side.end(), v) != c_side.end();
+      if (taken) continue;
+      for (const auto v : c_side) used[static_cast<std::size_t>(v)] = 2;  // marked for a moment
+      for (const auto v : a) taken = taken || used[static_cast<std::size_t>(v)] != 0;
+      for (const auto v : c_side) used[static_cast<std::size_t>(v)] = 0;
       if (taken) continue;
 
       // Faces between A (a_i → a_{i+1} boundary edges) and C (c_{j+1} → c_j boundary edges),

@@ -101,4 +101,11 @@ inline Vec3 area_vector(const Mesh& mesh, const Face& face) {
   return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
 }
 
+/// Unit normal of a face; zero for a face without area (no orientation to compare).
+inline Vec3 unit_normal(const Mesh& mesh, const Face& face) {
+  const Vec3 area = area_vector(mesh, face);
+  const double norm = area.norm();
+  return norm > 0 ? Vec3(area / norm) : Vec3::Zero();
+}
+
 }  // namespace orthofront
