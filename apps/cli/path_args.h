@@ -17,6 +17,9 @@ struct PathArgs {
   double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
   bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
+  std::string device;                 // empty: per vertex through the streamed field
+  std::size_t device_min_vertices = 0;
+  std::string device_memory;          // empty: half the device's free memory
   StreamSurfaceOptions options = path_engine_defaults();
   MemoryLimits limits;
 

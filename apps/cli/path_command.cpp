@@ -22,6 +22,7 @@
 #include "orthofront/io/open_field.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/io/vdb_grid.h"
+#include "orthofront/spacetime/bulk_front_integrator.h"
 #include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/spacetime/path_surface.h"
 
@@ -107,6 +108,20 @@ void add_path_flags(CLI::App& command, PathArgs& args) {
                   "smoothly (0: a hard switch at the bound)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  command
+      .add_option("--device", args.device,
+                  "Gridded series: advance the front by bulk advection (whole time steps, slab by "
+                  "slab) on cpu or cuda; auto: cuda for fronts of at least " +
+                      std::to_string(spacetime::kCudaFrontBreakEven) +
+                      " vertices where a device is present. Default: per vertex through the "
+                      "streamed field")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  command.add_option("--device-min-vertices", args.device_min_vertices,
+                     "With --device: smaller fronts advance per vertex (0: every front for cpu "
+                     "and cuda, the break-even size for auto)");
+  command.add_option("--device-memory", args.device_memory,
+                     "With --device cuda/auto: time steps kept on the device (e.g. 8GiB; default: "
+                     "half its free memory)");
   command.add_flag("--spacetime-out", args.spacetime_out,
                    "2D flows: write positions (x, y, t) instead of (x, y, 0)");
   add_engine_flags(command, args.options);
@@ -132,6 +147,9 @@ spacetime::PathSurfaceOptions path_options(const PathArgs& args) {
   o.engine.lag_ramp = args.band_ramp;
   o.seed_name = args.seed;  // errors name the seed and field as given
   o.field_name = args.field;
+  if (!args.device.empty()) o.device = advect::parse_device(args.device);
+  o.device_min_vertices = args.device_min_vertices;
+  if (!args.device_memory.empty()) o.device_bytes = spacetime::parse_bytes(args.device_memory);
   return o;
 }
 
@@ -179,6 +197,9 @@ void add_path_command(CLI::App& app) {
     spacetime::PathSurfaceResult result;
     std::size_t cache_budget = 0;  // streamed runs only
     if (is_unsteady_field_name(args->field)) {
+      if (o.device)
+        throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
+                              "' is an analytic field (sample it with `generate` first)");
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
     } else {
@@ -263,6 +284,13 @@ void add_path_command(CLI::App& app) {
             spacetime::format_bytes(pr.cache.unit_bytes).c_str(), pr.cache.hits, pr.cache.misses,
             pr.cache.late_prefetches, spacetime::format_bytes(pr.cache.bytes_read).c_str(),
             pr.cache.read_amplification(), spacetime::format_bytes(pr.cache.peak_bytes).c_str());
+      if (!pr.device.empty())
+        std::printf("; front advance on %s: %zu calls, %zu particles, %.3f s (compute %.3f s, "
+                    "uploads %.3f s, %s up)",
+                    pr.device.c_str(), pr.device_calls, pr.device_statistics.particles,
+                    pr.device_statistics.total_seconds, pr.device_statistics.compute_seconds,
+                    pr.device_statistics.upload_seconds,
+                    spacetime::format_bytes(pr.device_statistics.bytes_uploaded).c_str());
       std::printf(".\nWrote %s%s%s\n", args->out.c_str(), args->report.empty() ? "" : " and ",
                   args->report.c_str());
     }

@@ -3,6 +3,7 @@
 // in cells without data and outside the time range, and results that do not depend on the batch.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -249,4 +250,47 @@ TEST_CASE("bulk advection: devices by name, and cuda refused with the reason whe
     CHECK_THROWS_WITH(make_advector(Device::cuda), Catch::Contains(why));
     CHECK(make_advector(Device::auto_select)->name() == "cpu");
   }
+}
+
+TEST_CASE("bulk advection: each particle stops at its own end time", "[advect]") {
+  const auto advector = make_cpu_advector();
+  ResidentSteps series = linear_series(3, false, 3);
+  const auto points = random_points(120, 0.7, 3, 11);
+  MethodOptions o;
+  o.method = Method::dopri5;
+  o.absolute = o.relative = 1e-12;
+  ParticleBatch b = batch_of(points, 0);
+  b.stop.resize(b.size());
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    b.t[i] = 0.1 * static_cast<double>(i % 3);               // 0, 0.1, 0.2
+    b.stop[i] = b.t[i] + 0.05 + 0.7 * static_cast<double>(i % 5) / 4.0;  // 0.05 … 0.95 later
+  }
+  const double horizon = *std::max_element(b.stop.begin(), b.stop.end());
+  const std::vector<double> starts = b.t, ends = b.stop;
+  const AdvectionStatistics s = advector->advect(series, b, horizon, o);
+  CHECK(s.slabs == 4);
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    INFO("particle " << i);
+    REQUIRE(b.status[i] == ParticleStatus::moving);
+    REQUIRE(b.t[i] == ends[i]);
+    const auto want = reference(points[i], starts[i], ends[i], 3);
+    for (std::size_t d = 0; d < 3; ++d) CHECK(std::abs(b.x[d][i] - want[d]) < 1e-10);
+    // The same particle alone, with the common end time, lands on the same bits.
+    ParticleBatch one = batch_of({points[i]}, starts[i]);
+    advector->advect(series, one, ends[i], o);
+    for (std::size_t d = 0; d < 3; ++d) CHECK(one.x[d][0] == b.x[d][i]);
+  }
+
+  // An own end beyond the call's end, before the particle's time, or NaN: time_bounds, unmoved.
+  ParticleBatch bad = batch_of({points[0], points[1], points[2]}, 0.25);
+  bad.stop = {0.9, 0.2, std::nan("")};
+  advector->advect(series, bad, 0.75, o);
+  for (std::size_t i = 0; i < 3; ++i) {
+    CHECK(bad.status[i] == ParticleStatus::time_bounds);
+    CHECK(bad.t[i] == 0.25);
+    CHECK(bad.x[0][i] == points[i][0]);
+  }
+  ParticleBatch short_stop = batch_of({points[0], points[1]}, 0.25);
+  short_stop.stop = {0.5};
+  CHECK_THROWS_AS(advector->advect(series, short_stop, 0.75, o), InvalidArgument);
 }

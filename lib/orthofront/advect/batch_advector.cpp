@@ -38,6 +38,7 @@ void ParticleBatch::resize(std::size_t n) {
   h.resize(n, 0.0);
   evaluations.resize(n, 0);
   status.resize(n, ParticleStatus::moving);
+  if (!stop.empty()) stop.resize(n, 0.0);
 }
 
 ParticleState ParticleBatch::state(std::size_t i) const {
@@ -134,11 +135,18 @@ SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, 
   SlabPlan plan;
   const double lo = times.front(), hi = times.back();
   const bool end_inside = t_end >= lo && t_end <= hi;
+  const bool own_ends = !particles.stop.empty();
+  if (own_ends && particles.stop.size() != particles.size())
+    throw InvalidArgument("bulk advection: " + std::to_string(particles.stop.size()) +
+                          " end times for " + std::to_string(particles.size()) + " particles");
   double earliest = t_end, latest = t_end;
   for (std::size_t i = 0; i < particles.size(); ++i) {
     if (particles.status[i] != ParticleStatus::moving) continue;
     const double t = particles.t[i];
-    if (!end_inside || !(t >= lo && t <= hi)) {
+    // An own end lies between t and t_end, both ends included (NaN fails both tests).
+    const bool own_end_ok =
+        !own_ends || (particles.stop[i] >= std::min(t, t_end) && particles.stop[i] <= std::max(t, t_end));
+    if (!end_inside || !(t >= lo && t <= hi) || !own_end_ok) {
       particles.status[i] = ParticleStatus::time_bounds;
       continue;
     }
@@ -176,6 +184,7 @@ class CpuAdvector final : public BatchAdvector {
     const std::vector<double>& times = source.times();
     const SlabPlan plan = begin_call(times, particles, t_end, options, stats);
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
+    const bool own_ends = !particles.stop.empty();
     // The two steps of the current slab; moving on releases the one not needed any more.
     std::size_t held[2] = {SIZE_MAX, SIZE_MAX};
     const float* data[2] = {nullptr, nullptr};
@@ -216,12 +225,15 @@ class CpuAdvector final : public BatchAdvector {
               [&](const tbb::blocked_range<std::size_t>& r) {
                 std::size_t local_steps = 0, local_evaluations = 0;
                 for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                  const double end = own_ends ? particles.stop[i] : t_end;
                   if (particles.status[i] != ParticleStatus::moving ||
-                      !in_slab(slab.t0, slab.t1, plan.forward, particles.t[i], t_end))
+                      !in_slab(slab.t0, slab.t1, plan.forward, particles.t[i], end))
                     continue;
                   ParticleState p = particles.state(i);
                   const std::uint32_t e0 = p.evaluations;
-                  advance_particle<Axes, Components, Rectilinear>(slab, p, slab_t_end, options);
+                  advance_particle<Axes, Components, Rectilinear>(
+                      slab, p, own_ends ? slab_end(slab.t0, slab.t1, plan.forward, end) : slab_t_end,
+                      options);
                   local_steps += p.steps;
                   local_evaluations += p.evaluations - e0;
                   particles.store(i, p);
@@ -276,13 +288,15 @@ bool cuda_available(std::string* why) {
 
 std::unique_ptr<BatchAdvector> make_cpu_advector() { return std::make_unique<CpuAdvector>(); }
 
-std::unique_ptr<BatchAdvector> make_advector(Device device) {
+std::unique_ptr<BatchAdvector> make_advector(Device device, std::size_t device_bytes) {
   if (device == Device::cpu) return make_cpu_advector();
   std::string why;
   const bool cuda = cuda_available(&why);
   if (device == Device::cuda && !cuda) throw InvalidArgument("--device cuda: " + why);
 #ifdef ORTHOFRONT_HAVE_CUDA
-  if (cuda) return make_cuda_advector();
+  if (cuda) return make_cuda_advector(device_bytes);
+#else
+  static_cast<void>(device_bytes);  // nothing to keep on a device in a CPU build
 #endif
   return make_cpu_advector();
 }

@@ -16,10 +16,14 @@
 namespace orthofront::advect {
 
 /// Particles as a structure of arrays (coalesced loads on a device). A particle moves from its own
-/// time t[i] to the common end time of a call.
+/// time t[i] to the common end time of a call, or to its own end time stop[i] when `stop` is given.
 struct ParticleBatch {
   std::array<std::vector<double>, 3> x;
   std::vector<double> t;
+  /// Empty, or one end time per particle, each between t[i] and the call's t_end (inclusive;
+  /// the call's t_end is then the farthest of them). A particle whose end lies elsewhere gets
+  /// time_bounds and does not move.
+  std::vector<double> stop;
   std::vector<double> h;  ///< DOPRI5 step size carried between slabs and calls (0: none yet)
   std::vector<std::uint32_t> evaluations;
   std::vector<ParticleStatus> status;
@@ -114,8 +118,9 @@ struct SlabPlan {
 /// tolerance that is not finite and > 0, no evaluation budget).
 void check_method(const MethodOptions& options);
 
-/// Marks particles whose time or t_end lies outside the series (time_bounds) and plans the slabs
-/// from the earliest particle time to t_end. Throws InvalidArgument for fewer than two steps.
+/// Marks particles whose time or t_end (or own end, `stop`) lies outside the series, or whose own
+/// end is not between its time and t_end (time_bounds), and plans the slabs from the earliest
+/// particle time to t_end. Throws InvalidArgument for fewer than two steps.
 SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, double t_end);
 
 class BatchAdvector {
@@ -140,8 +145,9 @@ Device parse_device(const std::string& text);
 bool cuda_available(std::string* why = nullptr);
 
 /// The seam: the CPU backend, or the CUDA backend (cuda; auto when cuda_available()). Throws
-/// InvalidArgument when cuda is asked for and cannot be had, saying why.
-std::unique_ptr<BatchAdvector> make_advector(Device device);
+/// InvalidArgument when cuda is asked for and cannot be had, saying why. `device_bytes`: what the
+/// CUDA backend may keep of a series' steps on the device (0: half its free memory).
+std::unique_ptr<BatchAdvector> make_advector(Device device, std::size_t device_bytes = 0);
 std::unique_ptr<BatchAdvector> make_cpu_advector();
 
 }  // namespace orthofront::advect

@@ -101,6 +101,7 @@ struct DeviceParticles {
   double* h;
   std::uint32_t* evaluations;
   ParticleStatus* status;
+  const double* stop;  ///< own end times, or nullptr: the call's t_end
 };
 
 template <int Axes, int Components, bool Rectilinear, Method M>
@@ -109,15 +110,16 @@ __global__ void advance_kernel(SlabView slab, DeviceParticles p, std::size_t n, 
                                unsigned long long* counters) {
   const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   unsigned steps = 0, evaluations = 0;
+  const double end = p.stop && i < n ? p.stop[i] : t_end;
   if (i < n && p.status[i] == ParticleStatus::moving &&
-      in_slab(slab.t0, slab.t1, forward, p.t[i], t_end)) {
+      in_slab(slab.t0, slab.t1, forward, p.t[i], end)) {
     ParticleState s;
     for (int d = 0; d < 3; ++d) s.x[d] = p.x[d][i];
     s.t = p.t[i];
     s.h = p.h[i];
     s.evaluations = p.evaluations[i];
     // One method per kernel: fewer registers than a branch between both.
-    const double stop = slab_end(slab.t0, slab.t1, forward, t_end);
+    const double stop = slab_end(slab.t0, slab.t1, forward, end);
     if constexpr (M == Method::rk4)
       advance_rk4<Axes, Components, Rectilinear>(slab, s, stop, options);
     else
@@ -170,7 +172,7 @@ double overlap(double a0, double a1, double b0, double b1) {
 
 class CudaAdvector final : public BatchAdvector {
  public:
-  CudaAdvector() {
+  explicit CudaAdvector(std::size_t device_bytes) : device_budget_(device_bytes) {
     int device = 0;
     check(cudaGetDevice(&device), "cudaGetDevice");
     cudaDeviceProp prop{};
@@ -226,16 +228,18 @@ class CudaAdvector final : public BatchAdvector {
     // not uploaded again.
     const auto need = [&](std::size_t i, int keep0, int keep1) -> int {
       const std::size_t step = sequence[i];
-      for (int s = 0; s < 3; ++s)
-        if (slots_[s].source == source.identity() && slots_[s].step == step) {
-          slots_[s].last_use = ++clock_;
+      const int slot_count = static_cast<int>(slots_.size());
+      for (int s = 0; s < slot_count; ++s)
+        if (slots_[s]->source == source.identity() && slots_[s]->step == step) {
+          slots_[s]->last_use = ++clock_;
           return s;
         }
       int victim = -1;
-      for (int s = 0; s < 3; ++s)
-        if (s != keep0 && s != keep1 && (victim < 0 || slots_[s].last_use < slots_[victim].last_use))
+      for (int s = 0; s < slot_count; ++s)
+        if (s != keep0 && s != keep1 &&
+            (victim < 0 || slots_[s]->last_use < slots_[victim]->last_use))
           victim = s;
-      Slot& slot = slots_[victim];
+      Slot& slot = *slots_[victim];
       // The pinned buffer is free once its last upload finished; the slot once the kernels that
       // read its old step finished.
       const int p = next_staging_;
@@ -277,11 +281,11 @@ class CudaAdvector final : public BatchAdvector {
       slab.grid = grid;
       slab.t0 = times[k];
       slab.t1 = times[k + 1];
-      slab.step0 = slots_[plan.forward ? a : b].data.get();
-      slab.step1 = slots_[plan.forward ? b : a].data.get();
+      slab.step0 = slots_[plan.forward ? a : b]->data.get();
+      slab.step1 = slots_[plan.forward ? b : a]->data.get();
       for (const int s : {a, b})
-        if (slots_[s].ready)
-          check(cudaStreamWaitEvent(compute_.get(), slots_[s].ready_event.get(), 0), "cudaStreamWaitEvent");
+        if (slots_[s]->ready)
+          check(cudaStreamWaitEvent(compute_.get(), slots_[s]->ready_event.get(), 0), "cudaStreamWaitEvent");
       const std::size_t begin = mark(compute_.get());
       const unsigned threads = 128;
       const auto blocks = static_cast<unsigned>((n + threads - 1) / threads);
@@ -290,8 +294,8 @@ class CudaAdvector final : public BatchAdvector {
       check(cudaGetLastError(), "kernel launch");
       kernel_marks.push_back({begin, mark(compute_.get())});
       for (const int s : {a, b}) {
-        check(cudaEventRecord(slots_[s].used_event.get(), compute_.get()), "cudaEventRecord");
-        slots_[s].used = true;
+        check(cudaEventRecord(slots_[s]->used_event.get(), compute_.get()), "cudaEventRecord");
+        slots_[s]->used = true;
       }
       ++stats.slabs;
       if (j + 1 < plan.slabs.size()) {
@@ -338,16 +342,24 @@ class CudaAdvector final : public BatchAdvector {
     bool ready = false, used = false;
   };
 
-  // Step buffers (three slots, two pinned staging buffers) for steps of `floats` floats; a new
-  // size drops what the slots held.
+  // Step buffers for steps of `floats` floats (as many as the device budget holds, at least
+  // three) and two pinned staging buffers; a new size drops what the slots held.
   void prepare_buffers(std::size_t floats) {
     if (floats == slot_floats_) return;
     check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
-    for (Slot& s : slots_) {
-      s.data = DeviceArray<float>(floats);
-      s.source = 0;
-      s.ready = s.used = false;
-      s.last_use = 0;
+    slots_.clear();
+    const std::size_t step_bytes = floats * sizeof(float);
+    std::size_t budget = device_budget_;
+    if (budget == 0) {
+      // Half the memory free now: room for the particles and for other users of the device.
+      std::size_t free_bytes = 0, total_bytes = 0;
+      check(cudaMemGetInfo(&free_bytes, &total_bytes), "cudaMemGetInfo");
+      budget = free_bytes / 2;
+    }
+    const std::size_t count = std::clamp<std::size_t>(budget / std::max<std::size_t>(step_bytes, 1), 3, kMaxSlots);
+    for (std::size_t i = 0; i < count; ++i) {
+      slots_.push_back(std::make_unique<Slot>());
+      slots_.back()->data = DeviceArray<float>(floats);
     }
     for (auto& p : staging_) p = std::make_unique<PinnedBuffer>(floats * sizeof(float));
     staged_[0] = staged_[1] = false;
@@ -380,14 +392,18 @@ class CudaAdvector final : public BatchAdvector {
       ph_ = DeviceArray<double>(c);
       pe_ = DeviceArray<std::uint32_t>(c);
       ps_ = DeviceArray<ParticleStatus>(c);
+      pstop_ = DeviceArray<double>(c);
       capacity_ = c;
     }
+    const bool own_ends = !particles.stop.empty();
+    if (own_ends) pstop_.upload(particles.stop.data(), n);
     for (std::size_t d = 0; d < 3; ++d) px_[d].upload(particles.x[d].data(), n);
     pt_.upload(particles.t.data(), n);
     ph_.upload(particles.h.data(), n);
     pe_.upload(particles.evaluations.data(), n);
     ps_.upload(particles.status.data(), n);
-    return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get()};
+    return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get(),
+            own_ends ? pstop_.get() : nullptr};
   }
 
   void download_particles(ParticleBatch& particles) const {
@@ -401,7 +417,9 @@ class CudaAdvector final : public BatchAdvector {
 
   std::string name_;
   Stream compute_, upload_;
-  std::array<Slot, 3> slots_;
+  static constexpr std::size_t kMaxSlots = 1024;
+  std::size_t device_budget_ = 0;  ///< bytes for resident steps (0: half the free memory)
+  std::vector<std::unique_ptr<Slot>> slots_;
   std::size_t slot_floats_ = 0;
   std::array<std::unique_ptr<PinnedBuffer>, 2> staging_;
   std::array<Event, 2> staged_event_;
@@ -410,7 +428,7 @@ class CudaAdvector final : public BatchAdvector {
   std::uint64_t clock_ = 0;
   std::array<DeviceArray<double>, 3> coordinates_, inverse_widths_;
   std::array<DeviceArray<double>, 3> px_;
-  DeviceArray<double> pt_, ph_;
+  DeviceArray<double> pt_, ph_, pstop_;
   DeviceArray<std::uint32_t> pe_;
   DeviceArray<ParticleStatus> ps_;
   std::size_t capacity_ = 0;
@@ -431,6 +449,8 @@ bool cuda_device_present(std::string* why) {
   return true;
 }
 
-std::unique_ptr<BatchAdvector> make_cuda_advector() { return std::make_unique<CudaAdvector>(); }
+std::unique_ptr<BatchAdvector> make_cuda_advector(std::size_t device_bytes) {
+  return std::make_unique<CudaAdvector>(device_bytes);
+}
 
 }  // namespace orthofront::advect

@@ -81,6 +81,7 @@ class Engine {
   }
 
   void set_stop_request(StopRequest request) { stop_request_ = std::move(request); }
+  void set_front_integrator(FrontIntegrator<N>* integrator) { front_integrator_ = integrator; }
 
   /// Lays the seed as the first front.
   void begin() {
@@ -329,28 +330,49 @@ class Engine {
     nf.id = f.id;
     nf.v.resize(n);
     std::vector<int> evaluations(n, 0);
-    for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const double tau = alpha_[i] * h;
+    const auto apply = [&](std::size_t i, FrontVertex<N>& fv, const IntegrationResult<N>& r) {
+      evaluations[i] = r.evaluations;
+      fv.x = r.x;
+      fv.t += r.reached;
+      if (r.status != FieldStatus::inside) keep[i] = 0;
+      state_[i] = r.interrupted                     ? VertexState::interrupted
+                  : r.status == FieldStatus::outside ? VertexState::outside
+                  : r.status == FieldStatus::inside  ? VertexState::ok
+                                                     : VertexState::no_data;
+    };
+    const bool stopping = stopping_.load(std::memory_order_relaxed);
+    if (front_integrator_ && !stopping && n >= front_integrator_->min_vertices()) {
+      // The whole front in one call of the bulk backend.
+      batch_x_.resize(n);
+      batch_tau_.resize(n);
+      batch_out_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        batch_x_[i] = f.v[i].x;
+        batch_tau_[i] = alpha_[i] * h;
+      }
+      front_integrator_->integrate(batch_x_, batch_tau_, batch_out_);
+      for (std::size_t i = 0; i < n; ++i) {
         FrontVertex<N> fv = f.v[i];
         fv.origin = static_cast<std::int32_t>(i);
-        if (stopping_.load(std::memory_order_relaxed)) {
-          keep[i] = 0;  // the run stops: this stream line ends at its last mesh vertex
-          state_[i] = VertexState::interrupted;
-        } else if (tau != 0) {
-          const IntegrationResult<N> r = integrate(fv.x, tau);
-          evaluations[i] = r.evaluations;
-          fv.x = r.x;
-          fv.t += r.reached;
-          if (r.status != FieldStatus::inside) keep[i] = 0;
-          state_[i] = r.interrupted                     ? VertexState::interrupted
-                      : r.status == FieldStatus::outside ? VertexState::outside
-                      : r.status == FieldStatus::inside  ? VertexState::ok
-                                                         : VertexState::no_data;
-        }
+        if (batch_tau_[i] != 0) apply(i, fv, batch_out_[i]);
         nf.v[i] = fv;
       }
-    });
+    } else {
+      for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          const double tau = alpha_[i] * h;
+          FrontVertex<N> fv = f.v[i];
+          fv.origin = static_cast<std::int32_t>(i);
+          if (stopping_.load(std::memory_order_relaxed)) {
+            keep[i] = 0;  // the run stops: this stream line ends at its last mesh vertex
+            state_[i] = VertexState::interrupted;
+          } else if (tau != 0) {
+            apply(i, fv, integrate(fv.x, tau));
+          }
+          nf.v[i] = fv;
+        }
+      });
+    }
     report_.vertex_steps += n;
     for (std::size_t i = 0; i < n; ++i) {
       report_.field_evaluations += static_cast<std::size_t>(evaluations[i]);
@@ -558,6 +580,10 @@ class Engine {
   StreamSurfaceOptions opt_;
   Tolerance tol_;
   StopRequest stop_request_;
+  FrontIntegrator<N>* front_integrator_ = nullptr;  // not owned; null: per vertex
+  std::vector<Vec<N>> batch_x_;                      // its call's arrays, kept between steps
+  std::vector<double> batch_tau_;
+  std::vector<IntegrationResult<N>> batch_out_;
   StopRequest integration_stop_;  ///< stop_requested(), as the integrators take it
   mutable std::atomic<bool> stopping_{false};
   mutable std::atomic<bool> stopped_by_budget_{false};
@@ -624,6 +650,11 @@ void SurfaceBuilder<N>::cancel() {
 template <int N>
 void SurfaceBuilder<N>::set_stop_request(StopRequest request) {
   engine_->set_stop_request(std::move(request));
+}
+
+template <int N>
+void SurfaceBuilder<N>::set_front_integrator(FrontIntegrator<N>* integrator) {
+  engine_->set_front_integrator(integrator);
 }
 template <int N>
 FrontSnapshot SurfaceBuilder<N>::front() {

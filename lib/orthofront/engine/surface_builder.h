@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "orthofront/engine/front.h"
+#include "orthofront/engine/front_integrator.h"
 #include "orthofront/engine/stream_surface.h"
 
 namespace orthofront {
@@ -51,6 +52,9 @@ class SurfaceBuilder {
   /// integrations got to and then the surface, as cancel() does. The time budget is checked
   /// there too.
   void set_stop_request(StopRequest request);
+  /// Moves fronts of at least integrator->min_vertices() vertices through `integrator` (not
+  /// owned; it must outlive the builder) instead of per vertex; nullptr: per vertex.
+  void set_front_integrator(FrontIntegrator<N>* integrator);
 
   /// The front that the next step advances, N coordinates per vertex (valid until step()).
   FrontSnapshot front();

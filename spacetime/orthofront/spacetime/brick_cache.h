@@ -101,6 +101,7 @@ class BrickCache {
   /// file when it cannot be read, orthofront::Error when the budget cannot take it.
   Handle acquire(BrickKey key);
   /// Pins all `keys`: starts every missing load at once (so they decode in parallel), then waits.
+  /// The handles come in their own order (resident units first): tell them by Handle::key().
   /// Same errors as acquire.
   std::vector<Handle> acquire_all(std::span<const BrickKey> keys);
   /// Requests loads of `keys` (most urgent first) while the budget allows, evicting only units

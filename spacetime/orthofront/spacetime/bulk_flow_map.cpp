@@ -1,5 +1,6 @@
 #include "orthofront/spacetime/bulk_flow_map.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace orthofront::spacetime {
@@ -9,35 +10,46 @@ CachedSteps::CachedSteps(BrickCache& cache) : cache_(cache) {}
 const float* CachedSteps::acquire(std::size_t step) {
   if (const auto it = held_.find(step); it != held_.end()) return it->second.data;
   const io::BrickLayout& layout = cache_.layout();
-  std::vector<BrickKey> keys;
-  for (std::size_t b = 0; b < layout.bricks(); ++b)
-    keys.push_back({static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)});
-  Held h;
-  h.pins = cache_.acquire_all(keys);
   const GridGeometry& g = geometry();
   const auto c = static_cast<std::size_t>(components());
+  const auto key = [&](std::size_t b) {
+    return BrickKey{static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)};
+  };
+  Held h;
   if (layout.bricks() == 1 && layout.size == g.size) {
+    const BrickKey whole = key(0);
+    h.pins = cache_.acquire_all(std::span<const BrickKey>(&whole, 1));
     h.data = h.pins.front().data();
-  } else {
-    // Rows of each brick into their place in the step (edge bricks are padded past the grid).
-    h.gathered.resize(g.point_count() * c);
-    for (std::int64_t bk = 0; bk < layout.count[2]; ++bk)
-      for (std::int64_t bj = 0; bj < layout.count[1]; ++bj)
-        for (std::int64_t bi = 0; bi < layout.count[0]; ++bi) {
-          const float* brick = h.pins[layout.brick_index(bi, bj, bk)].data();
-          const std::int64_t i0 = bi * layout.size[0], j0 = bj * layout.size[1], k0 = bk * layout.size[2];
-          const std::int64_t ni = std::min(layout.size[0], g.size[0] - i0);
-          for (std::int64_t k = 0; k < std::min(layout.size[2], g.size[2] - k0); ++k)
-            for (std::int64_t j = 0; j < std::min(layout.size[1], g.size[1] - j0); ++j) {
-              const std::size_t from =
-                  static_cast<std::size_t>((k * layout.size[1] + j) * layout.size[0]) * c;
-              std::memcpy(h.gathered.data() + g.index(i0, j0 + j, k0 + k) * c, brick + from,
-                          static_cast<std::size_t>(ni) * c * sizeof(float));
-            }
-        }
-    h.pins.clear();
-    h.data = h.gathered.data();
+    return held_.emplace(step, std::move(h)).first->second.data;
   }
+  // Rows of each brick into their place in the step (edge bricks are padded past the grid), a
+  // group of bricks at a time: beside a path surface's band, the cache need not hold a whole step.
+  h.gathered.resize(g.point_count() * c);
+  const std::size_t bricks = layout.bricks();
+  for (std::size_t first = 0; first < bricks; first += kGatherBricks) {
+    const std::size_t last = std::min(bricks, first + kGatherBricks);
+    std::vector<BrickKey> keys;
+    for (std::size_t b = first; b < last; ++b) keys.push_back(key(b));
+    // The handles come resident units first: each is placed by its own key.
+    const std::vector<BrickCache::Handle> pins = cache_.acquire_all(keys);
+    for (const BrickCache::Handle& pin : pins) {
+      const auto index = static_cast<std::int64_t>(pin.key().brick);
+      const std::int64_t bi = index % layout.count[0];
+      const std::int64_t bj = index / layout.count[0] % layout.count[1];
+      const std::int64_t bk = index / (layout.count[0] * layout.count[1]);
+      const float* brick = pin.data();
+      const std::int64_t i0 = bi * layout.size[0], j0 = bj * layout.size[1], k0 = bk * layout.size[2];
+      const std::int64_t ni = std::min(layout.size[0], g.size[0] - i0);
+      for (std::int64_t k = 0; k < std::min(layout.size[2], g.size[2] - k0); ++k)
+        for (std::int64_t j = 0; j < std::min(layout.size[1], g.size[1] - j0); ++j) {
+          const std::size_t from =
+              static_cast<std::size_t>((k * layout.size[1] + j) * layout.size[0]) * c;
+          std::memcpy(h.gathered.data() + g.index(i0, j0 + j, k0 + k) * c, brick + from,
+                      static_cast<std::size_t>(ni) * c * sizeof(float));
+        }
+    }
+  }
+  h.data = h.gathered.data();
   return held_.emplace(step, std::move(h)).first->second.data;
 }
 

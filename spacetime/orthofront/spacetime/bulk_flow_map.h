@@ -15,9 +15,12 @@
 namespace orthofront::spacetime {
 
 /// Whole time steps of a cached series (a step of one brick is used in place; bricks are gathered
-/// into a step buffer, outside the cache's budget: at most three steps at once).
+/// into a step buffer, outside the cache's budget: at most three steps at once). A step is
+/// gathered kGatherBricks bricks at a time, so the cache needs room for that many beside what
+/// else it holds.
 class CachedSteps final : public advect::StepSource {
  public:
+  static constexpr std::size_t kGatherBricks = 64;
   explicit CachedSteps(BrickCache& cache);
   const GridGeometry& geometry() const override { return cache_.series().geometry(); }
   int components() const override { return cache_.series().components(); }

@@ -65,6 +65,23 @@ inline nlohmann::json to_json(const PathReport& r) {
     j["cache"] = to_json(r.cache);
     j["slow_evaluations"] = r.slow_evaluations;
   }
+  if (!r.device.empty()) {
+    const advect::AdvectionStatistics& d = r.device_statistics;
+    j["device"] = {{"backend", r.device},
+                   {"min_front_vertices", r.device_min_vertices},
+                   {"calls", r.device_calls},
+                   {"particles", d.particles},
+                   {"slabs", d.slabs},
+                   {"steps_loaded", d.steps_loaded},
+                   {"particle_steps", d.particle_steps},
+                   {"evaluations", d.evaluations},
+                   {"seconds", d.total_seconds},
+                   {"compute_seconds", d.compute_seconds},
+                   {"upload_seconds", d.upload_seconds},
+                   {"host_seconds", d.host_seconds},
+                   {"bytes_uploaded", d.bytes_uploaded},
+                   {"overlap_seconds", d.overlap_seconds}};
+  }
   return j;
 }
 

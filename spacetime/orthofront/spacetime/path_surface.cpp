@@ -13,6 +13,8 @@
 #include "orthofront/seed/seed.h"
 #include "orthofront/seed/seed_check.h"
 #include "orthofront/engine/surface_builder.h"
+#include "orthofront/spacetime/bulk_flow_map.h"
+#include "orthofront/spacetime/bulk_front_integrator.h"
 #include "orthofront/spacetime/lifted_field.h"
 #include "orthofront/spacetime/streamed_field.h"
 
@@ -41,6 +43,16 @@ class TrackedFlow final : public UnsteadyField {
   TimeRange time_range() const override { return flow_.time_range(); }
   std::string describe() const override { return flow_.describe(); }
 
+  /// Widens the range by a time evaluated elsewhere (by a bulk front advance).
+  void note(double t) const {
+    double lo = lo_.load(std::memory_order_relaxed);
+    while (t < lo && !lo_.compare_exchange_weak(lo, t, std::memory_order_relaxed)) {
+    }
+    double hi = hi_.load(std::memory_order_relaxed);
+    while (t > hi && !hi_.compare_exchange_weak(hi, t, std::memory_order_relaxed)) {
+    }
+  }
+
   /// Range since the last reset (lo > hi when nothing was evaluated), then resets.
   std::pair<double, double> take() {
     const std::pair<double, double> r{lo_.load(), hi_.load()};
@@ -52,14 +64,6 @@ class TrackedFlow final : public UnsteadyField {
   void reset() {
     lo_.store(kInf);
     hi_.store(-kInf);
-  }
-  void note(double t) const {
-    double lo = lo_.load(std::memory_order_relaxed);
-    while (t < lo && !lo_.compare_exchange_weak(lo, t, std::memory_order_relaxed)) {
-    }
-    double hi = hi_.load(std::memory_order_relaxed);
-    while (t > hi && !hi_.compare_exchange_weak(hi, t, std::memory_order_relaxed)) {
-    }
   }
   const UnsteadyField& flow_;
   mutable std::atomic<double> lo_, hi_;
@@ -237,6 +241,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     } else {
       builder_ = std::make_unique<SurfaceBuilder<N>>(*lifted_, seed_, engine);
     }
+    if (o.device && run.cache) attach_bulk_advance(*run.cache, engine);
   }
 
   bool next() override {
@@ -254,7 +259,16 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     return true;
   }
 
-  void step() override { builder_->step(); }
+  void step() override {
+    builder_->step();
+    if (bulk_) {
+      // The band records every time the step reached, the bulk advance's too.
+      if (const auto [lo, hi] = bulk_->take_time_range(); lo <= hi) {
+        tracked_.note(lo);
+        tracked_.note(hi);
+      }
+    }
+  }
   void cancel() override { builder_->cancel(); }
   int steps_done() const override { return builder_->steps_done(); }
 
@@ -375,10 +389,44 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       pr.decode_seconds = pr.cache.decode_seconds - before_.decode_seconds;
     }
     pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
+    if (bulk_) {
+      pr.device = backend_->name();
+      pr.device_min_vertices = bulk_->min_vertices();
+      pr.device_calls = bulk_->calls();
+      pr.device_statistics = bulk_->statistics();
+    }
     return std::move(result_);
   }
 
  private:
+  // The front advance through a BatchAdvector (PathSurfaceOptions::device). `auto` without a
+  // CUDA device keeps the per-vertex advance.
+  void attach_bulk_advance(BrickCache& cache, const StreamSurfaceOptions& engine) {
+    const advect::Device device = *o_.device;
+    std::size_t min_vertices = o_.device_min_vertices;
+    if (device == advect::Device::auto_select) {
+      if (!advect::cuda_available()) return;
+      if (min_vertices == 0) min_vertices = kCudaFrontBreakEven;
+    }
+    BulkFrontOptions bo;
+    bo.time_scale = c_;
+    bo.times = {o_.t0, o_.t1};
+    bo.min_vertices = min_vertices;
+    if (engine.integrator == IntegratorKind::rk4) {
+      bo.method.method = advect::Method::rk4;
+      // The engine's step spans at most ℓ / c in time, cut into its substeps.
+      bo.method.rk4_step = engine.edge / c_ / std::max(engine.rk4_substeps, 1);
+    } else {
+      bo.method.method = advect::Method::dopri5;
+      bo.method.absolute = engine.tolerance * engine.edge;
+      bo.method.relative = engine.tolerance;
+    }
+    steps_ = std::make_unique<CachedSteps>(cache);
+    backend_ = advect::make_advector(device, o_.device_bytes);
+    bulk_ = std::make_unique<BulkFrontIntegrator<N>>(*steps_, *backend_, bo);
+    builder_->set_front_integrator(bulk_.get());
+  }
+
   bool hold_band(const FrontSnapshot& f) {
     PathReport& pr = result_.path;
     samples_.resize(f.positions.size() / N);
@@ -460,6 +508,9 @@ class PathRun final : public PathSurfaceBuilder::Impl {
   BandPrediction prediction_;
   std::vector<FrontSample> samples_;
   CacheStatistics before_;
+  std::unique_ptr<CachedSteps> steps_;  // the bulk front advance (device set), else null
+  std::unique_ptr<advect::BatchAdvector> backend_;
+  std::unique_ptr<BulkFrontIntegrator<N>> bulk_;
 };
 
 std::unique_ptr<PathSurfaceBuilder::Impl> make_run(const Run& run, const SeedCurve& seed,

@@ -2,12 +2,15 @@
 /// Path surfaces of unsteady flows: the stream surface of the lifted field (v, c) in R^(d+1),
 /// built by the flow-orthogonal engine, from analytic fields or from time series streamed
 /// through the space-time BrickCache.
+#include <cstddef>
 #include <functional>
+#include <optional>
 #include <memory>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "orthofront/advect/batch_advector.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/seed/seed_curve.h"
@@ -42,6 +45,15 @@ struct PathSurfaceOptions {
   /// How error messages name the seed and the field (e.g. as given on a command line); empty:
   /// "the seed curve" and the field's describe().
   std::string seed_name, field_name;
+  /// Series read through a cache: move the front by bulk advection (whole time steps, slab by
+  /// slab; bulk_front_integrator.h) on cpu or cuda; auto: cuda for fronts of at least
+  /// kCudaFrontBreakEven vertices where a device is present, per vertex otherwise. Unset: per
+  /// vertex through the streamed field. Insertions and velocities stay per vertex.
+  std::optional<advect::Device> device;
+  /// Fronts smaller than this stay per vertex (0: every front for cpu and cuda, the break-even
+  /// size for auto).
+  std::size_t device_min_vertices = 0;
+  std::size_t device_bytes = 0;    ///< steps the CUDA backend keeps on the device (0: half its free memory)
 };
 
 /// The time band of one front step: the range of times evaluated during it.
@@ -70,6 +82,10 @@ struct PathReport {
   double io_seconds = 0;           ///< read_raw seconds (pipeline thread, overlapped)
   double decode_seconds = 0;       ///< decode seconds summed over threads
   double compute_seconds = 0;      ///< total - wait
+  std::string device;              ///< bulk front advance backend ("" when not used)
+  std::size_t device_min_vertices = 0;  ///< fronts from this size went through it
+  std::size_t device_calls = 0;    ///< backend calls (one or two a front)
+  advect::AdvectionStatistics device_statistics;
 };
 
 struct PathSurfaceResult {

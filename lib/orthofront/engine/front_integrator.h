@@ -1,0 +1,27 @@
+#pragma once
+/// The seam through which the engine moves a whole front along its stream lines in one call (the
+/// front advance): a bulk backend (many particles at once, on a device) plugs in here. Without
+/// one, or for fronts smaller than it asks for, the engine integrates each vertex through its
+/// Field<N>.
+#include <cstddef>
+#include <span>
+
+#include "orthofront/integrate/runge_kutta.h"
+
+namespace orthofront {
+
+template <int N>
+class FrontIntegrator {
+ public:
+  virtual ~FrontIntegrator() = default;
+  /// Fronts with fewer vertices than this go through the engine's per-vertex integration (where
+  /// one call of the backend costs more than it saves).
+  virtual std::size_t min_vertices() const = 0;
+  /// out[i]: x[i] moved along its stream line by the signed parameter tau[i] (tau[i] = 0: not
+  /// moved, status inside), or as far as it got (status outside or no_data). Called from the
+  /// engine's thread; each result must not depend on the others.
+  virtual void integrate(std::span<const Vec<N>> x, std::span<const double> tau,
+                         std::span<IntegrationResult<N>> out) = 0;
+};
+
+}  // namespace orthofront

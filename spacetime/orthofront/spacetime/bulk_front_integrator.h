@@ -1,0 +1,66 @@
+#pragma once
+/// The front advance of a path surface by bulk advection: the front's vertices in the lifted
+/// space (x, c t) are particles (x, t) that move by their own spans of time, all in one call of
+/// an advect::BatchAdvector (CPU or CUDA) through whole time steps. Plugs into the engine at its
+/// FrontIntegrator seam.
+#include <cstddef>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "orthofront/advect/batch_advector.h"
+#include "orthofront/engine/front_integrator.h"
+#include "orthofront/field/unsteady.h"
+
+namespace orthofront::spacetime {
+
+/// Front size from which `--device auto` moves a path surface's front on a CUDA device (measured
+/// with `orthofront bench-path --device`, README "Path surfaces on a GPU").
+inline constexpr std::size_t kCudaFrontBreakEven = 4096;
+
+struct BulkFrontOptions {
+  double time_scale = 1;            ///< c of the lifted coordinate τ = c t
+  TimeRange times;                  ///< the surface's [t0, t1]: a vertex stops at its end
+  advect::MethodOptions method;
+  std::size_t min_vertices = 0;     ///< smaller fronts go per vertex through the engine's field
+};
+
+/// Non-owning: `steps` and `backend` must outlive it.
+template <int N>
+class BulkFrontIntegrator final : public FrontIntegrator<N> {
+  static_assert(N == 3 || N == 4, "lifted spaces have N = 3 (2D flows) or N = 4 (3D flows)");
+
+ public:
+  static constexpr int d = N - 1;
+
+  BulkFrontIntegrator(advect::StepSource& steps, advect::BatchAdvector& backend,
+                      BulkFrontOptions options);
+  std::size_t min_vertices() const override { return options_.min_vertices; }
+  void integrate(std::span<const Vec<N>> x, std::span<const double> tau,
+                 std::span<IntegrationResult<N>> out) override;
+
+  /// What the backend did, summed over calls, and the fronts and vertices it moved.
+  const advect::AdvectionStatistics& statistics() const { return total_; }
+  std::size_t calls() const { return calls_; }
+  /// The range of times the particles spanned since the last take (lo > hi: nothing moved),
+  /// then starts a new range.
+  std::pair<double, double> take_time_range();
+
+ private:
+  void run(std::span<const Vec<N>> x, std::span<const double> tau,
+           std::span<IntegrationResult<N>> out, bool forward);
+
+  advect::StepSource& steps_;
+  advect::BatchAdvector& backend_;
+  BulkFrontOptions options_;
+  advect::ParticleBatch batch_;
+  std::vector<std::size_t> index_;  ///< front vertex of each particle
+  advect::AdvectionStatistics total_;
+  std::size_t calls_ = 0;
+  double lo_, hi_;
+};
+
+extern template class BulkFrontIntegrator<3>;
+extern template class BulkFrontIntegrator<4>;
+
+}  // namespace orthofront::spacetime
