@@ -193,3 +193,42 @@ TEST_CASE("cuda advection: steps stay on the device between calls on the same so
   const AdvectionStatistics s = gpu->advect(copy, c, 0.1, o);
   CHECK(s.bytes_uploaded == 2 * step_bytes);
 }
+
+TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits; steps within "
+          "the budget are not uploaded again",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  const auto cpu = make_cpu_advector();
+  ResidentSteps series = sampled(3, false, 65, 11, true);
+  const std::size_t step_bytes = series.geometry().point_count() * 3 * sizeof(float);
+  ParticleBatch start = random_batch(series.geometry(), 20000, 9);
+  start.stop.resize(start.size());
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    start.t[i] = 0.05 * static_cast<double>(i % 7);          // 0 … 0.3
+    start.stop[i] = start.t[i] + 0.1 * static_cast<double>(1 + i % 5);  // up to 0.8
+  }
+  MethodOptions o;
+  o.absolute = o.relative = 1e-8;
+  for (const std::size_t budget : {3 * step_bytes, std::size_t{0}}) {
+    INFO("device budget " << budget << " bytes");
+    const auto gpu = make_advector(Device::cuda, budget);
+    ParticleBatch a = start, b = start;
+    cpu->advect(series, a, 0.8, o);
+    const AdvectionStatistics first = gpu->advect(series, b, 0.8, o);
+    CHECK(first.bytes_uploaded == 9 * step_bytes);  // steps 0 … 8
+    for (std::size_t i = 0; i < start.size(); ++i) {
+      REQUIRE(a.status[i] == b.status[i]);
+      REQUIRE(a.t[i] == b.t[i]);
+      for (std::size_t d = 0; d < 3; ++d) REQUIRE(a.x[d][i] == b.x[d][i]);
+    }
+    // The same span again: with three steps on the device (least recently used out) every step
+    // goes up again; with the default budget (half the free memory) none does.
+    ParticleBatch c = start;
+    const AdvectionStatistics again = gpu->advect(series, c, 0.8, o);
+    CHECK(again.bytes_uploaded == (budget ? 9 * step_bytes : 0));
+  }
+}
