@@ -116,17 +116,19 @@ void add_bench_front_command(CLI::App& app) {
     const double c_scale = 2.0;
     const spacetime::LiftedField<4> lifted(streamed, c_scale, TimeRange{0.0, 4.0});
     spacetime::CachedSteps steps(cache);
-    const auto cpu = advect::make_cpu_advector();
-    const auto gpu = cuda ? advect::make_advector(advect::Device::cuda) : nullptr;
     spacetime::BulkFrontOptions bo;
     bo.time_scale = c_scale;
     bo.times = {0.0, 4.0};
     bo.method.method = advect::Method::dopri5;
     bo.method.absolute = a->tolerance * a->edge;
     bo.method.relative = a->tolerance;
-    spacetime::BulkFrontIntegrator<4> bulk_cpu(steps, *cpu, bo);
+    spacetime::BulkFrontIntegrator<4> bulk_cpu(steps, advect::make_cpu_advector(), bo);
     std::unique_ptr<spacetime::BulkFrontIntegrator<4>> bulk_gpu;
-    if (gpu) bulk_gpu = std::make_unique<spacetime::BulkFrontIntegrator<4>>(steps, *gpu, bo);
+    if (cuda)
+      bulk_gpu = std::make_unique<spacetime::BulkFrontIntegrator<4>>(
+          steps, advect::make_advector(advect::Device::cuda), bo);
+    const bool gpu = bulk_gpu != nullptr;
+    const std::string gpu_name = gpu ? bulk_gpu->backend_name() : std::string();
     Tolerance tol;
     tol.absolute = a->tolerance * a->edge;
     tol.relative = a->tolerance;
@@ -184,7 +186,7 @@ void add_bench_front_command(CLI::App& app) {
                         {"edge", a->edge},
                         {"band", a->band},
                         {"cpu_threads", threads},
-                        {"cuda", cuda ? gpu->name() : "unavailable: " + why},
+                        {"cuda", cuda ? gpu_name : "unavailable: " + why},
                         {"break_even_vertices", break_even},
                         {"rows", nlohmann::json::array()}};
     std::printf("bench-front: %s on %d^3, %d time steps over [0, 4]; front vertices spread over "
@@ -192,11 +194,11 @@ void add_bench_front_command(CLI::App& app) {
                 "threads; fastest of %d\nCUDA: %s\n\n",
                 a->field.c_str(), a->resolution, a->steps + 1, t_lo, t_hi, a->edge, c_scale,
                 a->tolerance, threads, a->repeats,
-                cuda ? gpu->name().c_str() : ("unavailable (" + why + ")").c_str());
+                cuda ? gpu_name.c_str() : ("unavailable (" + why + ")").c_str());
     std::printf("%10s %14s %14s %14s %14s %10s %14s\n", "vertices", "per vertex ms", "bulk cpu ms",
                 "bulk cuda ms", "cuda kernels ms", "cuda x", "max |diff|");
     for (const Row& r : rows) {
-      const bool g = gpu != nullptr;
+      const bool g = gpu;
       std::printf("%10zu %14.3f %14.3f %14s %14s %10s %14.2e\n", r.vertices, 1e3 * r.per_vertex,
                   1e3 * r.bulk_cpu, g ? std::to_string(1e3 * r.bulk_cuda).substr(0, 8).c_str() : "-",
                   g ? std::to_string(1e3 * r.cuda_compute).substr(0, 8).c_str() : "-",

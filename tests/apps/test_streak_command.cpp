@@ -304,3 +304,50 @@ TEST_CASE(
     CHECK(!fs::exists(dir.path() / "cuda.pvd"));
   }
 }
+
+TEST_CASE(
+    "path command: --device advances the front by bulk advection, the same mesh under any "
+    "budget, and names what it cannot do",
+    "[apps][path][advect]") {
+  test_support::TempDir dir;
+  const fs::path h5 = dir.path() / "abc.h5";
+  REQUIRE(cli_test::run("generate --field unsteady-abc --resolution 24,24,24 --box 0,0,0:6.3,6.3,6.3 "
+                        "--steps 21 --t1 2 --brick 8 --out " +
+                        h5.string() + " --quiet")
+              .status == 0);
+  const auto path = [&](const std::string& name, const std::string& extra) {
+    return cli_test::run("path --field " + h5.string() +
+                         " --seed line:1,1,2:5,5,2 --t1 1.5 --edge 0.1 --out " +
+                         (dir.path() / (name + ".ply")).string() + " --report " +
+                         (dir.path() / (name + ".json")).string() + " " + extra);
+  };
+  const auto big = path("big", "--device cpu");
+  INFO(big.output);
+  REQUIRE(big.status == 0);
+  const auto small = path("small", "--device cpu --cache-budget 2MiB");
+  INFO(small.output);
+  REQUIRE(small.status == 0);
+  CHECK(read_text(dir.path() / "big.ply") == read_text(dir.path() / "small.ply"));
+  const auto j = nlohmann::json::parse(read_text(dir.path() / "small.json"));
+  CHECK(j["path"]["device"]["backend"] == "cpu");
+  CHECK(j["path"]["device"]["calls"].get<std::size_t>() >= j["steps"].get<std::size_t>());
+  CHECK(j["path"]["device"]["particle_steps"].get<std::size_t>() > 0);
+  CHECK(j["path"]["complete"] == true);
+  // auto without a front of the break-even size: the per-vertex surface.
+  REQUIRE(path("auto", "--device auto").status == 0);
+  REQUIRE(path("plain", "").status == 0);
+  CHECK(read_text(dir.path() / "auto.ply") == read_text(dir.path() / "plain.ply"));
+  // An analytic field has no grid to move through.
+  const auto analytic = cli_test::run("path --field unsteady-abc --seed line:1,1,2:5,5,2 --t1 0.5 "
+                                      "--device cpu --out " + (dir.path() / "a.ply").string());
+  CHECK(analytic.status == 2);
+  CHECK(analytic.output.find("--device") != std::string::npos);
+  CHECK(!fs::exists(dir.path() / "a.ply"));
+  // Without a CUDA device (or a CUDA build), --device cuda says why and writes nothing.
+  const auto cuda = path("cuda", "--device cuda");
+  if (cuda.status != 0) {
+    CHECK(cuda.status == 2);
+    CHECK(cuda.output.find("--device cuda:") != std::string::npos);
+    CHECK(!fs::exists(dir.path() / "cuda.ply"));
+  }
+}

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
 #include "io/grid_test_support.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -178,15 +179,15 @@ TEST_CASE("bulk front advance: integrator seam calls and spans", "[spacetime][ad
     steps.push_back(std::move(v));
   }
   advect::ResidentSteps source(g, 2, {0, 1, 2}, std::move(steps));
-  const auto backend = advect::make_cpu_advector();
   BulkFrontOptions o;
   o.time_scale = 2;
   o.times = {0, 1.5};
-  BulkFrontIntegrator<3> integrator(source, *backend, o);
+  BulkFrontIntegrator<3> integrator(source, advect::make_cpu_advector(), o);
   const std::vector<Vec<3>> x{Vec<3>(1, 1, 0.5), Vec<3>(1, 2, 2.0), Vec<3>(2, 2, 1.0)};
   const std::vector<double> tau{0.5, 0.75, 0};
   std::vector<IntegrationResult<3>> out(3);
-  integrator.integrate(x, tau, out);
+  REQUIRE(integrator.integrate(x, tau, out));
+  CHECK(integrator.backend_name() == "cpu");
   CHECK(out[0].status == FieldStatus::inside);
   CHECK(out[0].reached == 0.5);
   CHECK((out[0].x - Vec<3>(1.5, 1.25, 1.5)).norm() < 1e-12);
@@ -199,4 +200,16 @@ TEST_CASE("bulk front advance: integrator seam calls and spans", "[spacetime][ad
   const auto [lo, hi] = integrator.take_time_range();
   CHECK(lo == 0.25);
   CHECK(hi == 1.5);
+
+  // A backend that cannot be had: declined once asked, and never asked again.
+  int asked = 0;
+  BulkFrontIntegrator<3> none(source, [&]() -> std::unique_ptr<advect::BatchAdvector> {
+    ++asked;
+    return nullptr;
+  }, o);
+  CHECK_FALSE(none.integrate(x, tau, out));
+  CHECK_FALSE(none.integrate(x, tau, out));
+  CHECK(asked == 1);
+  CHECK(none.backend_name().empty());
+  CHECK(none.min_vertices() == std::numeric_limits<std::size_t>::max());
 }

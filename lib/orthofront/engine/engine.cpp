@@ -340,8 +340,9 @@ class Engine {
                   : r.status == FieldStatus::inside  ? VertexState::ok
                                                      : VertexState::no_data;
     };
-    const bool stopping = stopping_.load(std::memory_order_relaxed);
-    if (front_integrator_ && !stopping && n >= front_integrator_->min_vertices()) {
+    bool bulk = false;
+    if (front_integrator_ && !stopping_.load(std::memory_order_relaxed) &&
+        n >= front_integrator_->min_vertices()) {
       // The whole front in one call of the bulk backend.
       batch_x_.resize(n);
       batch_tau_.resize(n);
@@ -350,7 +351,9 @@ class Engine {
         batch_x_[i] = f.v[i].x;
         batch_tau_[i] = alpha_[i] * h;
       }
-      front_integrator_->integrate(batch_x_, batch_tau_, batch_out_);
+      bulk = front_integrator_->integrate(batch_x_, batch_tau_, batch_out_);
+    }
+    if (bulk) {
       for (std::size_t i = 0; i < n; ++i) {
         FrontVertex<N> fv = f.v[i];
         fv.origin = static_cast<std::int32_t>(i);

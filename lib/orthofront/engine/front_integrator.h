@@ -19,8 +19,9 @@ class FrontIntegrator {
   virtual std::size_t min_vertices() const = 0;
   /// out[i]: x[i] moved along its stream line by the signed parameter tau[i] (tau[i] = 0: not
   /// moved, status inside), or as far as it got (status outside or no_data). Called from the
-  /// engine's thread; each result must not depend on the others.
-  virtual void integrate(std::span<const Vec<N>> x, std::span<const double> tau,
+  /// engine's thread; each result must not depend on the others. False: declined (the backend
+  /// turned out to be unavailable), out untouched; the engine then integrates per vertex.
+  virtual bool integrate(std::span<const Vec<N>> x, std::span<const double> tau,
                          std::span<IntegrationResult<N>> out) = 0;
 };
 

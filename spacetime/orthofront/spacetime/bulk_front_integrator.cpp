@@ -11,9 +11,17 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 template <int N>
 BulkFrontIntegrator<N>::BulkFrontIntegrator(advect::StepSource& steps,
-                                            advect::BatchAdvector& backend,
+                                            std::unique_ptr<advect::BatchAdvector> backend,
                                             BulkFrontOptions options)
-    : steps_(steps), backend_(backend), options_(options), lo_(kInf), hi_(-kInf) {
+    : BulkFrontIntegrator(steps, BackendFactory(), options) {
+  backend_ = std::move(backend);
+}
+
+template <int N>
+BulkFrontIntegrator<N>::BulkFrontIntegrator(advect::StepSource& steps, BackendFactory make_backend,
+                                            BulkFrontOptions options)
+    : steps_(steps), make_backend_(std::move(make_backend)), options_(options), lo_(kInf),
+      hi_(-kInf) {
   advect::check_method(options_.method);
   // The series bounds the surface's time range as the lifted field's domain does.
   const std::vector<double>& times = steps_.times();
@@ -24,8 +32,14 @@ BulkFrontIntegrator<N>::BulkFrontIntegrator(advect::StepSource& steps,
 }
 
 template <int N>
-void BulkFrontIntegrator<N>::integrate(std::span<const Vec<N>> x, std::span<const double> tau,
+bool BulkFrontIntegrator<N>::integrate(std::span<const Vec<N>> x, std::span<const double> tau,
                                        std::span<IntegrationResult<N>> out) {
+  if (!backend_ && make_backend_) {
+    backend_ = make_backend_();
+    make_backend_ = nullptr;  // asked once
+    if (!backend_) options_.min_vertices = std::numeric_limits<std::size_t>::max();
+  }
+  if (!backend_) return false;
   for (std::size_t i = 0; i < x.size(); ++i) {
     out[i].x = x[i];
     out[i].status = FieldStatus::inside;
@@ -36,6 +50,7 @@ void BulkFrontIntegrator<N>::integrate(std::span<const Vec<N>> x, std::span<cons
   // A batch moves one way in time: vertices that go back (negative α kept) get a call of their own.
   run(x, tau, out, true);
   run(x, tau, out, false);
+  return true;
 }
 
 template <int N>
@@ -66,7 +81,7 @@ void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const doub
     lo_ = std::min({lo_, t, end});
     hi_ = std::max({hi_, t, end});
   }
-  const advect::AdvectionStatistics s = backend_.advect(steps_, batch_, horizon, options_.method);
+  const advect::AdvectionStatistics s = backend_->advect(steps_, batch_, horizon, options_.method);
   ++calls_;
   total_.particles += s.particles;
   total_.slabs += s.slabs;

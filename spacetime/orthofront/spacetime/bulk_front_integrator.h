@@ -4,7 +4,10 @@
 /// an advect::BatchAdvector (CPU or CUDA) through whole time steps. Plugs into the engine at its
 /// FrontIntegrator seam.
 #include <cstddef>
+#include <functional>
+#include <memory>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -25,7 +28,11 @@ struct BulkFrontOptions {
   std::size_t min_vertices = 0;     ///< smaller fronts go per vertex through the engine's field
 };
 
-/// Non-owning: `steps` and `backend` must outlive it.
+/// Makes the backend when the first front large enough comes (so a surface whose fronts stay
+/// small never starts a device); nullptr: none can be had, the fronts stay per vertex.
+using BackendFactory = std::function<std::unique_ptr<advect::BatchAdvector>()>;
+
+/// Non-owning: `steps` must outlive it.
 template <int N>
 class BulkFrontIntegrator final : public FrontIntegrator<N> {
   static_assert(N == 3 || N == 4, "lifted spaces have N = 3 (2D flows) or N = 4 (3D flows)");
@@ -33,11 +40,15 @@ class BulkFrontIntegrator final : public FrontIntegrator<N> {
  public:
   static constexpr int d = N - 1;
 
-  BulkFrontIntegrator(advect::StepSource& steps, advect::BatchAdvector& backend,
+  BulkFrontIntegrator(advect::StepSource& steps, std::unique_ptr<advect::BatchAdvector> backend,
+                      BulkFrontOptions options);
+  BulkFrontIntegrator(advect::StepSource& steps, BackendFactory make_backend,
                       BulkFrontOptions options);
   std::size_t min_vertices() const override { return options_.min_vertices; }
-  void integrate(std::span<const Vec<N>> x, std::span<const double> tau,
+  bool integrate(std::span<const Vec<N>> x, std::span<const double> tau,
                  std::span<IntegrationResult<N>> out) override;
+  /// The backend's name, or "" while none was made (or none could be).
+  std::string backend_name() const { return backend_ ? backend_->name() : std::string(); }
 
   /// What the backend did, summed over calls, and the fronts and vertices it moved.
   const advect::AdvectionStatistics& statistics() const { return total_; }
@@ -51,7 +62,8 @@ class BulkFrontIntegrator final : public FrontIntegrator<N> {
            std::span<IntegrationResult<N>> out, bool forward);
 
   advect::StepSource& steps_;
-  advect::BatchAdvector& backend_;
+  std::unique_ptr<advect::BatchAdvector> backend_;
+  BackendFactory make_backend_;
   BulkFrontOptions options_;
   advect::ParticleBatch batch_;
   std::vector<std::size_t> index_;  ///< front vertex of each particle

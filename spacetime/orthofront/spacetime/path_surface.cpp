@@ -390,8 +390,11 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     }
     pr.compute_seconds = pr.total_seconds - pr.wait_seconds;
     if (bulk_) {
-      pr.device = backend_->name();
-      pr.device_min_vertices = bulk_->min_vertices();
+      pr.device = bulk_->backend_name();
+      if (pr.device.empty())
+        pr.device = "none (auto: no front reached " + std::to_string(bulk_min_vertices_) +
+                    " vertices, or no CUDA device)";
+      pr.device_min_vertices = bulk_min_vertices_;
       pr.device_calls = bulk_->calls();
       pr.device_statistics = bulk_->statistics();
     }
@@ -404,14 +407,13 @@ class PathRun final : public PathSurfaceBuilder::Impl {
   void attach_bulk_advance(BrickCache& cache, const StreamSurfaceOptions& engine) {
     const advect::Device device = *o_.device;
     std::size_t min_vertices = o_.device_min_vertices;
-    if (device == advect::Device::auto_select) {
-      if (!advect::cuda_available()) return;
-      if (min_vertices == 0) min_vertices = kCudaFrontBreakEven;
-    }
+    const bool automatic = device == advect::Device::auto_select;
+    if (automatic && min_vertices == 0) min_vertices = kCudaFrontBreakEven;
     BulkFrontOptions bo;
     bo.time_scale = c_;
     bo.times = {o_.t0, o_.t1};
     bo.min_vertices = min_vertices;
+    bulk_min_vertices_ = min_vertices;
     if (engine.integrator == IntegratorKind::rk4) {
       bo.method.method = advect::Method::rk4;
       // The engine's step spans at most ℓ / c in time, cut into its substeps.
@@ -422,8 +424,21 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       bo.method.relative = engine.tolerance;
     }
     steps_ = std::make_unique<CachedSteps>(cache);
-    backend_ = advect::make_advector(device, o_.device_bytes);
-    bulk_ = std::make_unique<BulkFrontIntegrator<N>>(*steps_, *backend_, bo);
+    if (automatic) {
+      // CUDA starts (and is looked for) only when a front reaches the break-even size.
+      const std::size_t bytes = o_.device_bytes;
+      bulk_ = std::make_unique<BulkFrontIntegrator<N>>(
+          *steps_,
+          [bytes]() -> std::unique_ptr<advect::BatchAdvector> {
+            return advect::cuda_available() ? advect::make_advector(advect::Device::cuda, bytes)
+                                            : nullptr;
+          },
+          bo);
+    } else {
+      // Asked for by name: a missing device is an error at the start.
+      bulk_ = std::make_unique<BulkFrontIntegrator<N>>(
+          *steps_, advect::make_advector(device, o_.device_bytes), bo);
+    }
     builder_->set_front_integrator(bulk_.get());
   }
 
@@ -509,7 +524,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
   std::vector<FrontSample> samples_;
   CacheStatistics before_;
   std::unique_ptr<CachedSteps> steps_;  // the bulk front advance (device set), else null
-  std::unique_ptr<advect::BatchAdvector> backend_;
+  std::size_t bulk_min_vertices_ = 0;
   std::unique_ptr<BulkFrontIntegrator<N>> bulk_;
 };
 
