@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   orthofront::cli::add_bench_streak_command(app);
   orthofront::cli::add_bench_gpu_command(app);
   orthofront::cli::add_bench_front_command(app);
+  orthofront::cli::add_bench_gpu_streak_command(app);
   orthofront::cli::add_generate_command(app);
   orthofront::cli::add_info_command(app);
   orthofront::cli::add_convert_command(app);

@@ -19,6 +19,7 @@ void add_convert_command(CLI::App& app);
 void add_bench_grid_command(CLI::App& app);
 void add_bench_gpu_command(CLI::App& app);
 void add_bench_front_command(CLI::App& app);
+void add_bench_gpu_streak_command(CLI::App& app);
 void add_batch_command(CLI::App& app);
 void add_bench_batch_command(CLI::App& app);
 

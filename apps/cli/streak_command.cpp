@@ -369,6 +369,9 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
                   "cpu, cuda or auto (cuda when built with it and a device is present); default: "
                   "the streamed field's integrated flow map")
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  command.add_option("--device-memory", args.device_memory,
+                     "With --device cuda/auto: time steps kept on the device (e.g. 8GiB; default: "
+                     "half its free memory)");
 }
 
 spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
@@ -389,6 +392,7 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.seed_name = args.seed;
   o.field_name = args.field;
   if (!args.device.empty()) o.device = advect::parse_device(args.device);
+  if (!args.device_memory.empty()) o.device_bytes = spacetime::parse_bytes(args.device_memory);
   return o;
 }
 

@@ -286,6 +286,14 @@ bool cuda_available(std::string* why) {
 #endif
 }
 
+double cuda_upload_rate(std::size_t bytes) {
+#ifdef ORTHOFRONT_HAVE_CUDA
+  if (cuda_available()) return cuda_pinned_upload_rate(bytes);
+#endif
+  static_cast<void>(bytes);
+  return 0;
+}
+
 std::unique_ptr<BatchAdvector> make_cpu_advector() { return std::make_unique<CpuAdvector>(); }
 
 std::unique_ptr<BatchAdvector> make_advector(Device device, std::size_t device_bytes) {

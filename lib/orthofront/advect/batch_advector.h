@@ -144,6 +144,10 @@ Device parse_device(const std::string& text);
 /// which is missing.
 bool cuda_available(std::string* why = nullptr);
 
+/// Host-to-device bytes per second of one copy of `bytes` from pinned memory (the best of three;
+/// PCIe's rate, the floor of every upload). 0 without CUDA.
+double cuda_upload_rate(std::size_t bytes);
+
 /// The seam: the CPU backend, or the CUDA backend (cuda; auto when cuda_available()). Throws
 /// InvalidArgument when cuda is asked for and cannot be had, saying why. `device_bytes`: what the
 /// CUDA backend may keep of a series' steps on the device (0: half its free memory).

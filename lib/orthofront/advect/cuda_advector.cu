@@ -65,10 +65,23 @@ class PinnedBuffer {
   PinnedBuffer(const PinnedBuffer&) = delete;
   PinnedBuffer& operator=(const PinnedBuffer&) = delete;
   float* get() const { return static_cast<float*>(data_); }
+  template <class T>
+  T* as() const { return static_cast<T*>(data_); }
 
  private:
   void* data_ = nullptr;
 };
+
+/// Copies n objects between host arrays in parallel (into or out of pinned staging: one thread
+/// does not fill the copy engine's bandwidth).
+template <class T>
+void parallel_copy(T* to, const T* from, std::size_t n) {
+  const std::size_t parts = std::min<std::size_t>(16, std::max<std::size_t>(1, n / 65536));
+  tbb::parallel_for(std::size_t{0}, parts, [&](std::size_t part) {
+    const std::size_t lo = n * part / parts, hi = n * (part + 1) / parts;
+    if (hi > lo) std::memcpy(to + lo, from + lo, (hi - lo) * sizeof(T));
+  });
+}
 
 class Event {
  public:
@@ -381,7 +394,8 @@ class CudaAdvector final : public BatchAdvector {
     return grid;
   }
 
-  // Particle arrays on the device (grown, never shrunk), filled from `particles`.
+  // Particle arrays on the device and pinned staging for them on the host (grown, never shrunk),
+  // filled from `particles` on the compute stream (kernels follow in order).
   DeviceParticles upload_particles(const ParticleBatch& particles) {
     const std::size_t n = particles.size();
     if (n > capacity_) {
@@ -393,26 +407,70 @@ class CudaAdvector final : public BatchAdvector {
       pe_ = DeviceArray<std::uint32_t>(c);
       ps_ = DeviceArray<ParticleStatus>(c);
       pstop_ = DeviceArray<double>(c);
+      // x, y, z, t, h, stop (doubles), evaluations, status.
+      host_ = std::make_unique<PinnedBuffer>(c * (6 * sizeof(double) + sizeof(std::uint32_t) +
+                                                  sizeof(ParticleStatus)));
       capacity_ = c;
     }
     const bool own_ends = !particles.stop.empty();
-    if (own_ends) pstop_.upload(particles.stop.data(), n);
-    for (std::size_t d = 0; d < 3; ++d) px_[d].upload(particles.x[d].data(), n);
-    pt_.upload(particles.t.data(), n);
-    ph_.upload(particles.h.data(), n);
-    pe_.upload(particles.evaluations.data(), n);
-    ps_.upload(particles.status.data(), n);
+    const Staged h = staged(n);
+    for (std::size_t d = 0; d < 3; ++d) parallel_copy(h.x[d], particles.x[d].data(), n);
+    parallel_copy(h.t, particles.t.data(), n);
+    parallel_copy(h.h, particles.h.data(), n);
+    if (own_ends) parallel_copy(h.stop, particles.stop.data(), n);
+    parallel_copy(h.evaluations, particles.evaluations.data(), n);
+    parallel_copy(h.status, particles.status.data(), n);
+    const cudaStream_t s = compute_.get();
+    const auto up = [&](auto* device, const auto* host) {
+      check(cudaMemcpyAsync(device, host, n * sizeof(*host), cudaMemcpyHostToDevice, s),
+            "particle upload");
+    };
+    for (std::size_t d = 0; d < 3; ++d) up(px_[d].get(), h.x[d]);
+    up(pt_.get(), h.t);
+    up(ph_.get(), h.h);
+    if (own_ends) up(pstop_.get(), h.stop);
+    up(pe_.get(), h.evaluations);
+    up(ps_.get(), h.status);
     return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get(),
             own_ends ? pstop_.get() : nullptr};
   }
 
-  void download_particles(ParticleBatch& particles) const {
+  // After the kernels (same stream): back through the pinned staging.
+  void download_particles(ParticleBatch& particles) {
     const std::size_t n = particles.size();
-    for (std::size_t d = 0; d < 3; ++d) px_[d].download(particles.x[d].data(), n);
-    pt_.download(particles.t.data(), n);
-    ph_.download(particles.h.data(), n);
-    pe_.download(particles.evaluations.data(), n);
-    ps_.download(particles.status.data(), n);
+    const Staged h = staged(n);
+    const cudaStream_t s = compute_.get();
+    const auto down = [&](auto* host, const auto* device) {
+      check(cudaMemcpyAsync(host, device, n * sizeof(*host), cudaMemcpyDeviceToHost, s),
+            "particle download");
+    };
+    for (std::size_t d = 0; d < 3; ++d) down(h.x[d], px_[d].get());
+    down(h.t, pt_.get());
+    down(h.h, ph_.get());
+    down(h.evaluations, pe_.get());
+    down(h.status, ps_.get());
+    check(cudaStreamSynchronize(s), "particle download");
+    for (std::size_t d = 0; d < 3; ++d) parallel_copy(particles.x[d].data(), h.x[d], n);
+    parallel_copy(particles.t.data(), h.t, n);
+    parallel_copy(particles.h.data(), h.h, n);
+    parallel_copy(particles.evaluations.data(), h.evaluations, n);
+    parallel_copy(particles.status.data(), h.status, n);
+  }
+
+  // The pinned staging arrays, laid out for the current capacity.
+  struct Staged {
+    double* x[3];
+    double *t, *h, *stop;
+    std::uint32_t* evaluations;
+    ParticleStatus* status;
+  };
+  Staged staged(std::size_t) const {
+    double* base = host_->as<double>();
+    const std::size_t c = capacity_;
+    Staged h{{base, base + c, base + 2 * c}, base + 3 * c, base + 4 * c, base + 5 * c,
+             reinterpret_cast<std::uint32_t*>(base + 6 * c), nullptr};
+    h.status = reinterpret_cast<ParticleStatus*>(h.evaluations + c);
+    return h;
   }
 
   std::string name_;
@@ -432,6 +490,7 @@ class CudaAdvector final : public BatchAdvector {
   DeviceArray<std::uint32_t> pe_;
   DeviceArray<ParticleStatus> ps_;
   std::size_t capacity_ = 0;
+  std::unique_ptr<PinnedBuffer> host_;  // pinned staging of the particle arrays
   DeviceArray<unsigned long long> counters_{2};  // accepted steps, evaluations
 };
 
@@ -447,6 +506,28 @@ bool cuda_device_present(std::string* why) {
     return false;
   }
   return true;
+}
+
+double cuda_pinned_upload_rate(std::size_t bytes) {
+  const std::size_t floats = std::max<std::size_t>(bytes / sizeof(float), 1);
+  PinnedBuffer host(floats * sizeof(float));
+  std::memset(host.get(), 0, floats * sizeof(float));
+  DeviceArray<float> device(floats);
+  Stream stream;
+  Event begin, end;
+  double best = 0;
+  for (int i = 0; i < 3; ++i) {
+    check(cudaEventRecord(begin.get(), stream.get()), "cudaEventRecord");
+    check(cudaMemcpyAsync(device.get(), host.get(), floats * sizeof(float), cudaMemcpyHostToDevice,
+                          stream.get()),
+          "cudaMemcpyAsync");
+    check(cudaEventRecord(end.get(), stream.get()), "cudaEventRecord");
+    check(cudaEventSynchronize(end.get()), "cudaEventSynchronize");
+    float ms = 0;
+    check(cudaEventElapsedTime(&ms, begin.get(), end.get()), "cudaEventElapsedTime");
+    if (ms > 0) best = std::max(best, static_cast<double>(floats * sizeof(float)) / (1e-3 * ms));
+  }
+  return best;
 }
 
 std::unique_ptr<BatchAdvector> make_cuda_advector(std::size_t device_bytes) {

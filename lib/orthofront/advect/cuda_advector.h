@@ -12,6 +12,9 @@ namespace orthofront::advect {
 /// True when a CUDA device can be used; otherwise `why` has the runtime's reason.
 bool cuda_device_present(std::string* why);
 
+/// Bytes per second of a copy of `bytes` from pinned host memory to the device (best of three).
+double cuda_pinned_upload_rate(std::size_t bytes);
+
 /// Particles live on the device for the whole call; each step is copied once into pinned memory
 /// and uploaded on its own stream while the kernels of the slab before it run (two pinned staging
 /// buffers). Steps stay on the device between calls, least recently used first out, as many as

@@ -1,5 +1,8 @@
 #include "orthofront/spacetime/bulk_flow_map.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -74,18 +77,28 @@ Advected BulkFlowMap::advect(const Vec3& x, double t0, double t1) const {
 
 std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
                                     std::span<ParticleStatus> status) const {
-  advect::ParticleBatch batch;
+  std::lock_guard lock(mutex_);
+  // The arrays are kept between calls (a streak surface makes one call per interval).
+  advect::ParticleBatch& batch = batch_;
   batch.resize(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) {
+  const auto each = [n = x.size()](auto&& f) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+                      });
+  };
+  each([&](std::size_t i) {
     for (int d = 0; d < 3; ++d) batch.x[static_cast<std::size_t>(d)][i] = x[i][d];
     batch.t[i] = t0[i];
-  }
-  std::lock_guard lock(mutex_);
+    batch.h[i] = 0;
+    batch.evaluations[i] = 0;
+    batch.status[i] = ParticleStatus::moving;
+  });
   const advect::AdvectionStatistics s = backend_->advect(steps_, batch, t1, method_);
-  for (std::size_t i = 0; i < x.size(); ++i) {
+  each([&](std::size_t i) {
     for (int d = 0; d < 3; ++d) x[i][d] = batch.x[static_cast<std::size_t>(d)][i];
     status[i] = batch.status[i];
-  }
+  });
   total_.particles += s.particles;
   total_.slabs += s.slabs;
   total_.particle_steps += s.particle_steps;

@@ -59,6 +59,7 @@ class BulkFlowMap final : public FlowMap {
   advect::MethodOptions method_;
   std::string name_;
   mutable std::mutex mutex_;
+  mutable advect::ParticleBatch batch_;  // a call's particles (under mutex_)
   mutable advect::AdvectionStatistics total_;
 };
 

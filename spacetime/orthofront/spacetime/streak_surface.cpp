@@ -713,7 +713,8 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     method.method = advect::Method::dopri5;
     method.absolute = options.tolerance.absolute;
     method.relative = options.tolerance.relative;
-    bulk = std::make_unique<BulkFlowMap>(*steps, advect::make_advector(*options.device), method);
+    bulk = std::make_unique<BulkFlowMap>(*steps, advect::make_advector(*options.device, options.device_bytes),
+                                         method);
     access.map = bulk.get();
   }
   StreakReport report = StreakBuilder(access, seed, options, sink).run();

@@ -54,6 +54,7 @@ struct StreakOptions {
   /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
   /// map of the streamed field.
   std::optional<advect::Device> device;
+  std::size_t device_bytes = 0;     ///< steps the CUDA backend keeps on the device (0: half its free memory)
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.

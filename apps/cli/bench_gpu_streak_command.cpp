@@ -1,0 +1,227 @@
+// `orthofront bench-gpu-streak`: a streak surface of millions of particles moved on the GPU
+// through a series streamed from disk, the series several times larger than the steps the device
+// may keep, against its floors measured in the same run: the I/O floor (every step read and
+// decoded once through the cache, nothing computed), the GPU compute (the kernels' time) and the
+// host-to-device copy rate of pinned memory (PCIe). Prints a table and JSON.
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "cli/commands.h"
+#include "orthofront/error.h"
+#include "orthofront/field/unsteady.h"
+#include "orthofront/io/hdf5_layout.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/bulk_flow_map.h"
+#include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/streak_surface.h"
+
+namespace orthofront::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+struct BenchGpuStreakArgs {
+  std::string field = "unsteady-abc";
+  int resolution = 192;
+  int steps = 41;               // over t in [0, 4]
+  double edge = 0.004;
+  std::string seed = "1,2,3:5,2,3";
+  double release_end = 1.5;
+  int frames = 3;               // evenly up to t = 3
+  std::string host_budget = "4GiB";
+  double data_over_device = 4;  // series bytes / device budget for steps
+  std::string device = "auto";
+  std::string keep;
+};
+
+}  // namespace
+
+void add_bench_gpu_streak_command(CLI::App& app) {
+  auto a = std::make_shared<BenchGpuStreakArgs>();
+  CLI::App* c = app.add_subcommand(
+      "bench-gpu-streak",
+      "Benchmark a streak surface of millions of particles on the GPU through a streamed series "
+      "larger than the device's step budget, against the I/O floor, the GPU compute and PCIe");
+  c->add_option("--field", a->field, "Unsteady 3D analytic field sampled into the series")->capture_default_str();
+  c->add_option("--resolution", a->resolution, "Grid points per axis")->capture_default_str();
+  c->add_option("--steps", a->steps, "Time steps over t in [0, 4]")->capture_default_str();
+  c->add_option("--edge", a->edge, "Target edge length (smaller: more particles)")->capture_default_str();
+  c->add_option("--seed", a->seed, "Seed segment x0,y0,z0:x1,y1,z1")->capture_default_str();
+  c->add_option("--release-end", a->release_end, "Release from t = 0 to this")->capture_default_str();
+  c->add_option("--frames", a->frames, "Observation times, evenly up to t = 3")->capture_default_str();
+  c->add_option("--cache-budget", a->host_budget, "Host cache budget")->capture_default_str();
+  c->add_option("--data-over-device", a->data_over_device,
+                "Series bytes over the bytes of steps the device may keep")->capture_default_str();
+  c->add_option("--device", a->device, "cuda, cpu or auto (cuda where present)")->capture_default_str();
+  c->add_option("--keep", a->keep, "Write the series here and keep it (default: a temporary file)");
+  c->callback([a]() {
+    const auto flow = make_unsteady_field(a->field);
+    if (flow->dimension() != 3) throw InvalidArgument("bench-gpu-streak: --field must be a 3D flow");
+    if (a->resolution < 8 || a->resolution > 1024 || a->steps < 8 || a->frames < 1 ||
+        !(a->edge > 0) || !(a->release_end > 0 && a->release_end < 3) || !(a->data_over_device >= 1))
+      throw InvalidArgument("bench-gpu-streak: need --resolution in [8, 1024], --steps >= 8, "
+                            "--frames >= 1, --edge > 0, --release-end in (0, 3), "
+                            "--data-over-device >= 1");
+    double sx0, sy0, sz0, sx1, sy1, sz1;
+    if (std::sscanf(a->seed.c_str(), "%lf,%lf,%lf:%lf,%lf,%lf", &sx0, &sy0, &sz0, &sx1, &sy1, &sz1) != 6)
+      throw InvalidArgument("bench-gpu-streak: --seed '" + a->seed + "' is not x0,y0,z0:x1,y1,z1");
+    advect::Device device = advect::parse_device(a->device);
+    std::string why;
+    const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);
+    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("bench-gpu-streak --device cuda: " + why);
+    if (device == advect::Device::auto_select) device = cuda ? advect::Device::cuda : advect::Device::cpu;
+
+    // The series on disk (bricked, lz4), as `generate` writes it.
+    const spacetime::SampledTimeSeries sampled(
+        *flow, spacetime::uniform_grid(flow->domain(), 3, a->resolution),
+        spacetime::uniform_times(0, 4, static_cast<std::size_t>(a->steps - 1)));
+    std::filesystem::path file = a->keep;
+    const bool temporary = file.empty();
+    if (temporary)
+      file = std::filesystem::temp_directory_path() /
+             ("orthofront-bench-gpu-streak-" + std::to_string(std::random_device{}()) + ".h5");
+    struct Remove {
+      std::filesystem::path p;
+      bool on;
+      ~Remove() {
+        std::error_code ec;
+        if (on) std::filesystem::remove(p, ec);
+      }
+    } remove{file, temporary};
+    const auto w0 = Clock::now();
+    {
+      io::Hdf5WriteOptions w;
+      w.codec = io::Hdf5Codec::lz4;
+      w.zero_is_no_data = false;
+      w.xdmf = false;
+      std::vector<double> times;
+      for (std::size_t k = 0; k < sampled.step_count(); ++k) times.push_back(sampled.time(k));
+      io::Hdf5SeriesWriter writer(file, sampled.geometry(), 3, times, w);
+      std::vector<float> values(sampled.step_floats());
+      for (std::size_t k = 0; k < sampled.step_count(); ++k) {
+        sampled.sample(k, values.data());
+        writer.write_step(values);
+      }
+      writer.commit();
+    }
+    const double write_seconds = since(w0);
+    const auto series = io::open_hdf5_series(file);
+    const std::size_t step_bytes = sampled.step_floats() * sizeof(float);
+    const std::size_t data_bytes = step_bytes * sampled.step_count();
+    const auto device_bytes = static_cast<std::size_t>(static_cast<double>(data_bytes) / a->data_over_device);
+    spacetime::CacheOptions co;
+    co.budget_bytes = spacetime::parse_bytes(a->host_budget);
+
+    spacetime::StreakOptions o;
+    o.release_begin = 0;
+    o.release_end = a->release_end;
+    for (int i = 1; i <= a->frames; ++i) o.frames.push_back(3.0 * i / a->frames);
+    o.edge = a->edge;
+    o.insertion = spacetime::ParticleInsertion::interpolate;  // every step read once
+    o.device = device;
+    o.device_bytes = device_bytes;
+    const double last = o.frames.back();
+    std::size_t steps_used = 0;
+    while (steps_used < sampled.step_count() && sampled.time(steps_used) < last) ++steps_used;
+    steps_used = std::min(steps_used + 1, sampled.step_count());
+
+    // I/O floor: every step the run reads, read and decoded once (the next step prefetched while
+    // this one is gathered, as the run does), nothing computed.
+    double io_floor = 0;
+    {
+      spacetime::BrickCache cache(*series, co);
+      spacetime::CachedSteps steps(cache);
+      const std::size_t bricks = cache.layout().bricks();
+      const auto t0 = Clock::now();
+      for (std::size_t k = 0; k < steps_used; ++k) {
+        if (k + 1 < steps_used) {
+          std::vector<spacetime::BrickKey> next;
+          for (std::size_t b = 0; b < bricks; ++b)
+            next.push_back({static_cast<std::uint32_t>(k + 1), static_cast<std::uint32_t>(b)});
+          cache.prefetch(next);
+        }
+        steps.acquire(k);
+        steps.release(k);
+      }
+      io_floor = since(t0);
+    }
+    const double pcie = cuda ? advect::cuda_upload_rate(step_bytes) : 0;
+
+    spacetime::BrickCache cache(*series, co);
+    const SeedCurve seed = SeedCurve::line(Vec3(sx0, sy0, sz0), Vec3(sx1, sy1, sz1));
+    std::size_t last_vertices = 0;
+    const spacetime::StreakReport r = spacetime::build_streak_surface(
+        cache, seed, o, [&](const spacetime::StreakFrame& f) { last_vertices = f.mesh.vertex_count(); });
+    const advect::AdvectionStatistics& b = r.bulk;
+    const double floor = std::max(io_floor, b.compute_seconds);
+    const double h2d = b.upload_seconds > 0 ? static_cast<double>(b.bytes_uploaded) / b.upload_seconds : 0;
+
+    nlohmann::json j = {
+        {"benchmark", "bench-gpu-streak"},
+        {"field", a->field},
+        {"grid", a->resolution},
+        {"steps", sampled.step_count()},
+        {"steps_read", steps_used},
+        {"series_bytes", data_bytes},
+        {"step_bytes", step_bytes},
+        {"write_seconds", write_seconds},
+        {"host_cache_budget_bytes", co.budget_bytes},
+        {"device_step_budget_bytes", device_bytes},
+        {"backend", r.device},
+        {"cpu_threads", tbb::info::default_concurrency()},
+        {"complete", r.complete},
+        {"message", r.message},
+        {"max_particles", r.max_particles},
+        {"last_frame_vertices", last_vertices},
+        {"particle_steps", r.particle_steps},
+        {"seconds",
+         {{"total", r.total_seconds},
+          {"advect", r.advect_seconds},
+          {"refine", r.refine_seconds},
+          {"frames", r.frame_seconds},
+          {"wait", r.wait_seconds},
+          {"io_floor", io_floor},
+          {"gpu_compute", b.compute_seconds},
+          {"uploads", b.upload_seconds},
+          {"host_staging", b.host_seconds}}},
+        {"bytes_uploaded", b.bytes_uploaded},
+        {"h2d_bytes_per_second", h2d},
+        {"pcie_pinned_bytes_per_second", pcie},
+        {"total_over_floor", r.total_seconds / floor}};
+    std::printf("bench-gpu-streak: %s on %d^3, %zu steps over [0, 4] (%.2f GiB, %.0f MiB a step; "
+                "%zu read up to the last frame); host cache %s; the device keeps at most %.2f GiB "
+                "of steps (series / %.3g)\nbackend: %s; %d CPU threads\n",
+                a->field.c_str(), a->resolution, sampled.step_count(),
+                static_cast<double>(data_bytes) / (1u << 30), static_cast<double>(step_bytes) / (1u << 20),
+                steps_used, a->host_budget.c_str(), static_cast<double>(device_bytes) / (1u << 30),
+                a->data_over_device, r.device.c_str(), tbb::info::default_concurrency());
+    std::printf("streak: seed %s, release 0 -> %g, %d frames up to t = 3, edge %g, interpolated "
+                "insertion: %zu particles at most, %zu in the last frame%s\n\n",
+                a->seed.c_str(), a->release_end, a->frames, a->edge, r.max_particles, last_vertices,
+                r.complete ? "" : (" (incomplete: " + r.message + ")").c_str());
+    std::printf("%-44s %10s\n", "", "seconds");
+    std::printf("%-44s %10.3f\n", "end to end (streak surface)", r.total_seconds);
+    std::printf("%-44s %10.3f\n", "  advection (bulk calls)", r.advect_seconds);
+    std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
+    std::printf("%-44s %10.3f\n", "  frames", r.frame_seconds);
+    std::printf("%-44s %10.3f\n", "  waiting for data", r.wait_seconds);
+    std::printf("%-44s %10.3f\n", "I/O floor (read + decode every step once)", io_floor);
+    std::printf("%-44s %10.3f\n", cuda ? "GPU compute (kernels)" : "compute (CPU loops)",
+                b.compute_seconds);
+    std::printf("%-44s %10.3f  (%.2f GiB, %.1f GB/s; pinned PCIe %.1f GB/s)\n", "uploads (steps)",
+                b.upload_seconds, static_cast<double>(b.bytes_uploaded) / (1u << 30), h2d / 1e9, pcie / 1e9);
+    std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
+                r.total_seconds / floor);
+    std::cout << j.dump(1) << "\n";
+  });
+}
+
+}  // namespace orthofront::cli
