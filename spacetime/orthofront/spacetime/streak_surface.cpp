@@ -1,5 +1,8 @@
 #include "orthofront/spacetime/streak_surface.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <memory>
@@ -200,13 +203,21 @@ bool StreakBuilder::advance(double t_to) {
   x_.resize(moving.size());
   from_.assign(moving.size(), t_);
   status_.resize(moving.size());
-  for (std::size_t i = 0; i < moving.size(); ++i) x_[i] = moving[i]->x;
+  const auto each = [n = moving.size()](auto&& f) {  // millions of particles: in parallel
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+                      });
+  };
+  each([&](std::size_t i) { x_[i] = moving[i]->x; });
   report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
-  for (std::size_t i = 0; i < moving.size(); ++i) {
+  each([&](std::size_t i) {
     moving[i]->x = x_[i];
     moving[i]->status = status_[i];
-    if (status_[i] == ParticleStatus::left_domain) ++report_.left_domain;
-    if (status_[i] == ParticleStatus::no_data) ++report_.no_data;
+  });
+  for (const ParticleStatus st : status_) {
+    if (st == ParticleStatus::left_domain) ++report_.left_domain;
+    if (st == ParticleStatus::no_data) ++report_.no_data;
   }
   report_.particle_steps += moving.size();
   report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
@@ -415,19 +426,33 @@ bool StreakBuilder::refine_once() {
   report_.rows_inserted += across.size();
   for (const auto& [r, row] : across) report_.row_particles += row.p.size();
 
-  // Insert along rows (from the back, so indices stay valid), then the new rows.
-  std::sort(along.begin(), along.end(), [](const Insert& x, const Insert& y) {
-    return x.row != y.row ? x.row > y.row : x.after > y.after;
-  });
-  for (Insert& ins : along) {
-    std::vector<Particle>& p = rows_[ins.row].p;
-    if (ins.after + 1 == p.size())  // closing edge of a closed row: s wrapped past 1
-      p.push_back(ins.particle);
-    else
-      p.insert(p.begin() + static_cast<std::ptrdiff_t>(ins.after + 1), ins.particle);
+  // Insert along rows, then the new rows: each row and the row list rebuilt once, in linear time
+  // (an insertion in the middle of a vector per new particle is quadratic in a long row). The
+  // scans made `along` by row, then by left particle, and `across` by row. A new particle goes
+  // right after its left neighbour (the closing edge of a closed row: after the last particle).
+  std::vector<Particle> merged;
+  for (std::size_t k = 0; k < along.size();) {
+    std::vector<Particle>& p = rows_[along[k].row].p;
+    const std::size_t row = along[k].row;
+    merged.clear();
+    merged.reserve(p.size() + along.size() - k);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      merged.push_back(p[i]);
+      if (k < along.size() && along[k].row == row && along[k].after == i)
+        merged.push_back(along[k++].particle);
+    }
+    p.swap(merged);
   }
-  for (auto it = across.rbegin(); it != across.rend(); ++it)
-    rows_.insert(rows_.begin() + static_cast<std::ptrdiff_t>(it->first + 1), std::move(it->second));
+  if (!across.empty()) {
+    std::vector<Row> rows;
+    rows.reserve(rows_.size() + across.size());
+    std::size_t next = 0;
+    for (std::size_t r = 0; r < rows_.size(); ++r) {
+      rows.push_back(std::move(rows_[r]));
+      if (next < across.size() && across[next].first == r) rows.push_back(std::move(across[next++].second));
+    }
+    rows_.swap(rows);
+  }
   return true;
 }
 
