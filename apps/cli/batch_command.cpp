@@ -55,6 +55,8 @@ struct BatchArgs {
   double checkpoint_every = -1;  // < 0: the job file's
   int fail_after_steps = -1;     // tests: stop as if killed after this many front steps
   int threads = 0;               // 0: every core
+  std::string device;            // empty: per vertex; else cpu, cuda or auto
+  std::string device_memory;     // empty: half the device's free memory
 };
 
 std::string read_text(const std::filesystem::path& path) {
@@ -143,8 +145,9 @@ class PathTask final : public SurfaceTask {
     ready_ = builder_->next();
   }
   PathTask(const SurfaceSpec& spec, spacetime::StreamedField& shared,
-           spacetime::BrickCache& cache, const spacetime::PathState* resume)
-      : SurfaceTask(spec) {
+           spacetime::BrickCache& cache, const spacetime::PathState* resume,
+           std::shared_ptr<spacetime::SharedBulkAdvance> bulk)
+      : SurfaceTask(spec), bulk_(std::move(bulk)) {
     builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(shared, cache, seed(),
                                                                spec.seed_count, options(), resume);
     if (resume) resumed_at_step_ = resumed_step(*resume);
@@ -183,8 +186,10 @@ class PathTask final : public SurfaceTask {
     o.max_band = spec_.max_band;
     o.seed_name = spec_.seed;
     o.field_name = spec_.field;
+    o.shared_bulk = bulk_;
     return o;
   }
+  std::shared_ptr<spacetime::SharedBulkAdvance> bulk_;  // the pass's bulk front advance, or null
   std::unique_ptr<spacetime::PathSurfaceBuilder> builder_;
 };
 
@@ -394,6 +399,10 @@ class BatchRun {
     checkpoints_.start();
   }
 
+  std::size_t device_bytes() const {
+    return args_.device_memory.empty() ? 0 : spacetime::parse_bytes(args_.device_memory);
+  }
+
   void run_group(const Group& g) {
     std::vector<std::unique_ptr<SurfaceTask>> tasks;
     // What the group reads, opened once for all of its surfaces.
@@ -402,6 +411,7 @@ class BatchRun {
     std::unique_ptr<io::TimeSeries> series;
     std::unique_ptr<spacetime::BrickCache> cache;
     std::unique_ptr<spacetime::StreamedField> shared;
+    std::shared_ptr<spacetime::SharedBulkAdvance> bulk;
     std::vector<std::size_t> todo;
     for (std::size_t i : g.members) {
       const SurfaceSpec& s = job_.surfaces[i];
@@ -435,6 +445,9 @@ class BatchRun {
                               : spacetime::parse_bytes(job_.cache_budget);
         cache = std::make_unique<spacetime::BrickCache>(*series, co);
         shared = std::make_unique<spacetime::StreamedField>(*cache);
+        if (!args_.device.empty())
+          bulk = std::make_shared<spacetime::SharedBulkAdvance>(
+              *cache, advect::parse_device(args_.device), device_bytes());
       }
     } catch (const std::exception& e) {
       for (std::size_t i : todo)
@@ -460,7 +473,7 @@ class BatchRun {
           const auto* resume = saved ? std::get_if<spacetime::PathState>(&*saved) : nullptr;
           if (saved && !resume) throw InvalidArgument("checkpoint of '" + s.name + "' is not a path surface's");
           if (shared)
-            task = std::make_unique<PathTask>(s, *shared, *cache, resume);
+            task = std::make_unique<PathTask>(s, *shared, *cache, resume, bulk);
           else
             task = std::make_unique<PathTask>(s, *flow, resume);
         }
@@ -581,6 +594,10 @@ class BatchRun {
       o.seed_name = s.seed;
       o.field_name = s.field;
       o.progress = [](const spacetime::StreakProgress&) { return !interrupted(); };
+      if (!args_.device.empty() && !is_unsteady_field_name(s.field)) {
+        o.device = advect::parse_device(args_.device);
+        o.device_bytes = device_bytes();
+      }
       const auto sink = [&](const spacetime::StreakFrame& frame) {
         writer.add_frame(frame.mesh, frame.time);
       };
@@ -715,6 +732,14 @@ void add_batch_command(CLI::App& app) {
   c->add_option("--fail-after-steps", args->fail_after_steps,
                 "Testing: exit at once, as if killed with SIGKILL, after this many front steps")
       ->group("");
+  c->add_option("--device", args->device,
+                 "Series: advance path surfaces' fronts (one backend and one set of device-resident "
+                 "steps for a pass) and move streak particles by bulk advection on cpu, cuda or "
+                 "auto (as `path --device`); default: per vertex")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  c->add_option("--device-memory", args->device_memory,
+                 "With --device cuda/auto: time steps kept on the device (default: half its free "
+                 "memory)");
   c->add_option("--threads", args->threads,
                 "Threads of this process (0: every core; under MPI, per rank)")
       ->check(CLI::Range(0, 4096))
@@ -723,6 +748,11 @@ void add_batch_command(CLI::App& app) {
   c->callback([args]() {
     if (args->resume && args->restart)
       throw InvalidArgument("--resume and --restart exclude each other");
+    if (args->device == "cuda") {
+      std::string why;
+      if (!advect::cuda_available(&why)) throw InvalidArgument("--device cuda: " + why);
+    }
+    if (!args->device_memory.empty()) (void)spacetime::parse_bytes(args->device_memory);
     std::optional<tbb::global_control> threads;
     if (args->threads > 0)
       threads.emplace(tbb::global_control::max_allowed_parallelism,

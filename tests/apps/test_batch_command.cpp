@@ -401,3 +401,42 @@ TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte 
   CHECK(s["surfaces"][0]["status"] == "done");
   CHECK(s["surfaces"][0]["frames"] == 4);
 }
+
+TEST_CASE("batch --device: the surfaces of a pass share one bulk backend and give the meshes of "
+          "`path --device`, byte for byte",
+          "[batch][advect]") {
+  TempDir dir("batch-device");
+  const fs::path series = make_series(dir);
+  write_text(dir / "rake.toml", "[job]\nfield = \"" + series.string() +
+                                    "\"\ncache_budget = \"64MiB\"\n[defaults]\nedge = 0.04\n"
+                                    "seed_count = 12\nt0 = 0.0\nt1 = 6.0\n[[rake]]\nname = \"r\"\n"
+                                    "seed = \"line:0.2,0.2,0:0.2,0.8,0\"\ncount = 3\n"
+                                    "offset = [0.6, 0.0]\n");
+  const auto r = run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "out") +
+                     " --device cpu --threads 2 --quiet");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  for (int k = 0; k < 3; ++k) {
+    INFO(k);
+    const double x = 0.2 + 0.6 * k;
+    const std::string seed = "line:" + std::to_string(x) + ",0.2,0:" + std::to_string(x) + ",0.8,0";
+    const fs::path alone = dir / ("alone-" + std::to_string(k) + ".vtp");
+    REQUIRE(run("path --field " + quoted(series) + " --seed " + seed +
+                " --seed-count 12 --edge 0.04 --t0 0 --t1 6 --device cpu --quiet --out " +
+                quoted(alone))
+                .status == 0);
+    CHECK(read_text(alone) == read_text(dir / "out" / ("r-" + std::to_string(k) + ".vtp")));
+    const auto report =
+        nlohmann::json::parse(read_text(dir / "out" / ("r-" + std::to_string(k) + ".json")));
+    CHECK(report["path"]["device"]["backend"] == "cpu");
+    CHECK(report["path"]["device"]["calls"].get<std::size_t>() > 0);
+  }
+  // Per vertex (no --device) the meshes differ: the front really went through the backend.
+  REQUIRE(run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "plain") + " --quiet")
+              .status == 0);
+  CHECK(read_text(dir / "plain" / "r-0.vtp") != read_text(dir / "out" / "r-0.vtp"));
+  // A device that cannot be had is named before anything runs.
+  const auto cuda = run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "cuda") +
+                        " --device cuda --quiet");
+  if (cuda.status != 0) CHECK(cuda.output.find("--device cuda:") != std::string::npos);
+}

@@ -203,7 +203,7 @@ TEST_CASE("bulk front advance: integrator seam calls and spans", "[spacetime][ad
 
   // A backend that cannot be had: declined once asked, and never asked again.
   int asked = 0;
-  BulkFrontIntegrator<3> none(source, [&]() -> std::unique_ptr<advect::BatchAdvector> {
+  BulkFrontIntegrator<3> none(source, [&]() -> std::shared_ptr<advect::BatchAdvector> {
     ++asked;
     return nullptr;
   }, o);

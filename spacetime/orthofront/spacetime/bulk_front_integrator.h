@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/engine/front_integrator.h"
 #include "orthofront/field/unsteady.h"
+#include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::spacetime {
 
@@ -30,7 +32,31 @@ struct BulkFrontOptions {
 
 /// Makes the backend when the first front large enough comes (so a surface whose fronts stay
 /// small never starts a device); nullptr: none can be had, the fronts stay per vertex.
-using BackendFactory = std::function<std::unique_ptr<advect::BatchAdvector>()>;
+using BackendFactory = std::function<std::shared_ptr<advect::BatchAdvector>()>;
+
+/// One backend and one view of a series' whole steps for the surfaces of a batch pass, which
+/// step in parallel: the device keeps each step once for all of them, and their calls take turns
+/// (one at a time on the backend and the steps). The backend starts at the first call.
+class SharedBulkAdvance {
+ public:
+  /// Non-owning: `cache` must outlive it. `device` auto: CUDA where present, else none (fronts
+  /// stay per vertex).
+  SharedBulkAdvance(BrickCache& cache, advect::Device device, std::size_t device_bytes);
+  ~SharedBulkAdvance();
+  advect::StepSource& steps();
+  /// The backend (made on the first call; nullptr where auto found no CUDA device).
+  std::shared_ptr<advect::BatchAdvector> backend();
+  advect::Device device() const { return device_; }
+
+ private:
+  class Turns;
+  advect::Device device_;
+  std::size_t device_bytes_;
+  std::unique_ptr<advect::StepSource> steps_;
+  std::mutex mutex_;
+  bool made_ = false;
+  std::shared_ptr<advect::BatchAdvector> backend_;
+};
 
 /// Non-owning: `steps` must outlive it.
 template <int N>
@@ -40,7 +66,7 @@ class BulkFrontIntegrator final : public FrontIntegrator<N> {
  public:
   static constexpr int d = N - 1;
 
-  BulkFrontIntegrator(advect::StepSource& steps, std::unique_ptr<advect::BatchAdvector> backend,
+  BulkFrontIntegrator(advect::StepSource& steps, std::shared_ptr<advect::BatchAdvector> backend,
                       BulkFrontOptions options);
   BulkFrontIntegrator(advect::StepSource& steps, BackendFactory make_backend,
                       BulkFrontOptions options);
@@ -62,7 +88,7 @@ class BulkFrontIntegrator final : public FrontIntegrator<N> {
            std::span<IntegrationResult<N>> out, bool forward);
 
   advect::StepSource& steps_;
-  std::unique_ptr<advect::BatchAdvector> backend_;
+  std::shared_ptr<advect::BatchAdvector> backend_;
   BackendFactory make_backend_;
   BulkFrontOptions options_;
   advect::ParticleBatch batch_;

@@ -241,7 +241,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     } else {
       builder_ = std::make_unique<SurfaceBuilder<N>>(*lifted_, seed_, engine);
     }
-    if (o.device && run.cache) attach_bulk_advance(*run.cache, engine);
+    if ((o.device || o.shared_bulk) && run.cache) attach_bulk_advance(*run.cache, engine);
   }
 
   bool next() override {
@@ -405,7 +405,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
   // The front advance through a BatchAdvector (PathSurfaceOptions::device). `auto` without a
   // CUDA device keeps the per-vertex advance.
   void attach_bulk_advance(BrickCache& cache, const StreamSurfaceOptions& engine) {
-    const advect::Device device = *o_.device;
+    const advect::Device device = o_.shared_bulk ? o_.shared_bulk->device() : *o_.device;
     std::size_t min_vertices = o_.device_min_vertices;
     const bool automatic = device == advect::Device::auto_select;
     if (automatic && min_vertices == 0) min_vertices = kCudaFrontBreakEven;
@@ -423,15 +423,21 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       bo.method.absolute = engine.tolerance * engine.edge;
       bo.method.relative = engine.tolerance;
     }
+    if (const std::shared_ptr<SharedBulkAdvance> shared = o_.shared_bulk) {
+      bulk_ = std::make_unique<BulkFrontIntegrator<N>>(
+          shared->steps(), [shared] { return shared->backend(); }, bo);
+      builder_->set_front_integrator(bulk_.get());
+      return;
+    }
     steps_ = std::make_unique<CachedSteps>(cache);
     if (automatic) {
       // CUDA starts (and is looked for) only when a front reaches the break-even size.
       const std::size_t bytes = o_.device_bytes;
       bulk_ = std::make_unique<BulkFrontIntegrator<N>>(
           *steps_,
-          [bytes]() -> std::unique_ptr<advect::BatchAdvector> {
-            return advect::cuda_available() ? advect::make_advector(advect::Device::cuda, bytes)
-                                            : nullptr;
+          [bytes]() -> std::shared_ptr<advect::BatchAdvector> {
+            if (!advect::cuda_available()) return nullptr;
+            return advect::make_advector(advect::Device::cuda, bytes);
           },
           bo);
     } else {

@@ -15,6 +15,7 @@
 #include "orthofront/field/unsteady.h"
 #include "orthofront/seed/seed_curve.h"
 #include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/bulk_front_integrator.h"
 #include "orthofront/spacetime/streamed_field.h"
 
 namespace orthofront::spacetime {
@@ -54,6 +55,9 @@ struct PathSurfaceOptions {
   /// size for auto).
   std::size_t device_min_vertices = 0;
   std::size_t device_bytes = 0;    ///< steps the CUDA backend keeps on the device (0: half its free memory)
+  /// Surfaces of one pass over a cache (a batch): one backend and one set of device-resident
+  /// steps for all of them (its device replaces `device`, its budget `device_bytes`).
+  std::shared_ptr<SharedBulkAdvance> shared_bulk;
 };
 
 /// The time band of one front step: the range of times evaluated during it.
