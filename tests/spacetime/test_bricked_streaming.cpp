@@ -18,9 +18,12 @@
 #include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/spacetime/streamed_field.h"
 
+#include "bricked_series.h"
+
 using namespace orthofront;
 using namespace orthofront::spacetime;
 using grid_test::TempDir;
+using spacetime_test::write_bricked;
 
 namespace {
 
@@ -67,26 +70,6 @@ std::filesystem::path write_series(const TempDir& dir, const GridGeometry& g, in
   }
   writer.commit();
   return file;
-}
-
-// Writes a sampled series as a bricked HDF5 file (default codec) and opens it.
-std::unique_ptr<io::Hdf5TimeSeries> write_bricked(const std::filesystem::path& file,
-                                                  const SampledTimeSeries& memory,
-                                                  std::int64_t brick) {
-  io::Hdf5WriteOptions w;
-  w.brick_size = brick;
-  w.zero_is_no_data = false;
-  w.xdmf = false;
-  std::vector<double> times;
-  for (std::size_t k = 0; k < memory.step_count(); ++k) times.push_back(memory.time(k));
-  io::Hdf5SeriesWriter writer(file, memory.geometry(), memory.components(), times, w);
-  std::vector<float> values(memory.step_floats());
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    memory.sample(k, values.data());
-    writer.write_step(values);
-  }
-  writer.commit();
-  return io::open_hdf5_series(file);
 }
 
 }  // namespace

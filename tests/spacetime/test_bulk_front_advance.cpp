@@ -15,42 +15,18 @@
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/spacetime/streamed_field.h"
+
+#include "bricked_series.h"
+#include "mesh_equality.h"
 #include "reference_path.h"
 
 using namespace orthofront;
 using namespace orthofront::spacetime;
+using spacetime_test::same_mesh;
+using spacetime_test::write_bricked;
 using grid_test::TempDir;
 
 namespace {
-
-bool same_mesh(const Mesh& a, const Mesh& b) {
-  if (a.vertex_count() != b.vertex_count() || a.faces.size() != b.faces.size()) return false;
-  for (std::size_t i = 0; i < a.vertex_count(); ++i)
-    if (std::memcmp(a.positions[i].data(), b.positions[i].data(), 3 * sizeof(double)) != 0 ||
-        a.time[i] != b.time[i])
-      return false;
-  for (std::size_t f = 0; f < a.faces.size(); ++f)
-    if (a.faces[f].v != b.faces[f].v) return false;
-  return true;
-}
-
-std::unique_ptr<io::Hdf5TimeSeries> write_bricked(const std::filesystem::path& file,
-                                                  const SampledTimeSeries& memory) {
-  io::Hdf5WriteOptions w;
-  w.brick_size = 4;
-  w.zero_is_no_data = false;
-  w.xdmf = false;
-  std::vector<double> times;
-  for (std::size_t k = 0; k < memory.step_count(); ++k) times.push_back(memory.time(k));
-  io::Hdf5SeriesWriter writer(file, memory.geometry(), memory.components(), times, w);
-  std::vector<float> values(memory.step_floats());
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    memory.sample(k, values.data());
-    writer.write_step(values);
-  }
-  writer.commit();
-  return io::open_hdf5_series(file);
-}
 
 struct Case {
   std::unique_ptr<UnsteadyField> flow;
@@ -129,7 +105,7 @@ TEST_CASE("bulk front advance: through bricks under a tiny budget, the in-memory
   const PathSurfaceResult reference = build_path_surface(in_memory, c.seed, 8, c.options);
   REQUIRE(reference.path.complete);
 
-  const auto series = write_bricked(dir.path() / "gyre.h5", *c.memory);
+  const auto series = write_bricked(dir.path() / "gyre.h5", *c.memory, 4);
   CacheOptions tiny;
   tiny.budget_bytes = 400 * 768;  // 400 bricks of 7,500: the band plus one step gathered
   BrickCache cache(*series, tiny);
@@ -154,7 +130,7 @@ TEST_CASE("whole steps gathered from bricks of which some are resident already e
   // The cache hands resident units back first: each brick must go to its own place.
   TempDir dir("gather-resident");
   Case c = gyre_case();
-  const auto series = write_bricked(dir.path() / "gyre.h5", *c.memory);
+  const auto series = write_bricked(dir.path() / "gyre.h5", *c.memory, 4);
   BrickCache cache(*series, everything());
   std::vector<BrickCache::Handle> some;
   for (std::uint32_t b = 7; b < cache.layout().bricks(); b += 11) some.push_back(cache.acquire({3, b}));

@@ -4,29 +4,15 @@
 // device each test says so and does nothing.
 #include <catch2/catch.hpp>
 
-#include <cstring>
-
 #include "orthofront/spacetime/bulk_front_integrator.h"
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
 
+#include "mesh_equality.h"
+
 using namespace orthofront;
 using namespace orthofront::spacetime;
-
-namespace {
-
-bool same_mesh(const Mesh& a, const Mesh& b) {
-  if (a.vertex_count() != b.vertex_count() || a.faces.size() != b.faces.size()) return false;
-  for (std::size_t i = 0; i < a.vertex_count(); ++i)
-    if (std::memcmp(a.positions[i].data(), b.positions[i].data(), 3 * sizeof(double)) != 0 ||
-        a.time[i] != b.time[i])
-      return false;
-  for (std::size_t f = 0; f < a.faces.size(); ++f)
-    if (a.faces[f].v != b.faces[f].v) return false;
-  return true;
-}
-
-}  // namespace
+using spacetime_test::same_mesh;
 
 TEST_CASE("cuda front advance: the CPU backend's path surface byte for byte", "[gpu][path]") {
   std::string why;

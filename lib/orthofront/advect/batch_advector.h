@@ -92,6 +92,22 @@ struct AdvectionStatistics {
   double upload_seconds = 0;        ///< host-to-device copies (device events)
   double host_seconds = 0;          ///< acquire() and staging copies on the host
   double overlap_seconds = 0;       ///< copies running while a kernel ran (device events)
+
+  /// Adds another call's figures (totals over calls).
+  AdvectionStatistics& operator+=(const AdvectionStatistics& o) {
+    particles += o.particles;
+    slabs += o.slabs;
+    particle_steps += o.particle_steps;
+    evaluations += o.evaluations;
+    steps_loaded += o.steps_loaded;
+    bytes_uploaded += o.bytes_uploaded;
+    total_seconds += o.total_seconds;
+    compute_seconds += o.compute_seconds;
+    upload_seconds += o.upload_seconds;
+    host_seconds += o.host_seconds;
+    overlap_seconds += o.overlap_seconds;
+    return *this;
+  }
 };
 
 /// The grid as kernels see it, with the axis tables it points to.

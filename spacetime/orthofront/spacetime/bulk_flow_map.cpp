@@ -99,17 +99,7 @@ std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t
     for (int d = 0; d < 3; ++d) x[i][d] = batch.x[static_cast<std::size_t>(d)][i];
     status[i] = batch.status[i];
   });
-  total_.particles += s.particles;
-  total_.slabs += s.slabs;
-  total_.particle_steps += s.particle_steps;
-  total_.evaluations += s.evaluations;
-  total_.steps_loaded += s.steps_loaded;
-  total_.bytes_uploaded += s.bytes_uploaded;
-  total_.total_seconds += s.total_seconds;
-  total_.compute_seconds += s.compute_seconds;
-  total_.upload_seconds += s.upload_seconds;
-  total_.host_seconds += s.host_seconds;
-  total_.overlap_seconds += s.overlap_seconds;
+  total_ += s;
   return s.evaluations;
 }
 

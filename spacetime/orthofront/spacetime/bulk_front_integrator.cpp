@@ -127,17 +127,7 @@ void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const doub
   }
   const advect::AdvectionStatistics s = backend_->advect(steps_, batch_, horizon, options_.method);
   ++calls_;
-  total_.particles += s.particles;
-  total_.slabs += s.slabs;
-  total_.particle_steps += s.particle_steps;
-  total_.evaluations += s.evaluations;
-  total_.steps_loaded += s.steps_loaded;
-  total_.bytes_uploaded += s.bytes_uploaded;
-  total_.total_seconds += s.total_seconds;
-  total_.compute_seconds += s.compute_seconds;
-  total_.upload_seconds += s.upload_seconds;
-  total_.host_seconds += s.host_seconds;
-  total_.overlap_seconds += s.overlap_seconds;
+  total_ += s;
 
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = index_[k];
