@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/count_list.h"
 #include "orthofront/error.h"
 #include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/spacetime/brick_cache.h"
@@ -44,21 +45,6 @@ struct BenchFrontArgs {
   int threads = 0;
   std::string device = "auto";
 };
-
-std::vector<std::size_t> parse_sizes(const std::string& text) {
-  std::vector<std::size_t> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (end == item.c_str() || *end != '\0' || !(v >= 2) || v > 1e8)
-      throw InvalidArgument("--sizes: '" + item + "' is not a front size between 2 and 1e8");
-    out.push_back(static_cast<std::size_t>(v));
-  }
-  if (out.empty()) throw InvalidArgument("--sizes: no size given");
-  return out;
-}
 
 struct Row {
   std::size_t vertices = 0;
@@ -92,7 +78,7 @@ void add_bench_front_command(CLI::App& app) {
         !(a->edge > 0) || !(a->band >= 0 && a->band < 3) || !(a->tolerance > 0))
       throw InvalidArgument("bench-front: need --resolution in [8, 1024], --steps >= 4, "
                             "--repeats >= 1, --edge > 0, --band in [0, 3), --tolerance > 0");
-    const std::vector<std::size_t> sizes = parse_sizes(a->sizes);
+    const std::vector<std::size_t> sizes = parse_count_list(a->sizes, "--sizes", 2, 1e8);
     const advect::Device device = advect::parse_device(a->device);
     std::string why;
     const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);

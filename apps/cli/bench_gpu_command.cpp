@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/count_list.h"
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
@@ -34,21 +35,6 @@ struct BenchGpuArgs {
   std::string device = "auto";
   bool json_only = false;
 };
-
-std::vector<std::size_t> parse_counts(const std::string& text) {
-  std::vector<std::size_t> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (end == item.c_str() || *end != '\0' || !(v >= 1) || v > 1e9)
-      throw InvalidArgument("--particles: '" + item + "' is not a count between 1 and 1e9");
-    out.push_back(static_cast<std::size_t>(std::llround(v)));
-  }
-  if (out.empty()) throw InvalidArgument("--particles: no count given");
-  return out;
-}
 
 advect::ResidentSteps sample_slab_series(const UnsteadyField& flow, int n) {
   GridGeometry g;
@@ -120,7 +106,7 @@ void add_bench_gpu_command(CLI::App& app) {
       throw InvalidArgument("bench-gpu: --resolution must lie in [8, 2048]");
     if (!(a->rk4_steps >= 1) || !(a->tolerance > 0) || a->threads < 0)
       throw InvalidArgument("bench-gpu: --rk4-steps >= 1, --tolerance > 0, --threads >= 0");
-    const std::vector<std::size_t> counts = parse_counts(a->particles);
+    const std::vector<std::size_t> counts = parse_count_list(a->particles, "--particles", 1, 1e9);
     const advect::Device device = advect::parse_device(a->device);
     std::string why;
     const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);
