@@ -94,6 +94,23 @@ def test_path_surface_from_a_numpy_series_follows_the_path_lines():
     assert np.allclose(surface.spacetime_vertices[:, 2] / surface.report["path"]["time_scale"], t)
 
 
+def test_path_surface_front_on_the_bulk_backend_follows_the_path_lines():
+    values, times, origin, spacing = shear_series()
+    series = orthofront.Series(values, times, origin=origin, spacing=spacing)
+    surface = orthofront.path_surface(series, "line:0.2,0.2,0:0.2,0.6,0", t0=0, t1=2,
+                                      seed_count=9, edge=0.1, device="cpu")
+    device = surface.report["path"]["device"]
+    assert device["backend"] == "cpu" and device["calls"] > 0
+    t = surface.attributes["time"]
+    s = surface.attributes["s"]
+    assert np.max(np.abs(surface.vertices[:, 0] - (0.2 + t))) < 1e-6
+    assert np.max(np.abs(surface.vertices[:, 1] - (0.2 + 0.4 * s + 0.5 * t * t))) < 1e-6
+    # An analytic flow has no grid to move through.
+    with pytest.raises(ValueError, match="device"):
+        orthofront.path_surface("double-gyre", "line:0.2,0.2,0:0.2,0.6,0", t0=0, t1=1,
+                                device="cpu")
+
+
 def test_series_equals_a_glob_of_files_on_the_command_line(tmp_path, orthofront_binary):
     values, times, origin, spacing = shear_series()
     for i in range(len(times)):

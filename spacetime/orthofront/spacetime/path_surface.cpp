@@ -174,6 +174,11 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     if (seed_count < 2)
       throw InvalidArgument("a path surface needs at least 2 seed vertices, got " +
                             std::to_string(seed_count));
+    if ((o.device || o.shared_bulk) && !run.cache)
+      throw InvalidArgument("device: bulk advection moves the front through a gridded series "
+                            "read through a cache; '" +
+                            (o.field_name.empty() ? run.flow.describe() : o.field_name) +
+                            "' is a field in memory (sample it onto a grid first)");
     PathReport& pr = result_.path;
     pr.t0 = o.t0;
     pr.t1 = o.t1;
