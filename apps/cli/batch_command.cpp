@@ -108,7 +108,11 @@ class StreamTask final : public SurfaceTask {
       : SurfaceTask(spec) {
     const SeedCurve curve = parse_seed(spec.seed).translated(spec.offset);
     seed_ = make_seed(curve, spec.seed_count);
-    SurfaceJob job{spec.field, spec.seed, spec.seed_count, spec.options};
+    SurfaceJob job;
+    job.field = spec.field;
+    job.seed = spec.seed;
+    job.seed_count = spec.seed_count;
+    job.options = spec.options;
     if (!resume) check_stream_seed(field, seed_, job);
     builder_ = resume ? std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options, *resume)
                       : std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options);

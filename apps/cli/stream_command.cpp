@@ -6,6 +6,7 @@
 #include "cli/pictures.h"
 #include "cli/process_memory.h"
 #include "cli/surface_job.h"
+#include "orthofront/advect/batch_advector.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/exr_front_image.h"
@@ -40,6 +41,17 @@ void add_stream_command(CLI::App& app) {
       ->capture_default_str();
   add_engine_flags(*c, args->job.options);
   add_memory_flag(*c, args->limits);
+  c->add_option("--device", args->job.device,
+                "Gridded fields: advance the front by bulk advection on cpu or cuda; auto: cuda "
+                "for fronts of at least " + std::to_string(advect::kCudaFrontBreakEven) +
+                    " vertices where a device is present. Default: per vertex")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  c->add_option("--device-min-vertices", args->job.device_min_vertices,
+                "With --device: smaller fronts advance per vertex (0: every front for cpu and "
+                "cuda, the break-even size for auto)");
+  c->add_option("--device-memory", args->job.device_memory,
+                "With --device cuda/auto: what the device may hold of the grid (default: half "
+                "its free memory)");
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
   c->add_option("--exr", args->exr,
@@ -65,7 +77,8 @@ void add_stream_command(CLI::App& app) {
         throw InvalidArgument("--exr '" + args->exr + "' must end in .exr");
       io::check_writable(args->exr);
     }
-    SurfaceResult result = run_surface(args->job, true);
+    DeviceUse device;
+    SurfaceResult result = run_surface(args->job, true, &device);
     // A surface cut off by the vertex cap did not take the steps asked for: the report says so
     // (the exit status stays 0 with a warning, as before: what was built is a valid surface).
     const bool capped = result.report.stop_reason == StopReason::vertex_budget;
@@ -93,6 +106,14 @@ void add_stream_command(CLI::App& app) {
       report["limits"] = args->limits.to_json();
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
                            {"rss_bytes", current_rss_bytes()}};
+      if (!device.backend.empty())
+        report["device"] = {{"backend", device.backend},
+                            {"min_front_vertices", device.min_vertices},
+                            {"calls", device.calls},
+                            {"particles", device.particles},
+                            {"seconds", device.seconds},
+                            {"compute_seconds", device.compute_seconds},
+                            {"bytes_uploaded", device.bytes_uploaded}};
       io::write_json(report, args->report, outputs);
     }
     if (!args->exr.empty()) {

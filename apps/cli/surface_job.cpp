@@ -1,12 +1,17 @@
 #include "cli/surface_job.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 
 #include "orthofront/io/open_field.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
+#include "orthofront/advect/steady_front_integrator.h"
 #include "orthofront/error.h"
+#include "orthofront/field/grid_field.h"
 #include "orthofront/seed/seed_check.h"
+#include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::cli {
 
@@ -25,7 +30,47 @@ void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJo
   require_seed_inside(survey, context, true);
 }
 
-SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
+namespace {
+
+// The front advance through the bulk backend (--device), for a gridded field.
+std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& job,
+                                                            const Field3& field) {
+  if (job.device.empty()) return nullptr;
+  const auto* grid = dynamic_cast<const GridField*>(&field);
+  if (!grid)
+    throw InvalidArgument("--device: bulk advection moves particles through a grid; '" +
+                          job.field + "' is not a gridded field");
+  const advect::Device device = advect::parse_device(job.device);
+  const std::size_t bytes =
+      job.device_memory.empty() ? 0 : spacetime::parse_bytes(job.device_memory);
+  std::size_t min_vertices = job.device_min_vertices;
+  advect::SteadyBackendFactory factory;
+  if (device == advect::Device::auto_select) {
+    if (min_vertices == 0) min_vertices = advect::kCudaFrontBreakEven;
+    // CUDA starts (and is looked for) only when a front reaches the break-even size.
+    factory = [bytes]() -> std::shared_ptr<advect::BatchAdvector> {
+      if (!advect::cuda_available()) return nullptr;
+      return advect::make_advector(advect::Device::cuda, bytes);
+    };
+  } else {
+    std::shared_ptr<advect::BatchAdvector> backend = advect::make_advector(device, bytes);
+    factory = [backend] { return backend; };
+  }
+  advect::MethodOptions method;
+  if (job.options.integrator == IntegratorKind::rk4) {
+    method.method = advect::Method::rk4;
+    method.rk4_step = job.options.edge / std::max(job.options.rk4_substeps, 1);
+  } else {
+    method.method = advect::Method::dopri5;
+    method.absolute = job.options.tolerance * job.options.edge;
+    method.relative = job.options.tolerance;
+  }
+  return std::make_unique<advect::SteadyFrontIntegrator>(*grid, factory, method, min_vertices);
+}
+
+}  // namespace
+
+SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* used) {
   const auto field = io::open_field(job.field);
   const SeedCurve curve = parse_seed(job.seed);
   if (job.seed_count < 2)
@@ -38,10 +83,31 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress) {
   check_stream_seed(*field, seed, job);
   // SIGINT/SIGTERM also stop a step's long integrations, not only the next step.
   const StopRequest stop = [] { return interrupted(); };
-  if (!show_progress) return build_stream_surface(*field, seed, job.options, {}, {}, stop);
-  ProgressBar bar(job.field, job.options.max_vertices);
-  return build_stream_surface(*field, seed, job.options,
-                              [&](const Progress& p) { return bar.update(p); }, {}, stop);
+  const std::unique_ptr<advect::SteadyFrontIntegrator> bulk = bulk_advance(job, *field);
+  SurfaceResult result;
+  if (!show_progress) {
+    result = build_stream_surface(*field, seed, job.options, {}, {}, stop, bulk.get());
+  } else {
+    ProgressBar bar(job.field, job.options.max_vertices);
+    result = build_stream_surface(*field, seed, job.options,
+                                  [&](const Progress& p) { return bar.update(p); }, {}, stop,
+                                  bulk.get());
+  }
+  if (bulk && used) {
+    used->min_vertices = job.device_min_vertices ? job.device_min_vertices
+                         : job.device == "auto"  ? advect::kCudaFrontBreakEven
+                                                 : 0;
+    used->backend = bulk->backend_name();
+    if (used->backend.empty())
+      used->backend = "none (auto: no front reached " + std::to_string(used->min_vertices) +
+                      " vertices, or no CUDA device)";
+    used->calls = bulk->calls();
+    used->particles = bulk->statistics().particles;
+    used->bytes_uploaded = bulk->statistics().bytes_uploaded;
+    used->seconds = bulk->statistics().total_seconds;
+    used->compute_seconds = bulk->statistics().compute_seconds;
+  }
+  return result;
 }
 
 std::string summarize(const SurfaceJob& job, const SurfaceReport& r) {

@@ -1,5 +1,6 @@
 #pragma once
 /// One stream-surface job as the command line describes it, and its summary text.
+#include <cstddef>
 #include <string>
 
 #include "orthofront/engine/stream_surface.h"
@@ -13,6 +14,16 @@ struct SurfaceJob {
   std::string seed;           ///< --seed spec
   int seed_count = 20;
   StreamSurfaceOptions options;
+  std::string device;         ///< --device: empty (per vertex), cpu, cuda or auto
+  std::size_t device_min_vertices = 0;  ///< 0: every front (cpu, cuda), the break-even (auto)
+  std::string device_memory;  ///< empty: half the device's free memory
+};
+
+/// What the bulk front advance did (--device).
+struct DeviceUse {
+  std::string backend;        ///< empty: no --device; "none (...)": auto found nothing to do
+  std::size_t min_vertices = 0, calls = 0, particles = 0, bytes_uploaded = 0;
+  double seconds = 0, compute_seconds = 0;
 };
 
 /// Refuses a seed with fewer than 2 vertices inside `field`'s domain with data, or one where the
@@ -21,7 +32,8 @@ void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJo
 
 /// Opens the field, builds the seed and runs the engine (with a progress bar when asked).
 /// Throws InvalidArgument for a bad field, seed, or a seed outside the domain.
-SurfaceResult run_surface(const SurfaceJob& job, bool show_progress);
+/// With job.device: gridded fields only (InvalidArgument otherwise); `used` gets what it did.
+SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* used = nullptr);
 
 /// One paragraph: counts, quality, time, stop reason.
 std::string summarize(const SurfaceJob& job, const SurfaceReport& report);

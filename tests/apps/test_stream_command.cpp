@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -14,6 +15,7 @@
 #include "orthofront/io/hdf5_layout.h"
 #include "apps/cli_run.h"
 #include "orthofront/io/mesh_io.h"
+#include <nlohmann/json.hpp>
 
 namespace fs = std::filesystem;
 
@@ -227,4 +229,53 @@ TEST_CASE("a surface stopped by the vertex budget says so, with the memory it us
   std::stringstream json;
   json << report.rdbuf();
   CHECK(json.str().find("\"peak_rss_bytes\"") != std::string::npos);
+}
+
+TEST_CASE("stream --device: the front of a gridded field advances by bulk advection on the "
+          "exact surface, and says what it cannot do",
+          "[cli][stream][advect]") {
+  const fs::path dir = fresh_dir("stream-device");
+  const std::string h5 = (dir / "saddle.h5").string();
+  REQUIRE(run("generate --field saddle3d --resolution 33,33,33 --out " + h5 + " --quiet").status ==
+          0);
+  const auto stream = [&](const std::string& name, const std::string& extra) {
+    return run("stream --field " + h5 + " --seed line:-1,2,0.1:1,2,0.1 --seed-count 20 --edge 0.1 "
+               "--steps 100 --out " + (dir / (name + ".ply")).string() + " --report " +
+               (dir / (name + ".json")).string() + " " + extra);
+  };
+  const Outcome plain = stream("plain", "");
+  INFO(plain.output);
+  REQUIRE(plain.status == 0);
+  const Outcome bulk = stream("bulk", "--device cpu");
+  INFO(bulk.output);
+  REQUIRE(bulk.status == 0);
+  // A linear field is exact on its grid: both advances stay on y z = 0.2.
+  const orthofront::Mesh a = orthofront::io::read_mesh(dir / "plain.ply");
+  const orthofront::Mesh b = orthofront::io::read_mesh(dir / "bulk.ply");
+  CHECK(b.vertex_count() == a.vertex_count());
+  for (const auto& p : b.positions) REQUIRE(std::abs(p.y() * p.z() - 0.2) < 1e-8);
+  std::ifstream report(dir / "bulk.json");
+  const auto j = nlohmann::json::parse(report);
+  CHECK(j["device"]["backend"] == "cpu");
+  CHECK(j["device"]["calls"].get<std::size_t>() >= j["steps"].get<std::size_t>());
+  // auto with fronts below the break-even size: the per-vertex surface, byte for byte.
+  REQUIRE(stream("auto", "--device auto").status == 0);
+  std::ifstream pa(dir / "plain.ply", std::ios::binary), aa(dir / "auto.ply", std::ios::binary);
+  std::stringstream plain_bytes, auto_bytes;
+  plain_bytes << pa.rdbuf();
+  auto_bytes << aa.rdbuf();
+  CHECK(plain_bytes.str() == auto_bytes.str());
+  // An analytic field has no grid to move particles through.
+  const Outcome analytic = run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --steps 5 "
+                               "--device cpu --out " + (dir / "a.ply").string());
+  CHECK(analytic.status == 2);
+  CHECK(analytic.output.find("--device") != std::string::npos);
+  CHECK(!fs::exists(dir / "a.ply"));
+  // Without a CUDA device (or a CUDA build), --device cuda says why and writes nothing.
+  const Outcome cuda = stream("cuda", "--device cuda");
+  if (cuda.status != 0) {
+    CHECK(cuda.status == 2);
+    CHECK(cuda.output.find("--device cuda:") != std::string::npos);
+    CHECK(!fs::exists(dir / "cuda.ply"));
+  }
 }

@@ -152,6 +152,10 @@ class BatchAdvector {
 };
 
 enum class Device : unsigned char { cpu, cuda, auto_select };
+
+/// Front size from which `--device auto` advances a surface's front on a CUDA device (measured
+/// with `orthofront bench-front` on an H100: README "A path surface's front on the GPU").
+inline constexpr std::size_t kCudaFrontBreakEven = 4096;
 const char* to_string(Device device);
 /// "cpu", "cuda" or "auto"; throws InvalidArgument naming the value otherwise.
 Device parse_device(const std::string& text);

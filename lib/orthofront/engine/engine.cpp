@@ -687,9 +687,11 @@ template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
                                    const ProgressCallback& progress,
-                                   const FrontHook& before_step, const StopRequest& stop) {
+                                   const FrontHook& before_step, const StopRequest& stop,
+                                   FrontIntegrator<N>* front_integrator) {
   SurfaceBuilder<N> builder(field, seed, options);
   builder.set_stop_request(stop);
+  builder.set_front_integrator(front_integrator);
   while (builder.next()) {
     if (stop && stop()) {
       builder.cancel();
@@ -711,10 +713,10 @@ SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
 template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                const StreamSurfaceOptions&,
                                                const ProgressCallback&, const FrontHook&,
-                                               const StopRequest&);
+                                               const StopRequest&, FrontIntegrator<3>*);
 template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                const StreamSurfaceOptions&,
                                                const ProgressCallback&, const FrontHook&,
-                                               const StopRequest&);
+                                               const StopRequest&, FrontIntegrator<4>*);
 
 }  // namespace orthofront

@@ -4,6 +4,7 @@
 #include <span>
 #include <vector>
 
+#include "orthofront/engine/front_integrator.h"
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
 #include "orthofront/field/field.h"
@@ -40,21 +41,23 @@ struct SurfaceResult {
 /// Throws InvalidArgument for unusable options or a seed with fewer than two vertices inside
 /// the domain. `stop` (thread-safe) is asked inside long stream-line integrations too, so a
 /// DOPRI5 crawling towards its evaluation cap does not hold up a cancel; the surface then ends
-/// where its fronts got to (stop reason cancelled, report incomplete).
+/// where its fronts got to (stop reason cancelled, report incomplete). `front_integrator` (not
+/// owned; may be null): advances fronts in bulk (SurfaceBuilder::set_front_integrator).
 template <int N>
 SurfaceResult build_stream_surface(const Field<N>& field, const Seed<N>& seed,
                                    const StreamSurfaceOptions& options,
                                    const ProgressCallback& progress = {},
                                    const FrontHook& before_step = {},
-                                   const StopRequest& stop = {});
+                                   const StopRequest& stop = {},
+                                   FrontIntegrator<N>* front_integrator = nullptr);
 
 extern template SurfaceResult build_stream_surface<3>(const Field<3>&, const Seed<3>&,
                                                       const StreamSurfaceOptions&,
                                                       const ProgressCallback&, const FrontHook&,
-                                                      const StopRequest&);
+                                                      const StopRequest&, FrontIntegrator<3>*);
 extern template SurfaceResult build_stream_surface<4>(const Field<4>&, const Seed<4>&,
                                                       const StreamSurfaceOptions&,
                                                       const ProgressCallback&, const FrontHook&,
-                                                      const StopRequest&);
+                                                      const StopRequest&, FrontIntegrator<4>*);
 
 }  // namespace orthofront

@@ -19,9 +19,8 @@
 
 namespace orthofront::spacetime {
 
-/// Front size from which `--device auto` moves a path surface's front on a CUDA device (measured
-/// with `orthofront bench-path --device`, README "Path surfaces on a GPU").
-inline constexpr std::size_t kCudaFrontBreakEven = 4096;
+/// Front size from which `--device auto` moves a path surface's front on a CUDA device.
+inline constexpr std::size_t kCudaFrontBreakEven = advect::kCudaFrontBreakEven;
 
 struct BulkFrontOptions {
   double time_scale = 1;            ///< c of the lifted coordinate τ = c t
