@@ -2,10 +2,12 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 
@@ -31,6 +33,15 @@ std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", value);
   return text;
+}
+
+// Runs f(r) for r in [0, n), rows in parallel (each row's work is independent of the others').
+template <class F>
+void for_each_row(std::size_t n, const F& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t r = range.begin(); r != range.end(); ++r) f(r);
+                    });
 }
 
 struct Particle {
@@ -73,7 +84,16 @@ class StreakBuilder {
   void release(double tau);
   bool advance(double t_to);
   void adapt();
+  // A particle to insert on a row, after its particle `after`.
+  struct Insert {
+    std::size_t after;
+    Particle particle;
+  };
   bool refine_once();
+  std::vector<Insert> inserts_along(std::size_t r, double long_edge) const;
+  std::optional<Row> row_between(std::size_t r, double long_edge) const;
+  std::vector<Face> strip(std::size_t r, const std::vector<std::int32_t>& va,
+                          const std::vector<std::int32_t>& vb) const;
   bool release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
                           std::vector<ParticleStatus>& status);
   void coarsen();
@@ -318,96 +338,34 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
 
 bool StreakBuilder::refine_once() {
   const double long_edge = o_.split * o_.edge;
-  struct Insert {
-    std::size_t row;  // s-insert: the row; row-insert: the older of the two rows
-    std::size_t after;  // s-insert: index of the left particle
-    Particle particle;
-  };
-  std::vector<Insert> along;                     // along rows
-  std::vector<std::pair<std::size_t, Row>> across;  // new rows after index first
-  const bool closed = seed_.closed();
+  // Each row's (and each pair of rows') new particles are found independently, in parallel, and
+  // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
+  std::vector<std::vector<Insert>> along(rows_.size());  // per row, by left particle
+  std::vector<std::optional<Row>> across(rows_.size());  // [r]: the new row after row r
+  for_each_row(rows_.size(), [&](std::size_t r) { along[r] = inserts_along(r, long_edge); });
+  for_each_row(rows_.size() > 0 ? rows_.size() - 1 : 0,
+               [&](std::size_t r) { across[r] = row_between(r, long_edge); });
+  std::size_t along_count = 0, across_count = 0;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
-    const std::vector<Particle>& p = rows_[r].p;
-    const std::size_t n = p.size();
-    const std::size_t edges = closed ? n : n - 1;
-    for (std::size_t i = 0; i < edges; ++i) {
-      const Particle& a = p[i];
-      const Particle& b = p[(i + 1) % n];
-      if (!a.alive() || !b.alive()) continue;
-      const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
-      if (sb - a.s <= min_ds_ || (a.x - b.x).norm() <= long_edge) continue;
-      Particle q;
-      q.s = 0.5 * (a.s + sb);  // < 1: a closed row starts at s = 0, which is never removed
-      if (o_.insertion == ParticleInsertion::interpolate) {
-        const auto at = [&](std::ptrdiff_t j) -> const Particle* {
-          const auto m = static_cast<std::ptrdiff_t>(n);
-          if (closed) j = ((j % m) + m) % m;
-          if (j < 0 || j >= m || !p[static_cast<std::size_t>(j)].alive()) return nullptr;
-          return &p[static_cast<std::size_t>(j)];
-        };
-        const auto ii = static_cast<std::ptrdiff_t>(i);
-        const Particle* p0 = at(ii - 1);
-        const Particle* p3 = at(ii + 2);
-        q.x = (p0 && p3) ? cubic_middle(p0->x, a.x, b.x, p3->x) : 0.5 * (a.x + b.x);
-      }
-      along.push_back({r, i, q});
-    }
+    along_count += along[r].size();
+    across_count += across[r].has_value();
   }
-  for (std::size_t r = 0; r + 1 < rows_.size(); ++r) {
-    const Row& a = rows_[r];
-    const Row& b = rows_[r + 1];
-    if (b.tau - a.tau <= min_dtau_ || row_distance(a, b) <= long_edge) continue;
-    Row row;
-    row.tau = 0.5 * (a.tau + b.tau);
-    std::size_t i = 0, k = 0;
-    while (i < a.p.size() || k < b.p.size()) {
-      const bool take_a = k == b.p.size() || (i < a.p.size() && a.p[i].s <= b.p[k].s);
-      const bool take_b = i == a.p.size() || (k < b.p.size() && b.p[k].s <= a.p[i].s);
-      const bool common = take_a && take_b;
-      Particle q;
-      q.s = take_a ? a.p[i].s : b.p[k].s;
-      if (o_.insertion == ParticleInsertion::exact) {
-        row.p.push_back(q);
-      } else if (common) {
-        // Cubic across rows where the rows around carry this s too, linear otherwise.
-        const auto find = [&](std::ptrdiff_t rr) -> const Particle* {
-          if (rr < 0 || rr >= static_cast<std::ptrdiff_t>(rows_.size())) return nullptr;
-          const auto& ps = rows_[static_cast<std::size_t>(rr)].p;
-          const auto it = std::lower_bound(ps.begin(), ps.end(), q.s,
-                                           [](const Particle& x, double s) { return x.s < s; });
-          return it != ps.end() && it->s == q.s && it->alive() ? &*it : nullptr;
-        };
-        const Particle& pa = a.p[i];
-        const Particle& pb = b.p[k];
-        if (pa.alive() && pb.alive()) {
-          const auto rr = static_cast<std::ptrdiff_t>(r);
-          const Particle* p0 = find(rr - 1);
-          const Particle* p3 = find(rr + 2);
-          q.x = (p0 && p3) ? cubic_middle(p0->x, pa.x, pb.x, p3->x) : 0.5 * (pa.x + pb.x);
-        } else {
-          q.status = ParticleStatus::left_domain;
-        }
-        row.p.push_back(q);
-      }
-      if (take_a) ++i;
-      if (take_b) ++k;
-    }
-    across.emplace_back(r, std::move(row));
-  }
-  if (along.empty() && across.empty()) return false;
+  if (along_count == 0 && across_count == 0) return false;
 
   // Exact positions: every new particle released at its own (s, τ), moved to t in one batch.
   std::vector<Particle*> fresh;
   std::vector<double> from;
-  for (Insert& ins : along) {
-    fresh.push_back(&ins.particle);
-    from.push_back(rows_[ins.row].tau);
-  }
-  for (auto& [r, row] : across)
-    for (Particle& q : row.p) {
-      fresh.push_back(&q);
-      from.push_back(row.tau);
+  for (std::size_t r = 0; r < rows_.size(); ++r)
+    for (Insert& ins : along[r]) {
+      fresh.push_back(&ins.particle);
+      from.push_back(rows_[r].tau);
     }
+  for (std::optional<Row>& row : across)
+    if (row)
+      for (Particle& q : row->p) {
+        fresh.push_back(&q);
+        from.push_back(row->tau);
+      }
   for (Particle* q : fresh) q->id = next_id_++;
   if (o_.insertion == ParticleInsertion::exact) {
     std::vector<Vec3> x(fresh.size());
@@ -422,47 +380,125 @@ bool StreakBuilder::refine_once() {
   } else {
     report_.interpolated_insertions += fresh.size();
   }
-  report_.s_insertions += along.size();
-  report_.rows_inserted += across.size();
-  for (const auto& [r, row] : across) report_.row_particles += row.p.size();
+  report_.s_insertions += along_count;
+  report_.rows_inserted += across_count;
+  for (const std::optional<Row>& row : across)
+    if (row) report_.row_particles += row->p.size();
 
   // Insert along rows, then the new rows: each row and the row list rebuilt once, in linear time
-  // (an insertion in the middle of a vector per new particle is quadratic in a long row). The
-  // scans made `along` by row, then by left particle, and `across` by row. A new particle goes
-  // right after its left neighbour (the closing edge of a closed row: after the last particle).
-  std::vector<Particle> merged;
-  for (std::size_t k = 0; k < along.size();) {
-    std::vector<Particle>& p = rows_[along[k].row].p;
-    const std::size_t row = along[k].row;
-    merged.clear();
-    merged.reserve(p.size() + along.size() - k);
+  // (an insertion in the middle of a vector per new particle is quadratic in a long row). A new
+  // particle goes right after its left neighbour (the closing edge of a closed row: after the
+  // last particle).
+  for_each_row(rows_.size(), [&](std::size_t r) {
+    const std::vector<Insert>& ins = along[r];
+    if (ins.empty()) return;
+    std::vector<Particle>& p = rows_[r].p;
+    std::vector<Particle> merged;
+    merged.reserve(p.size() + ins.size());
+    std::size_t k = 0;
     for (std::size_t i = 0; i < p.size(); ++i) {
       merged.push_back(p[i]);
-      if (k < along.size() && along[k].row == row && along[k].after == i)
-        merged.push_back(along[k++].particle);
+      if (k < ins.size() && ins[k].after == i) merged.push_back(ins[k++].particle);
     }
     p.swap(merged);
-  }
-  if (!across.empty()) {
+  });
+  if (across_count > 0) {
     std::vector<Row> rows;
-    rows.reserve(rows_.size() + across.size());
-    std::size_t next = 0;
+    rows.reserve(rows_.size() + across_count);
     for (std::size_t r = 0; r < rows_.size(); ++r) {
       rows.push_back(std::move(rows_[r]));
-      if (next < across.size() && across[next].first == r) rows.push_back(std::move(across[next++].second));
+      if (across[r]) rows.push_back(std::move(*across[r]));
     }
     rows_.swap(rows);
   }
   return true;
 }
 
+// The particles to insert on row r's edges longer than `long_edge`, by left particle.
+std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
+                                                                double long_edge) const {
+  std::vector<Insert> along;
+  const bool closed = seed_.closed();
+  const std::vector<Particle>& p = rows_[r].p;
+  const std::size_t n = p.size();
+  const std::size_t edges = closed ? n : n - 1;
+  for (std::size_t i = 0; i < edges; ++i) {
+    const Particle& a = p[i];
+    const Particle& b = p[(i + 1) % n];
+    if (!a.alive() || !b.alive()) continue;
+    const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
+    if (sb - a.s <= min_ds_ || (a.x - b.x).norm() <= long_edge) continue;
+    Particle q;
+    q.s = 0.5 * (a.s + sb);  // < 1: a closed row starts at s = 0, which is never removed
+    if (o_.insertion == ParticleInsertion::interpolate) {
+      const auto at = [&](std::ptrdiff_t j) -> const Particle* {
+        const auto m = static_cast<std::ptrdiff_t>(n);
+        if (closed) j = ((j % m) + m) % m;
+        if (j < 0 || j >= m || !p[static_cast<std::size_t>(j)].alive()) return nullptr;
+        return &p[static_cast<std::size_t>(j)];
+      };
+      const auto ii = static_cast<std::ptrdiff_t>(i);
+      const Particle* p0 = at(ii - 1);
+      const Particle* p3 = at(ii + 2);
+      q.x = (p0 && p3) ? cubic_middle(p0->x, a.x, b.x, p3->x) : 0.5 * (a.x + b.x);
+    }
+    along.push_back({i, q});
+  }
+  return along;
+}
+
+// The row to insert between rows r and r + 1 when they are more than `long_edge` apart.
+std::optional<Row> StreakBuilder::row_between(std::size_t r,
+                                                             double long_edge) const {
+  const Row& a = rows_[r];
+  const Row& b = rows_[r + 1];
+  if (b.tau - a.tau <= min_dtau_ || row_distance(a, b) <= long_edge) return std::nullopt;
+  Row row;
+  row.tau = 0.5 * (a.tau + b.tau);
+  std::size_t i = 0, k = 0;
+  while (i < a.p.size() || k < b.p.size()) {
+    const bool take_a = k == b.p.size() || (i < a.p.size() && a.p[i].s <= b.p[k].s);
+    const bool take_b = i == a.p.size() || (k < b.p.size() && b.p[k].s <= a.p[i].s);
+    const bool common = take_a && take_b;
+    Particle q;
+    q.s = take_a ? a.p[i].s : b.p[k].s;
+    if (o_.insertion == ParticleInsertion::exact) {
+      row.p.push_back(q);
+    } else if (common) {
+      // Cubic across rows where the rows around carry this s too, linear otherwise.
+      const auto find = [&](std::ptrdiff_t rr) -> const Particle* {
+        if (rr < 0 || rr >= static_cast<std::ptrdiff_t>(rows_.size())) return nullptr;
+        const auto& ps = rows_[static_cast<std::size_t>(rr)].p;
+        const auto it = std::lower_bound(ps.begin(), ps.end(), q.s,
+                                         [](const Particle& x, double s) { return x.s < s; });
+        return it != ps.end() && it->s == q.s && it->alive() ? &*it : nullptr;
+      };
+      const Particle& pa = a.p[i];
+      const Particle& pb = b.p[k];
+      if (pa.alive() && pb.alive()) {
+        const auto rr = static_cast<std::ptrdiff_t>(r);
+        const Particle* p0 = find(rr - 1);
+        const Particle* p3 = find(rr + 2);
+        q.x = (p0 && p3) ? cubic_middle(p0->x, pa.x, pb.x, p3->x) : 0.5 * (pa.x + pb.x);
+      } else {
+        q.status = ParticleStatus::left_domain;
+      }
+      row.p.push_back(q);
+    }
+    if (take_a) ++i;
+    if (take_b) ++k;
+  }
+  return row;
+}
+
 void StreakBuilder::coarsen() {
   const double short_edge = o_.merge * o_.edge;
   const double long_edge = o_.split * o_.edge;
   // Along rows: a particle whose two edges are short goes (never a row's ends, and a row keeps
-  // three particles), unless its neighbours would then be too far apart.
-  for (Row& row : rows_) {
-    std::vector<Particle>& p = row.p;
+  // three particles), unless its neighbours would then be too far apart. Rows in parallel.
+  std::vector<std::size_t> removed(rows_.size(), 0);
+  for_each_row(rows_.size(), [&](std::size_t r) {
+    std::vector<Particle>& p = rows_[r].p;
     std::vector<Particle> kept;
     kept.reserve(p.size());
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -473,29 +509,38 @@ void StreakBuilder::coarsen() {
         const Particle& b = p[i + 1];
         if (a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
             (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge) {
-          ++report_.s_removals;
+          ++removed[r];
           continue;
         }
       }
       kept.push_back(p[i]);
     }
     p.swap(kept);
-  }
-  // Across rows: a row between two close ones goes (never the oldest or the newest).
+  });
+  for (const std::size_t n : removed) report_.s_removals += n;
+  // Across rows: a row between two close ones goes (never the oldest or the newest). Which row
+  // goes depends on the rows kept before it, so the walk is serial; the distances between
+  // neighbouring rows, which it mostly asks, are measured beforehand in parallel.
   if (rows_.size() > 2) {
+    std::vector<double> next_distance(rows_.size() - 1);  // [r]: rows r and r + 1
+    for_each_row(next_distance.size(),
+                 [&](std::size_t r) { next_distance[r] = row_distance(rows_[r], rows_[r + 1]); });
     std::vector<Row> kept;
     kept.reserve(rows_.size());
     kept.push_back(std::move(rows_[0]));
+    bool previous_kept = true;  // kept.back() is rows_[r - 1]
     for (std::size_t r = 1; r + 1 < rows_.size(); ++r) {
       const Row& a = kept.back();
       const Row& m = rows_[r];
       const Row& b = rows_[r + 1];
-      if (row_distance(a, m) < short_edge && row_distance(m, b) < short_edge &&
-          row_distance(a, b) < long_edge) {
+      const double am = previous_kept ? next_distance[r - 1] : row_distance(a, m);
+      if (am < short_edge && next_distance[r] < short_edge && row_distance(a, b) < long_edge) {
         ++report_.rows_removed;
+        previous_kept = false;
         continue;
       }
       kept.push_back(std::move(rows_[r]));
+      previous_kept = true;
     }
     kept.push_back(std::move(rows_.back()));
     rows_.swap(kept);
@@ -524,60 +569,54 @@ void StreakBuilder::emit(int index) {
   frame.time = t_;
   frame.rows = rows_.size();
   Mesh& mesh = frame.mesh;
-  std::vector<std::vector<std::int32_t>> vertex(rows_.size());
+  // Vertices: the live particles, row after row. Each row's first vertex index comes from a
+  // count of the live particles before it, so the rows fill the arrays in parallel.
+  const std::size_t nr = rows_.size();
+  std::vector<std::size_t> first(nr + 1, 0);
+  for_each_row(nr, [&](std::size_t r) {
+    first[r + 1] = static_cast<std::size_t>(
+        std::count_if(rows_[r].p.begin(), rows_[r].p.end(), [](const Particle& p) { return p.alive(); }));
+  });
   std::size_t dead = 0;
-  for (std::size_t r = 0; r < rows_.size(); ++r) {
-    vertex[r].assign(rows_[r].p.size(), -1);
-    for (std::size_t i = 0; i < rows_[r].p.size(); ++i) {
-      const Particle& p = rows_[r].p[i];
-      if (!p.alive()) {
-        ++dead;
-        continue;
-      }
-      vertex[r][i] = static_cast<std::int32_t>(mesh.positions.size());
-      mesh.positions.push_back(p.x);
-      mesh.s.push_back(p.s);
-      mesh.release_time.push_back(rows_[r].tau);
-      mesh.age.push_back(t_ - rows_[r].tau);
-      Vec3 v = Vec3::Zero();
-      if (flow_.velocity(p.x, t_, v) != FieldStatus::inside) v.setZero();
-      if (flow_.dimension() == 2) v.z() = 0;
-      mesh.speed.push_back(v.norm());
-      mesh.particle_id.push_back(p.id);
-    }
+  for (std::size_t r = 0; r < nr; ++r) {
+    dead += rows_[r].p.size() - first[r + 1];
+    first[r + 1] += first[r];
   }
-  // Strips between neighbouring rows: walk both rows in s; a shared s closes a quad, otherwise
-  // the row whose next s comes first gives a triangle. Faces with a stopped particle are left out.
-  const bool closed = seed_.closed();
-  for (std::size_t r = 0; r + 1 < rows_.size(); ++r) {
-    const auto& A = rows_[r].p;
-    const auto& B = rows_[r + 1].p;
-    const auto& va = vertex[r];
-    const auto& vb = vertex[r + 1];
-    const std::size_t na = A.size(), nb = B.size();
-    const std::size_t ea = closed ? na : na - 1, eb = closed ? nb : nb - 1;
-    const auto sa = [&](std::size_t i) { return i >= na ? A[i - na].s + 1.0 : A[i].s; };
-    const auto sb = [&](std::size_t k) { return k >= nb ? B[k - nb].s + 1.0 : B[k].s; };
-    std::size_t i = 0, k = 0;
-    while (i < ea || k < eb) {
-      const std::int32_t a0 = va[i % na], b0 = vb[k % nb];
-      const bool step_a = i < ea && (k == eb || sa(i + 1) <= sb(k + 1));
-      const bool step_b = k < eb && (i == ea || sb(k + 1) <= sa(i + 1));
-      if (step_a && step_b) {
-        const std::int32_t a1 = va[(i + 1) % na], b1 = vb[(k + 1) % nb];
-        if (a0 >= 0 && a1 >= 0 && b1 >= 0 && b0 >= 0) mesh.add_quad(a0, a1, b1, b0);
-        ++i, ++k;
-      } else if (step_a) {
-        const std::int32_t a1 = va[(i + 1) % na];
-        if (a0 >= 0 && a1 >= 0 && b0 >= 0) mesh.add_triangle(a0, a1, b0);
-        ++i;
-      } else {
-        const std::int32_t b1 = vb[(k + 1) % nb];
-        if (a0 >= 0 && b1 >= 0 && b0 >= 0) mesh.add_triangle(a0, b1, b0);
-        ++k;
-      }
+  const std::size_t nv = first[nr];
+  mesh.positions.resize(nv);
+  mesh.s.resize(nv);
+  mesh.release_time.resize(nv);
+  mesh.age.resize(nv);
+  mesh.speed.resize(nv);
+  mesh.particle_id.resize(nv);
+  std::vector<std::vector<std::int32_t>> vertex(nr);
+  for_each_row(nr, [&](std::size_t r) {
+    const Row& row = rows_[r];
+    vertex[r].assign(row.p.size(), -1);
+    std::size_t v = first[r];
+    for (std::size_t i = 0; i < row.p.size(); ++i) {
+      const Particle& p = row.p[i];
+      if (!p.alive()) continue;
+      vertex[r][i] = static_cast<std::int32_t>(v);
+      mesh.positions[v] = p.x;
+      mesh.s[v] = p.s;
+      mesh.release_time[v] = row.tau;
+      mesh.age[v] = t_ - row.tau;
+      Vec3 u = Vec3::Zero();
+      if (flow_.velocity(p.x, t_, u) != FieldStatus::inside) u.setZero();
+      if (flow_.dimension() == 2) u.z() = 0;
+      mesh.speed[v] = u.norm();
+      mesh.particle_id[v] = p.id;
+      ++v;
     }
-  }
+  });
+  // Strips between neighbouring rows, each into its own list, joined in row order.
+  std::vector<std::vector<Face>> strips(nr > 0 ? nr - 1 : 0);
+  for_each_row(strips.size(), [&](std::size_t r) { strips[r] = strip(r, vertex[r], vertex[r + 1]); });
+  std::size_t nf = 0;
+  for (const auto& f : strips) nf += f.size();
+  mesh.faces.reserve(nf);
+  for (const auto& f : strips) mesh.faces.insert(mesh.faces.end(), f.begin(), f.end());
   frame.quality = measure_quality(mesh);
   StreakFrameRecord rec;
   rec.index = index;
@@ -587,15 +626,58 @@ void StreakBuilder::emit(int index) {
   rec.rows = rows_.size();
   rec.dead_particles = dead;
   rec.quality = frame.quality;
-  for (const Face& f : mesh.faces)
-    for (int c = 0; c < f.size; ++c)
-      rec.max_edge = std::max(rec.max_edge, (mesh.positions[static_cast<std::size_t>(f.v[c])] -
-                                             mesh.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
-                                                .norm());
+  rec.max_edge = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.faces.size(), 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double longest) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const Face& f = mesh.faces[k];
+          for (int c = 0; c < f.size; ++c)
+            longest = std::max(longest, (mesh.positions[static_cast<std::size_t>(f.v[c])] -
+                                         mesh.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
+                                            .norm());
+        }
+        return longest;
+      },
+      [](double a, double b) { return std::max(a, b); });
   if (sink_) sink_(frame);
   rec.seconds = seconds_since(t0);
   report_.frame_seconds += rec.seconds;
   report_.frames.push_back(rec);
+}
+
+// The faces between rows r and r + 1 (`va`, `vb`: their particles' vertices, -1 for stopped
+// ones): walk both rows in s; a shared s closes a quad, otherwise the row whose next s comes
+// first gives a triangle. Faces with a stopped particle are left out.
+std::vector<Face> StreakBuilder::strip(std::size_t r, const std::vector<std::int32_t>& va,
+                                       const std::vector<std::int32_t>& vb) const {
+  std::vector<Face> faces;
+  const bool closed = seed_.closed();
+  const auto& A = rows_[r].p;
+  const auto& B = rows_[r + 1].p;
+  const std::size_t na = A.size(), nb = B.size();
+  const std::size_t ea = closed ? na : na - 1, eb = closed ? nb : nb - 1;
+  const auto sa = [&](std::size_t i) { return i >= na ? A[i - na].s + 1.0 : A[i].s; };
+  const auto sb = [&](std::size_t k) { return k >= nb ? B[k - nb].s + 1.0 : B[k].s; };
+  std::size_t i = 0, k = 0;
+  while (i < ea || k < eb) {
+    const std::int32_t a0 = va[i % na], b0 = vb[k % nb];
+    const bool step_a = i < ea && (k == eb || sa(i + 1) <= sb(k + 1));
+    const bool step_b = k < eb && (i == ea || sb(k + 1) <= sa(i + 1));
+    if (step_a && step_b) {
+      const std::int32_t a1 = va[(i + 1) % na], b1 = vb[(k + 1) % nb];
+      if (a0 >= 0 && a1 >= 0 && b1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, a1, b1, b0}, 4});
+      ++i, ++k;
+    } else if (step_a) {
+      const std::int32_t a1 = va[(i + 1) % na];
+      if (a0 >= 0 && a1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, a1, b0, -1}, 3});
+      ++i;
+    } else {
+      const std::int32_t b1 = vb[(k + 1) % nb];
+      if (a0 >= 0 && b1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, b1, b0, -1}, 3});
+      ++k;
+    }
+  }
+  return faces;
 }
 
 StreakReport StreakBuilder::run() {
