@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <tbb/global_control.h>
+
 #include "io/grid_test_support.h"
 #include "orthofront/error.h"
 #include "orthofront/engine/stream_surface.h"
@@ -358,4 +360,37 @@ TEST_CASE("streak surface: in a steady flow it is the stream surface up to t - t
   REQUIRE(compared > 100);
   // Chord error of the streak mesh at edge 0.05 on this spiral (measured 6.6e-4), with margin.
   CHECK(farthest < 0.03 * o.edge);
+}
+
+TEST_CASE("streak surface: one thread and many give the same frames, bit for bit",
+          "[spacetime][streak]") {
+  // Refinement, coarsening and frame assembly run row by row in parallel and gather in row
+  // order: particle ids, positions and faces must not depend on the schedule.
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.2, 0.2, 0), Vec3(0.4, 0.8, 0));
+  for (const ParticleInsertion insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
+    StreakOptions o = gyre_options();
+    o.insertion = insertion;
+    o.release_step = 0;  // many rows: rows are inserted and removed between them
+    std::vector<StreakFrame> serial;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      serial = collect(*flow, seed, o);
+    }
+    tbb::global_control many(tbb::global_control::max_allowed_parallelism, 8);
+    const std::vector<StreakFrame> parallel = collect(*flow, seed, o);
+    REQUIRE(parallel.size() == serial.size());
+    for (std::size_t k = 0; k < serial.size(); ++k) {
+      const Mesh& a = serial[k].mesh;
+      const Mesh& b = parallel[k].mesh;
+      INFO("frame " << k << ", " << to_string(insertion));
+      REQUIRE(a.vertex_count() > 100);
+      REQUIRE(a.vertex_count() == b.vertex_count());
+      REQUIRE(a.face_count() == b.face_count());
+      CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) == 0);
+      CHECK(a.particle_id == b.particle_id);
+      CHECK(a.speed == b.speed);
+      for (std::size_t f = 0; f < a.face_count(); ++f) REQUIRE(a.faces[f].v == b.faces[f].v);
+    }
+  }
 }
