@@ -56,6 +56,8 @@ def display():
     xvfb = shutil.which("Xvfb")
     if xvfb is None:
         raise RuntimeError("no display to render on and no Xvfb (Debian: apt-get install xvfb)")
+    # -noreset: by default the server resets when its last client leaves (the socket probe below
+    # is one), and a client that connects during the reset is refused; VTK then aborts the process.
     # A display number of our own, far from the low ones Xvfb -displayfd would pick: a server on
     # a number another process has just given up can lose its socket to that process's cleanup.
     chooser = random.Random(os.getpid() ^ time.monotonic_ns())
@@ -64,7 +66,7 @@ def display():
         read_end, write_end = os.pipe()
         server = subprocess.Popen([xvfb, ":%d" % chooser.randrange(100, 30000), "-displayfd",
                                    str(write_end), "-screen", "0", "1280x1024x24", "-nolisten",
-                                   "tcp"], pass_fds=(write_end,), stdout=subprocess.DEVNULL,
+                                   "tcp", "-noreset"], pass_fds=(write_end,), stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
         os.close(write_end)
         with os.fdopen(read_end) as pipe:
