@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>  // cross products
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstddef>
@@ -15,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
 
 #include "orthofront/error.h"
 
@@ -78,51 +80,76 @@ struct Edge {
   bool inconsistent = false;  ///< f1 traverses it in the same direction as f0
 };
 
-/// Undirected edges with the faces using them. Each face edge goes into the bucket of its smaller
-/// vertex index (a counting sort, O(V + F)); a bucket holds a handful of uses, which a small
-/// stable sort groups by the other index. Buckets keyed on the smaller index act as a perfect hash
-/// of the sorted pair and keep memory access local for meshes stored front by front.
+/// Undirected edges with the faces using them, by smaller vertex index, then larger. Each face
+/// edge goes into the bucket of its smaller vertex index (a counting sort, O(V + F)); a bucket
+/// holds a handful of uses, which a small sort orders by the other index, then the face. Buckets
+/// keyed on the smaller index act as a perfect hash of the sorted pair and keep memory access
+/// local for meshes stored front by front. Buckets are counted, filled and sorted in parallel; the
+/// order within a bucket is total, so the edges do not depend on the schedule.
 std::vector<Edge> build_edges(const Mesh& mesh) {
   struct Use {
     std::int32_t other, face;
     bool forward;  ///< the face traverses smaller -> other
   };
   const std::size_t nv = mesh.positions.size();
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const Face& face : mesh.faces) {
+  const std::size_t nf = mesh.faces.size();
+  const auto each = [](std::size_t n, const auto& body) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i < range.end(); ++i) body(i);
+                      });
+  };
+  std::vector<std::atomic<std::uint32_t>> fill(nv + 1);
+  each(nv + 1, [&](std::size_t v) { fill[v].store(0, std::memory_order_relaxed); });
+  each(nf, [&](std::size_t f) {
+    const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
-      if (u != w) ++start[std::min(u, w) + 1];  // repeated index: no edge
+      if (u != w) fill[static_cast<std::size_t>(std::min(u, w)) + 1].fetch_add(1, std::memory_order_relaxed);
     }
-  }
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  });
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] = start[v] + fill[v + 1].load(std::memory_order_relaxed);
+  each(nv, [&](std::size_t v) { fill[v].store(start[v], std::memory_order_relaxed); });
   std::vector<Use> uses(start[nv]);
-  std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
-  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+  each(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
       if (u == w) continue;
-      uses[next[std::min(u, w)]++] = Use{std::max(u, w), static_cast<std::int32_t>(f), u < w};
+      const std::uint32_t slot = fill[static_cast<std::size_t>(std::min(u, w))].fetch_add(1, std::memory_order_relaxed);
+      uses[slot] = Use{std::max(u, w), static_cast<std::int32_t>(f), u < w};
     }
-  }
+  });
 
-  std::vector<Edge> edges;
-  edges.reserve(uses.size() / 2 + 16);
-  const auto by_other = [](const Use& x, const Use& y) { return x.other < y.other; };
-  for (std::size_t a = 0; a < nv; ++a) {
+  // Sort each bucket and count its edges; then place them.
+  const auto before = [](const Use& x, const Use& y) {
+    if (x.other != y.other) return x.other < y.other;
+    return x.face != y.face ? x.face < y.face : x.forward < y.forward;
+  };
+  std::vector<std::uint32_t> first_edge(nv + 1, 0);
+  each(nv, [&](std::size_t a) {
     const auto first = uses.begin() + start[a], last = uses.begin() + start[a + 1];
     if (last - first > 32) {
-      std::stable_sort(first, last, by_other);
+      std::sort(first, last, before);
     } else {
       for (auto it = first; it != last; ++it) {  // insertion sort: buckets are tiny
         const Use use = *it;
         auto hole = it;
-        for (; hole != first && by_other(use, *(hole - 1)); --hole) *hole = *(hole - 1);
+        for (; hole != first && before(use, *(hole - 1)); --hole) *hole = *(hole - 1);
         *hole = use;
       }
     }
-    for (auto it = first; it != last;) {
+    std::uint32_t distinct = 0;
+    for (auto it = first; it != last; ++it) distinct += (it == first || it->other != (it - 1)->other);
+    first_edge[a + 1] = distinct;
+  });
+  for (std::size_t a = 0; a < nv; ++a) first_edge[a + 1] += first_edge[a];
+  std::vector<Edge> edges(first_edge[nv]);
+  each(nv, [&](std::size_t a) {
+    const auto last = uses.begin() + start[a + 1];
+    std::size_t e = first_edge[a];
+    for (auto it = uses.begin() + start[a]; it != last;) {
       Edge edge{static_cast<std::int32_t>(a), it->other, it->face, -1, 0, false};
       const auto group_end =
           std::find_if(it, last, [&](const Use& x) { return x.other != it->other; });
@@ -131,10 +158,10 @@ std::vector<Edge> build_edges(const Mesh& mesh) {
         edge.f1 = (it + 1)->face;
         edge.inconsistent = (it + 1)->forward == it->forward;
       }
-      edges.push_back(edge);
+      edges[e++] = edge;
       it = group_end;
     }
-  }
+  });
   return edges;
 }
 
@@ -186,6 +213,21 @@ double angle_deg(const Vec3& u, const Vec3& w) {
 
 void validate(const Mesh& mesh) {
   const auto n = static_cast<std::int64_t>(mesh.positions.size());
+  const auto bad = [n](const Face& face) {
+    if (face.size != 3 && face.size != 4) return true;
+    for (int i = 0; i < face.size; ++i)
+      if (face.v[i] < 0 || face.v[i] >= n) return true;
+    return false;
+  };
+  // Checked in parallel; only a bad mesh is walked again for the first bad face to name.
+  const bool any_bad = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.faces.size(), 16384), false,
+      [&](const tbb::blocked_range<std::size_t>& range, bool found) {
+        for (std::size_t f = range.begin(); f < range.end() && !found; ++f) found = bad(mesh.faces[f]);
+        return found;
+      },
+      [](bool a, bool b) { return a || b; });
+  if (!any_bad) return;
   for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
     const Face& face = mesh.faces[f];
     if (face.size != 3 && face.size != 4) {
@@ -380,42 +422,74 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   r.t_junctions = count_t_junctions(mesh, edges, boundary);
 
   // Shape statistics; faces with a zero-length edge have no defined angles and are skipped.
+  // Fixed blocks of faces are measured in parallel, each into its own histograms and lists; the
+  // lists are joined in face order, so every figure (sums included) is the serial one.
+  struct Shapes {
+    Histogram quad_angles, edge_ratio, triangle_min_angle;
+    std::vector<double> angle_dev, spread, tri_min;
+    std::size_t measured_quads = 0, measured_triangles = 0, within_10 = 0, below_10 = 0;
+  };
+  constexpr std::size_t kShapeBlock = 16384;
+  std::vector<Shapes> blocks((nf + kShapeBlock - 1) / kShapeBlock);
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
+    Shapes& out = blocks[b];
+    out.quad_angles = make_histogram(0, 180, options.angle_bins);
+    out.edge_ratio = make_histogram(-1, 1, options.edge_bins);
+    out.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
+    for (std::size_t f = b * kShapeBlock; f < std::min(nf, (b + 1) * kShapeBlock); ++f) {
+      const Face& face = mesh.faces[f];
+      const int n = face.size;
+      std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
+      std::array<double, 4> length{};
+      bool measurable = true;
+      for (int i = 0; i < n; ++i) {
+        e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
+        length[i] = e[i].norm();
+        measurable = measurable && length[i] > 0;
+      }
+      if (!measurable) continue;
+      if (face.is_quad()) {
+        ++out.measured_quads;
+        const double avg = 0.25 * (length[0] + length[1] + length[2] + length[3]);
+        for (int i = 0; i < 4; ++i) {
+          const double angle = angle_deg(-e[(i + 3) % 4], e[i]);
+          add(out.quad_angles, angle);
+          out.angle_dev.push_back(std::abs(angle - 90));
+          if (angle >= 80 && angle <= 100) ++out.within_10;
+          const double ratio = 1 - length[i] / avg;
+          add(out.edge_ratio, ratio);
+          out.spread.push_back(std::abs(ratio));
+        }
+      } else {
+        ++out.measured_triangles;
+        double smallest = 180;
+        for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
+        add(out.triangle_min_angle, smallest);
+        out.tri_min.push_back(smallest);
+        if (smallest < 10) ++out.below_10;
+      }
+    }
+  });
   std::vector<double> angle_dev, spread, tri_min;
   angle_dev.reserve(4 * r.quads);
   spread.reserve(4 * r.quads);
   tri_min.reserve(r.triangles);
   std::size_t within_10 = 0, below_10 = 0;
-  for (const Face& face : mesh.faces) {
-    const int n = face.size;
-    std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
-    std::array<double, 4> length{};
-    bool measurable = true;
-    for (int i = 0; i < n; ++i) {
-      e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
-      length[i] = e[i].norm();
-      measurable = measurable && length[i] > 0;
-    }
-    if (!measurable) continue;
-    if (face.is_quad()) {
-      ++r.measured_quads;
-      const double avg = 0.25 * (length[0] + length[1] + length[2] + length[3]);
-      for (int i = 0; i < 4; ++i) {
-        const double angle = angle_deg(-e[(i + 3) % 4], e[i]);
-        add(r.quad_angles, angle);
-        angle_dev.push_back(std::abs(angle - 90));
-        if (angle >= 80 && angle <= 100) ++within_10;
-        const double ratio = 1 - length[i] / avg;
-        add(r.edge_ratio, ratio);
-        spread.push_back(std::abs(ratio));
-      }
-    } else {
-      ++r.measured_triangles;
-      double smallest = 180;
-      for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
-      add(r.triangle_min_angle, smallest);
-      tri_min.push_back(smallest);
-      if (smallest < 10) ++below_10;
-    }
+  const auto add_counts = [](Histogram& to, const Histogram& from) {
+    for (std::size_t i = 0; i < to.counts.size(); ++i) to.counts[i] += from.counts[i];
+  };
+  for (Shapes& block : blocks) {
+    r.measured_quads += block.measured_quads;
+    r.measured_triangles += block.measured_triangles;
+    within_10 += block.within_10;
+    below_10 += block.below_10;
+    add_counts(r.quad_angles, block.quad_angles);
+    add_counts(r.edge_ratio, block.edge_ratio);
+    add_counts(r.triangle_min_angle, block.triangle_min_angle);
+    angle_dev.insert(angle_dev.end(), block.angle_dev.begin(), block.angle_dev.end());
+    spread.insert(spread.end(), block.spread.begin(), block.spread.end());
+    tri_min.insert(tri_min.end(), block.tri_min.begin(), block.tri_min.end());
+    block = Shapes{};  // its lists are copied: free them as we go
   }
   if (!angle_dev.empty()) {
     r.quad_angles_within_10 =
