@@ -182,6 +182,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"max_particles", r.max_particles},
         {"last_frame_vertices", last_vertices},
         {"particle_steps", r.particle_steps},
+        {"intervals", r.intervals},
         {"seconds",
          {{"total", r.total_seconds},
           {"advect", r.advect_seconds},
@@ -190,6 +191,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"wait", r.wait_seconds},
           {"io_floor", io_floor},
           {"gpu_compute", b.compute_seconds},
+          {"backend_calls", b.total_seconds},
           {"uploads", b.upload_seconds},
           {"host_staging", b.host_seconds}}},
         {"bytes_uploaded", b.bytes_uploaded},
@@ -210,6 +212,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     std::printf("%-44s %10s\n", "", "seconds");
     std::printf("%-44s %10.3f\n", "end to end (streak surface)", r.total_seconds);
     std::printf("%-44s %10.3f\n", "  advection (bulk calls)", r.advect_seconds);
+    std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
     std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
     std::printf("%-44s %10.3f\n", "  frames", r.frame_seconds);
     std::printf("%-44s %10.3f\n", "  waiting for data", r.wait_seconds);

@@ -35,7 +35,9 @@ const float* CachedSteps::acquire(std::size_t step) {
     for (std::size_t b = first; b < last; ++b) keys.push_back(key(b));
     // The handles come resident units first: each is placed by its own key.
     const std::vector<BrickCache::Handle> pins = cache_.acquire_all(keys);
-    for (const BrickCache::Handle& pin : pins) {
+    // Bricks fill disjoint parts of the step: in parallel.
+    tbb::parallel_for(std::size_t{0}, pins.size(), [&](std::size_t p) {
+      const BrickCache::Handle& pin = pins[p];
       const auto index = static_cast<std::int64_t>(pin.key().brick);
       const std::int64_t bi = index % layout.count[0];
       const std::int64_t bj = index / layout.count[0] % layout.count[1];
@@ -50,7 +52,7 @@ const float* CachedSteps::acquire(std::size_t step) {
           std::memcpy(h.gathered.data() + g.index(i0, j0 + j, k0 + k) * c, brick + from,
                       static_cast<std::size_t>(ni) * c * sizeof(float));
         }
-    }
+    });
   }
   h.data = h.gathered.data();
   return held_.emplace(step, std::move(h)).first->second.data;

@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -215,32 +216,42 @@ bool StreakBuilder::advance(double t_to) {
       return false;
     }
   }
-  std::vector<Particle*> moving;
-  for (Row& r : rows_)
-    for (Particle& p : r.p)
-      if (p.alive()) moving.push_back(&p);
-  // Scratch buffers are members: they are reused every interval.
-  x_.resize(moving.size());
-  from_.assign(moving.size(), t_);
-  status_.resize(moving.size());
-  const auto each = [n = moving.size()](auto&& f) {  // millions of particles: in parallel
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
-                      });
-  };
-  each([&](std::size_t i) { x_[i] = moving[i]->x; });
-  report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
-  each([&](std::size_t i) {
-    moving[i]->x = x_[i];
-    moving[i]->status = status_[i];
+  // The moving particles, row after row (millions: each row finds its own, in parallel, at an
+  // offset counted beforehand). Scratch buffers are members: they are reused every interval.
+  const std::size_t nr = rows_.size();
+  std::vector<std::size_t> first(nr + 1, 0);
+  for_each_row(nr, [&](std::size_t r) {
+    first[r + 1] = static_cast<std::size_t>(
+        std::count_if(rows_[r].p.begin(), rows_[r].p.end(), [](const Particle& p) { return p.alive(); }));
   });
-  for (const ParticleStatus st : status_) {
-    if (st == ParticleStatus::left_domain) ++report_.left_domain;
-    if (st == ParticleStatus::no_data) ++report_.no_data;
+  for (std::size_t r = 0; r < nr; ++r) first[r + 1] += first[r];
+  const std::size_t n = first[nr];
+  x_.resize(n);
+  from_.assign(n, t_);
+  status_.resize(n);
+  for_each_row(nr, [&](std::size_t r) {
+    std::size_t k = first[r];
+    for (const Particle& p : rows_[r].p)
+      if (p.alive()) x_[k++] = p.x;
+  });
+  report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
+  std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
+  for_each_row(nr, [&](std::size_t r) {
+    std::size_t k = first[r];
+    for (Particle& p : rows_[r].p) {
+      if (!p.alive()) continue;
+      p.x = x_[k];
+      p.status = status_[k++];
+      if (p.status == ParticleStatus::left_domain) ++stopped[r][0];
+      if (p.status == ParticleStatus::no_data) ++stopped[r][1];
+    }
+  });
+  for (const auto& c : stopped) {
+    report_.left_domain += c[0];
+    report_.no_data += c[1];
   }
-  report_.particle_steps += moving.size();
-  report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
+  report_.particle_steps += n;
+  report_.particle_time += static_cast<double>(n) * (t_to - t_);
   ++report_.intervals;
   t_ = t_to;
   report_.time_reached = t_;
