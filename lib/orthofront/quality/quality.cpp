@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
@@ -186,11 +187,52 @@ void add(Histogram& h, double x) {
   ++h.counts[bin];
 }
 
-/// q-quantile with linear interpolation between order statistics; reorders `values`.
+// A key whose unsigned order is the order of the doubles (negatives below positives).
+std::uint64_t order_key(double x) {
+  const auto bits = std::bit_cast<std::uint64_t>(x);
+  return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+/// The k-th smallest (from 0) of many values, without reordering them: the bin of its top 16 key
+/// bits is found from a histogram counted in parallel, then only that bin's values are ordered.
+double kth_smallest(const std::vector<double>& values, std::size_t k) {
+  constexpr int kBits = 16;
+  constexpr std::size_t kBins = std::size_t{1} << kBits;
+  const auto bin_of = [](double x) { return static_cast<std::size_t>(order_key(x) >> (64 - kBits)); };
+  tbb::enumerable_thread_specific<std::vector<std::size_t>> local(
+      [] { return std::vector<std::size_t>(kBins, 0); });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values.size(), 65536),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      std::vector<std::size_t>& h = local.local();
+                      for (std::size_t i = range.begin(); i < range.end(); ++i) ++h[bin_of(values[i])];
+                    });
+  std::vector<std::size_t> counts(kBins, 0);
+  for (const auto& h : local)
+    for (std::size_t b = 0; b < kBins; ++b) counts[b] += h[b];
+  std::size_t bin = 0;
+  while (k >= counts[bin]) k -= counts[bin++];
+  std::vector<double> in_bin;
+  in_bin.reserve(counts[bin]);
+  for (const double x : values)
+    if (bin_of(x) == bin) in_bin.push_back(x);
+  const auto kth = in_bin.begin() + static_cast<std::ptrdiff_t>(k);
+  std::nth_element(in_bin.begin(), kth, in_bin.end());
+  return *kth;
+}
+
+/// q-quantile with linear interpolation between order statistics; reorders `values` (small
+/// lists; many values are selected without reordering, in parallel).
 double quantile(std::vector<double>& values, double q) {
   if (values.empty()) return 0;
   const double pos = q * static_cast<double>(values.size() - 1);
   const auto k = static_cast<std::size_t>(pos);
+  constexpr std::size_t kManyValues = std::size_t{1} << 20;
+  if (values.size() >= kManyValues) {
+    const double lo = kth_smallest(values, k);
+    if (k + 1 >= values.size()) return lo;
+    const double hi = kth_smallest(values, k + 1);
+    return lo + (pos - static_cast<double>(k)) * (hi - lo);
+  }
   const auto kth = values.begin() + static_cast<std::ptrdiff_t>(k);
   std::nth_element(values.begin(), kth, values.end());
   const double lo = *kth;
@@ -401,23 +443,37 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   });
   r.degenerate_faces = static_cast<std::size_t>(std::count(degenerate.begin(), degenerate.end(), 1));
 
+  // Edge counts in parallel (sums of counts: the same in any order); the boundary in order.
   std::vector<std::uint32_t> boundary;
-  for (std::size_t e = 0; e < edges.size(); ++e) {
-    const Edge& edge = edges[e];
-    if (edge.count == 1) {
-      boundary.push_back(static_cast<std::uint32_t>(e));
-    } else if (edge.count > 2) {
-      ++r.non_manifold_edges;
-    } else {
-      if (edge.inconsistent) ++r.inconsistent_edges;
-      const Vec3& n0 = normals[edge.f0];
-      const Vec3& n1 = normals[edge.f1];
-      if (n0.squaredNorm() == 0 || n1.squaredNorm() == 0) continue;
-      // Undo an orientation flip so that only geometry decides.
-      const double dot = edge.inconsistent ? -n0.dot(n1) : n0.dot(n1);
-      if (dot < options.fold_cos) ++r.folds;
-    }
-  }
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges[e].count == 1) boundary.push_back(static_cast<std::uint32_t>(e));
+  using EdgeCounts = std::array<std::size_t, 3>;  // non-manifold, inconsistent, folds
+  const EdgeCounts counted = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, edges.size(), 16384), EdgeCounts{0, 0, 0},
+      [&](const tbb::blocked_range<std::size_t>& range, EdgeCounts c) {
+        for (std::size_t e = range.begin(); e < range.end(); ++e) {
+          const Edge& edge = edges[e];
+          if (edge.count == 1) continue;
+          if (edge.count > 2) {
+            ++c[0];
+            continue;
+          }
+          if (edge.inconsistent) ++c[1];
+          const Vec3& n0 = normals[edge.f0];
+          const Vec3& n1 = normals[edge.f1];
+          if (n0.squaredNorm() == 0 || n1.squaredNorm() == 0) continue;
+          // Undo an orientation flip so that only geometry decides.
+          const double dot = edge.inconsistent ? -n0.dot(n1) : n0.dot(n1);
+          if (dot < options.fold_cos) ++c[2];
+        }
+        return c;
+      },
+      [](const EdgeCounts& a, const EdgeCounts& b) {
+        return EdgeCounts{a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+      });
+  r.non_manifold_edges = counted[0];
+  r.inconsistent_edges = counted[1];
+  r.folds = counted[2];
   r.boundary_edges = boundary.size();
   r.t_junctions = count_t_junctions(mesh, edges, boundary);
 

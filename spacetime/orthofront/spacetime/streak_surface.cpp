@@ -227,12 +227,15 @@ bool StreakBuilder::advance(double t_to) {
   for (std::size_t r = 0; r < nr; ++r) first[r + 1] += first[r];
   const std::size_t n = first[nr];
   x_.resize(n);
-  from_.assign(n, t_);
+  from_.resize(n);
   status_.resize(n);
   for_each_row(nr, [&](std::size_t r) {
     std::size_t k = first[r];
     for (const Particle& p : rows_[r].p)
-      if (p.alive()) x_[k++] = p.x;
+      if (p.alive()) {
+        from_[k] = t_;
+        x_[k++] = p.x;
+      }
   });
   report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
   std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
