@@ -2,12 +2,14 @@
 
 #include <cuda_runtime.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <memory>
 #include <cstring>
+#include <type_traits>
 #include <string>
 #include <vector>
 
@@ -81,6 +83,27 @@ void parallel_copy(T* to, const T* from, std::size_t n) {
     const std::size_t lo = n * part / parts, hi = n * (part + 1) / parts;
     if (hi > lo) std::memcpy(to + lo, from + lo, (hi - lo) * sizeof(T));
   });
+}
+
+/// Whether the first n elements of `values` are all the same bits (checked in parallel).
+template <class T>
+bool all_same(const std::vector<T>& values, std::size_t n) {
+  if (n == 0) return true;
+  const T* v = values.data();
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(1, n, 65536), true,
+      [&](const tbb::blocked_range<std::size_t>& range, bool same) {
+        for (std::size_t i = range.begin(); same && i < range.end(); ++i)
+          same = std::memcmp(v + i, v, sizeof(T)) == 0;
+        return same;
+      },
+      [](bool a, bool b) { return a && b; });
+}
+
+template <class T>
+__global__ void fill_kernel(T* to, T value, std::size_t n) {
+  const std::size_t i = blockIdx.x * static_cast<std::size_t>(blockDim.x) + threadIdx.x;
+  if (i < n) to[i] = value;
 }
 
 class Event {
@@ -414,23 +437,28 @@ class CudaAdvector final : public BatchAdvector {
     }
     const bool own_ends = !particles.stop.empty();
     const Staged h = staged(n);
-    for (std::size_t d = 0; d < 3; ++d) parallel_copy(h.x[d], particles.x[d].data(), n);
-    parallel_copy(h.t, particles.t.data(), n);
-    parallel_copy(h.h, particles.h.data(), n);
-    if (own_ends) parallel_copy(h.stop, particles.stop.data(), n);
-    parallel_copy(h.evaluations, particles.evaluations.data(), n);
-    parallel_copy(h.status, particles.status.data(), n);
     const cudaStream_t s = compute_.get();
-    const auto up = [&](auto* device, const auto* host) {
-      check(cudaMemcpyAsync(device, host, n * sizeof(*host), cudaMemcpyHostToDevice, s),
+    // An array of one value throughout (a fresh start: h = 0, no evaluations, all moving; one
+    // start time for all) is filled on the device: PCIe is the slow part of a large batch.
+    const auto up = [&](auto* device, auto* host, const auto& values) {
+      using T = std::remove_cv_t<std::remove_reference_t<decltype(values[0])>>;
+      if (n > 0 && all_same(values, n)) {
+        const unsigned threads = 256;
+        const auto blocks = static_cast<unsigned>((n + threads - 1) / threads);
+        fill_kernel<T><<<blocks, threads, 0, s>>>(device, values[0], n);
+        check(cudaGetLastError(), "particle fill");
+        return;
+      }
+      parallel_copy(host, values.data(), n);
+      check(cudaMemcpyAsync(device, host, n * sizeof(T), cudaMemcpyHostToDevice, s),
             "particle upload");
     };
-    for (std::size_t d = 0; d < 3; ++d) up(px_[d].get(), h.x[d]);
-    up(pt_.get(), h.t);
-    up(ph_.get(), h.h);
-    if (own_ends) up(pstop_.get(), h.stop);
-    up(pe_.get(), h.evaluations);
-    up(ps_.get(), h.status);
+    for (std::size_t d = 0; d < 3; ++d) up(px_[d].get(), h.x[d], particles.x[d]);
+    up(pt_.get(), h.t, particles.t);
+    up(ph_.get(), h.h, particles.h);
+    if (own_ends) up(pstop_.get(), h.stop, particles.stop);
+    up(pe_.get(), h.evaluations, particles.evaluations);
+    up(ps_.get(), h.status, particles.status);
     return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get(),
             own_ends ? pstop_.get() : nullptr};
   }
