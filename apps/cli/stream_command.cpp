@@ -43,7 +43,7 @@ void add_stream_command(CLI::App& app) {
   add_memory_flag(*c, args->limits);
   c->add_option("--device", args->job.device,
                 "Gridded fields: advance the front by bulk advection on cpu or cuda; auto: cuda "
-                "for fronts of at least " + std::to_string(advect::kCudaFrontBreakEven) +
+                "for fronts of at least " + std::to_string(advect::kCudaSteadyFrontBreakEven) +
                     " vertices where a device is present. Default: per vertex")
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   c->add_option("--device-min-vertices", args->job.device_min_vertices,

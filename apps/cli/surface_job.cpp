@@ -46,7 +46,7 @@ std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& jo
   std::size_t min_vertices = job.device_min_vertices;
   advect::SteadyBackendFactory factory;
   if (device == advect::Device::auto_select) {
-    if (min_vertices == 0) min_vertices = advect::kCudaFrontBreakEven;
+    if (min_vertices == 0) min_vertices = advect::kCudaSteadyFrontBreakEven;
     // CUDA starts (and is looked for) only when a front reaches the break-even size.
     factory = [bytes]() -> std::shared_ptr<advect::BatchAdvector> {
       if (!advect::cuda_available()) return nullptr;
@@ -95,7 +95,7 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* 
   }
   if (bulk && used) {
     used->min_vertices = job.device_min_vertices ? job.device_min_vertices
-                         : job.device == "auto"  ? advect::kCudaFrontBreakEven
+                         : job.device == "auto"  ? advect::kCudaSteadyFrontBreakEven
                                                  : 0;
     used->backend = bulk->backend_name();
     if (used->backend.empty())
