@@ -23,13 +23,7 @@ bool SteadyFrontIntegrator::integrate(std::span<const Vec<3>> x, std::span<const
     if (!backend_) min_vertices_ = std::numeric_limits<std::size_t>::max();
   }
   if (!backend_) return false;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    out[i].x = x[i];
-    out[i].status = FieldStatus::inside;
-    out[i].reached = 0;
-    out[i].evaluations = 0;
-    out[i].interrupted = false;
-  }
+  set_unmoved<3>(x, out);
   run(x, tau, out, true);
   run(x, tau, out, false);
   return true;

@@ -25,4 +25,17 @@ class FrontIntegrator {
                          std::span<IntegrationResult<N>> out) = 0;
 };
 
+/// Every result as "not moved": out[i].x = x[i], inside, nothing reached, no evaluations (what a
+/// bulk backend's results start from before its calls fill them).
+template <int N>
+void set_unmoved(std::span<const Vec<N>> x, std::span<IntegrationResult<N>> out) {
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    out[i].x = x[i];
+    out[i].status = FieldStatus::inside;
+    out[i].reached = 0;
+    out[i].evaluations = 0;
+    out[i].interrupted = false;
+  }
+}
+
 }  // namespace orthofront

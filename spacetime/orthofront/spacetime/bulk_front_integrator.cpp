@@ -84,13 +84,7 @@ bool BulkFrontIntegrator<N>::integrate(std::span<const Vec<N>> x, std::span<cons
     if (!backend_) options_.min_vertices = std::numeric_limits<std::size_t>::max();
   }
   if (!backend_) return false;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    out[i].x = x[i];
-    out[i].status = FieldStatus::inside;
-    out[i].reached = 0;
-    out[i].evaluations = 0;
-    out[i].interrupted = false;
-  }
+  set_unmoved<N>(x, out);
   // A batch moves one way in time: vertices that go back (negative α kept) get a call of their own.
   run(x, tau, out, true);
   run(x, tau, out, false);
