@@ -10,6 +10,7 @@
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/exr_front_image.h"
+#include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/report_json.h"
 
@@ -107,13 +108,8 @@ void add_stream_command(CLI::App& app) {
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
                            {"rss_bytes", current_rss_bytes()}};
       if (!device.backend.empty())
-        report["device"] = {{"backend", device.backend},
-                            {"min_front_vertices", device.min_vertices},
-                            {"calls", device.calls},
-                            {"particles", device.particles},
-                            {"seconds", device.seconds},
-                            {"compute_seconds", device.compute_seconds},
-                            {"bytes_uploaded", device.bytes_uploaded}};
+        report["device"] = spacetime::device_json(device.backend, device.min_vertices, device.calls,
+                                                  device.statistics);
       io::write_json(report, args->report, outputs);
     }
     if (!args->exr.empty()) {

@@ -1,6 +1,5 @@
 #include "cli/surface_job.h"
 
-#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -32,6 +31,12 @@ void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJo
 
 namespace {
 
+// Fronts smaller than this advance per vertex under --device (auto: the break-even size).
+std::size_t device_min_vertices(const SurfaceJob& job) {
+  if (job.device_min_vertices > 0 || job.device != "auto") return job.device_min_vertices;
+  return advect::kCudaSteadyFrontBreakEven;
+}
+
 // The front advance through the bulk backend (--device), for a gridded field.
 std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& job,
                                                             const Field3& field) {
@@ -43,10 +48,8 @@ std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& jo
   const advect::Device device = advect::parse_device(job.device);
   const std::size_t bytes =
       job.device_memory.empty() ? 0 : spacetime::parse_bytes(job.device_memory);
-  std::size_t min_vertices = job.device_min_vertices;
   advect::SteadyBackendFactory factory;
   if (device == advect::Device::auto_select) {
-    if (min_vertices == 0) min_vertices = advect::kCudaSteadyFrontBreakEven;
     // CUDA starts (and is looked for) only when a front reaches the break-even size.
     factory = [bytes]() -> std::shared_ptr<advect::BatchAdvector> {
       if (!advect::cuda_available()) return nullptr;
@@ -56,16 +59,8 @@ std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& jo
     std::shared_ptr<advect::BatchAdvector> backend = advect::make_advector(device, bytes);
     factory = [backend] { return backend; };
   }
-  advect::MethodOptions method;
-  if (job.options.integrator == IntegratorKind::rk4) {
-    method.method = advect::Method::rk4;
-    method.rk4_step = job.options.edge / std::max(job.options.rk4_substeps, 1);
-  } else {
-    method.method = advect::Method::dopri5;
-    method.absolute = job.options.tolerance * job.options.edge;
-    method.relative = job.options.tolerance;
-  }
-  return std::make_unique<advect::SteadyFrontIntegrator>(*grid, factory, method, min_vertices);
+  return std::make_unique<advect::SteadyFrontIntegrator>(
+      *grid, factory, advect::front_method(job.options), device_min_vertices(job));
 }
 
 }  // namespace
@@ -94,18 +89,13 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* 
                                   bulk.get());
   }
   if (bulk && used) {
-    used->min_vertices = job.device_min_vertices ? job.device_min_vertices
-                         : job.device == "auto"  ? advect::kCudaSteadyFrontBreakEven
-                                                 : 0;
+    used->min_vertices = device_min_vertices(job);
     used->backend = bulk->backend_name();
     if (used->backend.empty())
       used->backend = "none (auto: no front reached " + std::to_string(used->min_vertices) +
                       " vertices, or no CUDA device)";
     used->calls = bulk->calls();
-    used->particles = bulk->statistics().particles;
-    used->bytes_uploaded = bulk->statistics().bytes_uploaded;
-    used->seconds = bulk->statistics().total_seconds;
-    used->compute_seconds = bulk->statistics().compute_seconds;
+    used->statistics = bulk->statistics();
   }
   return result;
 }

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <string>
 
+#include "orthofront/advect/batch_advector.h"
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/field.h"
 #include "orthofront/seed/seed.h"
@@ -22,8 +23,8 @@ struct SurfaceJob {
 /// What the bulk front advance did (--device).
 struct DeviceUse {
   std::string backend;        ///< empty: no --device; "none (...)": auto found nothing to do
-  std::size_t min_vertices = 0, calls = 0, particles = 0, bytes_uploaded = 0;
-  double seconds = 0, compute_seconds = 0;
+  std::size_t min_vertices = 0, calls = 0;
+  advect::AdvectionStatistics statistics;
 };
 
 /// Refuses a seed with fewer than 2 vertices inside `field`'s domain with data, or one where the

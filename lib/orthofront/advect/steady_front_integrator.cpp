@@ -5,6 +5,19 @@
 
 namespace orthofront::advect {
 
+MethodOptions front_method(const StreamSurfaceOptions& engine, double time_scale) {
+  MethodOptions method;
+  if (engine.integrator == IntegratorKind::rk4) {
+    method.method = Method::rk4;
+    method.rk4_step = engine.edge / time_scale / std::max(engine.rk4_substeps, 1);
+  } else {
+    method.method = Method::dopri5;
+    method.absolute = engine.tolerance * engine.edge;
+    method.relative = engine.tolerance;
+  }
+  return method;
+}
+
 SteadySteps::SteadySteps(const GridField& field) : field_(field) {}
 
 SteadyFrontIntegrator::SteadyFrontIntegrator(const GridField& field,

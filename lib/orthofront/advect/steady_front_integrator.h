@@ -13,9 +13,14 @@
 
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/engine/front_integrator.h"
+#include "orthofront/engine/options.h"
 #include "orthofront/field/grid_field.h"
 
 namespace orthofront::advect {
+
+/// The bulk method that matches the engine's per-vertex integration of a front step: RK4 with the
+/// engine's substeps of a step spanning ℓ / time_scale in time, or DOPRI5 with its tolerances.
+MethodOptions front_method(const StreamSurfaceOptions& engine, double time_scale = 1);
 
 /// The grid of a GridField as a StepSource of two equal steps at times ±kSteadyHorizon.
 class SteadySteps final : public StepSource {

@@ -6,6 +6,25 @@
 
 namespace orthofront::spacetime {
 
+/// What a front's bulk advance did (path --device, stream --device).
+inline nlohmann::json device_json(const std::string& backend, std::size_t min_front_vertices,
+                                  std::size_t calls, const advect::AdvectionStatistics& d) {
+  return {{"backend", backend},
+          {"min_front_vertices", min_front_vertices},
+          {"calls", calls},
+          {"particles", d.particles},
+          {"slabs", d.slabs},
+          {"steps_loaded", d.steps_loaded},
+          {"particle_steps", d.particle_steps},
+          {"evaluations", d.evaluations},
+          {"seconds", d.total_seconds},
+          {"compute_seconds", d.compute_seconds},
+          {"upload_seconds", d.upload_seconds},
+          {"host_seconds", d.host_seconds},
+          {"bytes_uploaded", d.bytes_uploaded},
+          {"overlap_seconds", d.overlap_seconds}};
+}
+
 inline nlohmann::json to_json(const CacheStatistics& s) {
   return {{"unit_bytes", s.unit_bytes},
           {"bricks_per_step", s.units_per_step},
@@ -65,23 +84,8 @@ inline nlohmann::json to_json(const PathReport& r) {
     j["cache"] = to_json(r.cache);
     j["slow_evaluations"] = r.slow_evaluations;
   }
-  if (!r.device.empty()) {
-    const advect::AdvectionStatistics& d = r.device_statistics;
-    j["device"] = {{"backend", r.device},
-                   {"min_front_vertices", r.device_min_vertices},
-                   {"calls", r.device_calls},
-                   {"particles", d.particles},
-                   {"slabs", d.slabs},
-                   {"steps_loaded", d.steps_loaded},
-                   {"particle_steps", d.particle_steps},
-                   {"evaluations", d.evaluations},
-                   {"seconds", d.total_seconds},
-                   {"compute_seconds", d.compute_seconds},
-                   {"upload_seconds", d.upload_seconds},
-                   {"host_seconds", d.host_seconds},
-                   {"bytes_uploaded", d.bytes_uploaded},
-                   {"overlap_seconds", d.overlap_seconds}};
-  }
+  if (!r.device.empty())
+    j["device"] = device_json(r.device, r.device_min_vertices, r.device_calls, r.device_statistics);
   return j;
 }
 

@@ -1,5 +1,7 @@
 #include "orthofront/spacetime/path_surface.h"
 
+#include "orthofront/advect/steady_front_integrator.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -419,15 +421,8 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     bo.times = {o_.t0, o_.t1};
     bo.min_vertices = min_vertices;
     bulk_min_vertices_ = min_vertices;
-    if (engine.integrator == IntegratorKind::rk4) {
-      bo.method.method = advect::Method::rk4;
-      // The engine's step spans at most ℓ / c in time, cut into its substeps.
-      bo.method.rk4_step = engine.edge / c_ / std::max(engine.rk4_substeps, 1);
-    } else {
-      bo.method.method = advect::Method::dopri5;
-      bo.method.absolute = engine.tolerance * engine.edge;
-      bo.method.relative = engine.tolerance;
-    }
+    // The engine's step spans at most ℓ / c in time.
+    bo.method = advect::front_method(engine, c_);
     if (const std::shared_ptr<SharedBulkAdvance> shared = o_.shared_bulk) {
       bulk_ = std::make_unique<BulkFrontIntegrator<N>>(
           shared->steps(), [shared] { return shared->backend(); }, bo);
