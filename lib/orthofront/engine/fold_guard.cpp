@@ -26,11 +26,6 @@ void FoldGuard::EdgeLists::clear() {
   free_ = kNone;
 }
 
-std::uint32_t FoldGuard::EdgeLists::head(std::int32_t v) const {
-  const auto i = static_cast<std::size_t>(v);
-  return i < head_.size() && generation_of_head_[i] == generation_ ? head_[i] : kNone;
-}
-
 std::uint32_t& FoldGuard::EdgeLists::head_slot(std::int32_t v) {
   const auto i = static_cast<std::size_t>(v);
   if (i >= head_.size()) {
@@ -89,51 +84,72 @@ void FoldGuard::rebuild(const Mesh& mesh) {
 }
 
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
-  for (std::size_t f = first_face; f < mesh.faces.size(); ++f) {
-    const Vec3 normal = unit_normal(mesh, mesh.faces[f]);
+  const std::size_t end = mesh.faces.size();
+  // The faces just checked are the ones accepted, their normals already known.
+  const bool checked = first_face == checked_first_ && end - first_face == checked_normals_.size();
+  for (std::size_t f = first_face; f < end; ++f) {
+    const Vec3 normal =
+        checked ? checked_normals_[f - first_face] : unit_normal(mesh, mesh.faces[f]);
     for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
       // An edge's second face puts it inside the surface.
       if (!open_.remove(a, b)) open_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
     });
   }
+  checked_normals_.clear();
 }
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
                                                      std::size_t first_new_vertex) {
   std::vector<std::int32_t> out;
   const std::size_t end = mesh.faces.size();
+  // Parts of one step are checked one after another: keep their normals for accept().
+  if (first_face != checked_first_ + checked_normals_.size()) {
+    checked_first_ = first_face;
+    checked_normals_.clear();
+  }
   if (first_face >= end) return out;
   strip_.clear();
-  normals_.resize(end - first_face);
-  for (std::size_t f = first_face; f < end; ++f) {
-    const Vec3& normal = normals_[f - first_face] = unit_normal(mesh, mesh.faces[f]);
-    for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
-      strip_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
-    });
-  }
   const auto is_new = [&](std::int32_t v) {
     return v >= 0 && static_cast<std::size_t>(v) >= first_new_vertex;
   };
+  // The new ends of a folded edge (a, b), or else the new corners of its face.
+  const auto take = [&](std::size_t f, std::int32_t a, std::int32_t b) {
+    const std::size_t before = out.size();
+    for (const std::int32_t v : {a, b})
+      if (is_new(v)) out.push_back(v);
+    if (out.size() == before) {
+      const Face& face = mesh.faces[f];
+      for (std::size_t c = 0; c < face.size; ++c)
+        if (is_new(face.v[c])) out.push_back(face.v[c]);
+    }
+  };
   for (std::size_t f = first_face; f < end; ++f) {
     const Face& face = mesh.faces[f];
-    const Vec3& n0 = normals_[f - first_face];
-    if (n0.squaredNorm() == 0) continue;
+    const Vec3 n0 = unit_normal(mesh, face);
+    checked_normals_.push_back(n0);
+    const auto face_id = static_cast<std::uint32_t>(f);
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
       const auto folds_over = [&](const EdgeLists::Entry& other) {
-        if (other.face == f) return false;
+        if (other.face == face_id) return false;
         const Vec3& n1 = other.normal;
         // Consistent neighbours walk the edge in opposite directions; undo a flip so that only
         // geometry decides, as the quality measure does.
         const double dot = other.forward == (a < b) ? -n0.dot(n1) : n0.dot(n1);
         return n1.squaredNorm() > 0 && dot < 0;
       };
-      if (!strip_.any_of(a, b, folds_over) && !open_.any_of(a, b, folds_over)) return;
-      const std::size_t before = out.size();
-      for (const std::int32_t v : {a, b})
-        if (is_new(v)) out.push_back(v);
-      if (out.size() == before)
-        for (std::size_t c = 0; c < face.size; ++c)
-          if (is_new(face.v[c])) out.push_back(face.v[c]);
+      if (n0.squaredNorm() > 0) {
+        // Each pair of strip faces on an edge is compared once, when the second one comes.
+        bool folded = false;
+        strip_.any_of(a, b, [&](const EdgeLists::Entry& other) {
+          if (folds_over(other)) {
+            folded = true;
+            take(other.face, a, b);
+          }
+          return false;
+        });
+        if (folded || open_.any_of(a, b, folds_over)) take(f, a, b);
+      }
+      strip_.add(a, b, face_id, a < b, n0);
     });
   }
   std::sort(out.begin(), out.end());

@@ -70,7 +70,10 @@ class FoldGuard {
     static std::pair<std::int32_t, std::int32_t> ordered(std::int32_t a, std::int32_t b) {
       return a < b ? std::pair{a, b} : std::pair{b, a};
     }
-    std::uint32_t head(std::int32_t v) const;
+    std::uint32_t head(std::int32_t v) const {
+      const auto i = static_cast<std::size_t>(v);
+      return i < head_.size() && generation_of_head_[i] == generation_ ? head_[i] : kNone;
+    }
     std::uint32_t& head_slot(std::int32_t v);
 
     std::vector<std::uint32_t> head_, generation_of_head_;
@@ -82,8 +85,10 @@ class FoldGuard {
   /// Edges of accepted faces that have one face so far: the surface's boundary, which holds
   /// every edge a new strip can share with it (the front's rows among them).
   EdgeLists open_;
-  EdgeLists strip_;  ///< scratch: the faces checked
-  std::vector<Vec3> normals_;  ///< scratch: their unit normals
+  EdgeLists strip_;  ///< scratch: the faces of the part being checked
+  /// Unit normals of the faces checked since the last accept(), from face checked_first_ on.
+  std::vector<Vec3> checked_normals_;
+  std::size_t checked_first_ = 0;
 };
 
 }  // namespace orthofront
