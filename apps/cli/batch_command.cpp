@@ -57,6 +57,7 @@ struct BatchArgs {
   int threads = 0;               // 0: every core
   std::string device;            // empty: per vertex; else cpu, cuda or auto
   std::string device_memory;     // empty: half the device's free memory
+  bool no_merge_fronts = false;  // the fronts' calls take turns unmerged (a baseline)
 };
 
 std::string read_text(const std::filesystem::path& path) {
@@ -451,7 +452,7 @@ class BatchRun {
         shared = std::make_unique<spacetime::StreamedField>(*cache);
         if (!args_.device.empty())
           bulk = std::make_shared<spacetime::SharedBulkAdvance>(
-              *cache, advect::parse_device(args_.device), device_bytes());
+              *cache, advect::parse_device(args_.device), device_bytes(), !args_.no_merge_fronts);
       }
     } catch (const std::exception& e) {
       for (std::size_t i : todo)
@@ -576,6 +577,13 @@ class BatchRun {
                  {"surfaces", tasks.size()},   {"data_passes", data_passes},
                  {"set_aside", set_aside}};
     if (cache) pass["cache"] = spacetime::to_json(cache->statistics());
+    if (const auto merged = bulk ? bulk->merge_statistics() : std::nullopt)
+      pass["device"] = {{"backend", bulk->backend()->name()},
+                        {"merged", !args_.no_merge_fronts},
+                        {"front_calls", merged->requests},
+                        {"backend_calls", merged->backend_calls},
+                        {"largest_merge", merged->largest_merge},
+                        {"particles", merged->particles}};
     passes_.push_back(pass);
   }
 
@@ -744,6 +752,10 @@ void add_batch_command(CLI::App& app) {
   c->add_option("--device-memory", args->device_memory,
                  "With --device cuda/auto: time steps kept on the device (default: half its free "
                  "memory)");
+  c->add_flag("--no-merge-fronts", args->no_merge_fronts,
+              "With --device: the fronts of a pass take turns on the backend, one call each, "
+              "instead of going together in merged calls (the same meshes; a baseline to measure "
+              "against)");
   c->add_option("--threads", args->threads,
                 "Threads of this process (0: every core; under MPI, per rank)")
       ->check(CLI::Range(0, 4096))

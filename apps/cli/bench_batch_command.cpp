@@ -40,6 +40,7 @@ struct BenchBatchArgs {
   std::string budget;     // empty: the series' raw size / 16
   std::string work, json_out;
   bool keep = false;
+  std::string device;  // non-empty: the front advance table instead (per vertex, turns, merged)
 };
 
 std::string read_file(const std::filesystem::path& p) {
@@ -130,6 +131,71 @@ void read_batch_summary(Row& r, const std::filesystem::path& out,
   }
 }
 
+
+/// `bench-batch --device D`: the rake's shared pass with the front advance per vertex, on D with
+/// the fronts taking turns (one backend call each), and on D with the fronts of a round merged;
+/// the merged meshes against the turns' (they must be equal), backend calls and time.
+void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
+  namespace fs = std::filesystem;
+  struct Way {
+    std::string name;
+    std::vector<std::string> options;
+    double seconds = 0;
+    json device;
+  };
+  std::vector<Way> ways{{"per vertex (no --device)", {}, 0, json()},
+                        {"--device " + a.device + ", fronts take turns",
+                         {"--device", a.device, "--no-merge-fronts"}, 0, json()},
+                        {"--device " + a.device + ", fronts merged", {"--device", a.device}, 0,
+                         json()}};
+  for (Way& w : ways) {
+    const fs::path out = work / ("device-" + std::to_string(&w - ways.data()));
+    fs::remove_all(out);
+    std::vector<std::string> args{"batch", (work / "job.toml").string(), "--out", out.string(),
+                                  "--checkpoint-every", "0", "--quiet"};
+    args.insert(args.end(), w.options.begin(), w.options.end());
+    const Child ch = run_self(args, out.string() + ".log");
+    require_ok(ch, w.name);
+    w.seconds = ch.seconds;
+    const json s = json::parse(read_file(out / "summary.json"));
+    for (const json& p : s["passes"])
+      if (p.contains("device")) w.device = p["device"];
+    std::printf("  %s: %.2f s\n", w.name.c_str(), w.seconds);
+    std::fflush(stdout);
+  }
+  // Merged and turns must write the same meshes.
+  std::size_t identical = 0;
+  const int width = static_cast<int>(std::to_string(a.surfaces - 1).size());
+  for (int k = 0; k < a.surfaces; ++k) {
+    char member[64];
+    std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
+    if (read_file(work / "device-1" / member) == read_file(work / "device-2" / member))
+      ++identical;
+  }
+  std::printf("\n%-40s %10s %12s %14s %14s %14s\n", "front advance", "seconds", "front calls",
+              "backend calls", "largest merge", "particles");
+  json rows = json::array();
+  for (const Way& w : ways) {
+    const auto field = [&](const char* key) {
+      return w.device.is_null() ? std::string("-") : std::to_string(w.device.value(key, 0ul));
+    };
+    std::printf("%-40s %10.2f %12s %14s %14s %14s\n", w.name.c_str(), w.seconds,
+                field("front_calls").c_str(), field("backend_calls").c_str(),
+                field("largest_merge").c_str(), field("particles").c_str());
+    rows.push_back({{"way", w.name}, {"seconds", w.seconds}, {"device", w.device}});
+  }
+  std::printf("merged vs turns: %zu/%d meshes identical; time %.3f of the turns'\n", identical,
+              a.surfaces, ways[2].seconds / std::max(ways[1].seconds, 1e-9));
+  if (!a.json_out.empty())
+    io::write_json({{"surfaces", a.surfaces},
+                    {"resolution", a.resolution},
+                    {"steps", a.steps},
+                    {"device", a.device},
+                    {"rows", rows},
+                    {"identical_meshes", identical}},
+                   a.json_out);
+}
+
 }  // namespace
 
 void add_bench_batch_command(CLI::App& app) {
@@ -160,6 +226,10 @@ void add_bench_batch_command(CLI::App& app) {
   c->add_option("--work", a->work,
                 "Folder for the series and the outputs (default: a temporary one)");
   c->add_flag("--keep", a->keep, "Keep the work folder");
+  c->add_option("--device", a->device,
+                "Instead: the shared pass with the front advance per vertex, on this device with "
+                "the fronts taking turns, and with them merged (backend calls, time, equal meshes)")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   c->add_option("--json", a->json_out, "Write the results as JSON here");
   c->callback([a]() {
     namespace fs = std::filesystem;
@@ -207,6 +277,24 @@ void add_bench_batch_command(CLI::App& app) {
         a->edge, a->max_band);
     std::fflush(stdout);
 
+    // The rake as a batch job.
+    char job[1024];
+    std::snprintf(job, sizeof job,
+                  "[job]\nfield = \"%s\"\ncache_budget = \"%zu\"\n[defaults]\nedge = %.17g\n"
+                  "max_band = %.17g\nt0 = 0.0\nt1 = %.17g\n[[rake]]\nname = \"r\"\nseed = "
+                  "\"%s\"\ncount = %d\n"
+                  "offset = [%.17g, 0.0, 0.0]\n",
+                  series.string().c_str(), budget, a->edge, a->max_band, t_end, seed_of(0).c_str(),
+                  a->surfaces, step_x);
+    {
+      std::ofstream out(work / "job.toml");
+      out << job;
+    }
+    if (!a->device.empty()) {
+      device_table(*a, work);
+      if (!a->keep && a->work.empty()) fs::remove_all(work);
+      return;
+    }
     std::vector<Row> rows;
     // 1. One process per surface.
     Row alone{"one process per surface"};
@@ -250,18 +338,6 @@ void add_bench_batch_command(CLI::App& app) {
     std::fflush(stdout);
 
     // 2. One shared pass, without checkpoints and with them every 10 s and every 1 s.
-    char job[1024];
-    std::snprintf(job, sizeof job,
-                  "[job]\nfield = \"%s\"\ncache_budget = \"%zu\"\n[defaults]\nedge = %.17g\n"
-                  "max_band = %.17g\nt0 = 0.0\nt1 = %.17g\n[[rake]]\nname = \"r\"\nseed = "
-                  "\"%s\"\ncount = %d\n"
-                  "offset = [%.17g, 0.0, 0.0]\n",
-                  series.string().c_str(), budget, a->edge, a->max_band, t_end, seed_of(0).c_str(),
-                  a->surfaces, step_x);
-    {
-      std::ofstream out(work / "job.toml");
-      out << job;
-    }
     double shared_seconds = 0;
     const std::vector<std::pair<std::string, std::string>> ways{
         {"one shared pass", "0"},

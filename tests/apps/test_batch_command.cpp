@@ -431,6 +431,24 @@ TEST_CASE("batch --device: the surfaces of a pass share one bulk backend and giv
     CHECK(report["path"]["device"]["backend"] == "cpu");
     CHECK(report["path"]["device"]["calls"].get<std::size_t>() > 0);
   }
+  // The pass's fronts went through one merging backend: every front call is counted, and no
+  // more backend calls than front calls ran.
+  const nlohmann::json pass = summary(dir / "out")["passes"][0];
+  REQUIRE(pass.contains("device"));
+  CHECK(pass["device"]["merged"] == true);
+  CHECK(pass["device"]["front_calls"].get<std::size_t>() > 0);
+  CHECK(pass["device"]["backend_calls"].get<std::size_t>() <=
+        pass["device"]["front_calls"].get<std::size_t>());
+  CHECK(pass["device"]["largest_merge"].get<std::size_t>() >= 1);
+  // The fronts taking turns write the same meshes.
+  REQUIRE(run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "turns") +
+              " --device cpu --no-merge-fronts --threads 2 --quiet")
+              .status == 0);
+  for (int k = 0; k < 3; ++k) {
+    const std::string member = "r-" + std::to_string(k) + ".vtp";
+    CHECK(read_text(dir / "turns" / member) == read_text(dir / "out" / member));
+  }
+  CHECK(summary(dir / "turns")["passes"][0]["device"]["largest_merge"] == 1);
   // Per vertex (no --device) the meshes differ: the front really went through the backend.
   REQUIRE(run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "plain") + " --quiet")
               .status == 0);

@@ -11,26 +11,10 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
-/// The backend behind a mutex: one call at a time, from whichever surface's thread.
-class SharedBulkAdvance::Turns final : public advect::BatchAdvector {
- public:
-  Turns(std::unique_ptr<advect::BatchAdvector> backend, std::mutex& mutex)
-      : backend_(std::move(backend)), mutex_(mutex) {}
-  std::string name() const override { return backend_->name(); }
-  advect::AdvectionStatistics advect(advect::StepSource& source, advect::ParticleBatch& particles,
-                                     double t_end, const advect::MethodOptions& options) override {
-    std::lock_guard lock(mutex_);
-    return backend_->advect(source, particles, t_end, options);
-  }
-
- private:
-  std::unique_ptr<advect::BatchAdvector> backend_;
-  std::mutex& mutex_;
-};
-
 SharedBulkAdvance::SharedBulkAdvance(BrickCache& cache, advect::Device device,
-                                     std::size_t device_bytes)
-    : device_(device), device_bytes_(device_bytes), steps_(std::make_unique<CachedSteps>(cache)) {
+                                     std::size_t device_bytes, bool merge)
+    : device_(device), device_bytes_(device_bytes), merge_(merge),
+      steps_(std::make_unique<CachedSteps>(cache)) {
   // Asked for by name: a missing device is an error at the start.
   if (device_ != advect::Device::auto_select) backend();
 }
@@ -44,13 +28,19 @@ std::shared_ptr<advect::BatchAdvector> SharedBulkAdvance::backend() {
   if (!made_) {
     made_ = true;
     if (device_ != advect::Device::auto_select || advect::cuda_available())
-      backend_ = std::make_shared<Turns>(
+      backend_ = std::make_shared<advect::MergingAdvector>(
           advect::make_advector(device_ == advect::Device::auto_select ? advect::Device::cuda
                                                                        : device_,
                                 device_bytes_),
-          mutex_);
+          merge_);
   }
   return backend_;
+}
+
+std::optional<advect::MergeStatistics> SharedBulkAdvance::merge_statistics() {
+  std::lock_guard lock(mutex_);
+  if (!backend_) return std::nullopt;
+  return backend_->merge_statistics();
 }
 
 template <int N>

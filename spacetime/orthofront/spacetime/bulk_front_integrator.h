@@ -7,12 +7,14 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "orthofront/advect/batch_advector.h"
+#include "orthofront/advect/merging_advector.h"
 #include "orthofront/engine/front_integrator.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/spacetime/brick_cache.h"
@@ -34,27 +36,32 @@ struct BulkFrontOptions {
 using BackendFactory = std::function<std::shared_ptr<advect::BatchAdvector>()>;
 
 /// One backend and one view of a series' whole steps for the surfaces of a batch pass, which
-/// step in parallel: the device keeps each step once for all of them, and their calls take turns
-/// (one at a time on the backend and the steps). The backend starts at the first call.
+/// step in parallel: the device keeps each step once for all of them, and the fronts that come
+/// while a call runs go together in the next one (advect::MergingAdvector). The backend starts at
+/// the first call.
 class SharedBulkAdvance {
  public:
   /// Non-owning: `cache` must outlive it. `device` auto: CUDA where present, else none (fronts
   /// stay per vertex).
-  SharedBulkAdvance(BrickCache& cache, advect::Device device, std::size_t device_bytes);
+  /// `merge` false: the calls take turns unmerged (the baseline `batch --no-merge-fronts` measures).
+  SharedBulkAdvance(BrickCache& cache, advect::Device device, std::size_t device_bytes,
+                    bool merge = true);
   ~SharedBulkAdvance();
   advect::StepSource& steps();
   /// The backend (made on the first call; nullptr where auto found no CUDA device).
   std::shared_ptr<advect::BatchAdvector> backend();
   advect::Device device() const { return device_; }
+  /// How the fronts' calls were merged (none while no backend was made).
+  std::optional<advect::MergeStatistics> merge_statistics();
 
  private:
-  class Turns;
   advect::Device device_;
   std::size_t device_bytes_;
+  bool merge_;
   std::unique_ptr<advect::StepSource> steps_;
   std::mutex mutex_;
   bool made_ = false;
-  std::shared_ptr<advect::BatchAdvector> backend_;
+  std::shared_ptr<advect::MergingAdvector> backend_;
 };
 
 /// Non-owning: `steps` must outlive it.
