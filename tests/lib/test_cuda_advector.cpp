@@ -7,9 +7,11 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "orthofront/advect/batch_advector.h"
+#include "orthofront/advect/merging_advector.h"
 #include "orthofront/field/unsteady.h"
 
 using namespace orthofront;
@@ -231,4 +233,53 @@ TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits
     const AdvectionStatistics again = gpu->advect(series, c, 0.8, o);
     CHECK(again.bytes_uploaded == (budget ? 9 * step_bytes : 0));
   }
+}
+
+TEST_CASE("cuda advection: calls merged from several threads give each particle the bits of a "
+          "call of its own",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  ResidentSteps series = sampled(3, true, 49, 11, true);
+  MethodOptions o;
+  o.absolute = o.relative = 1e-8;
+  // Twelve fronts' worth of particles, each call with its own start and end.
+  constexpr std::size_t calls = 12;
+  std::vector<ParticleBatch> start(calls);
+  std::vector<double> t_end(calls);
+  for (std::size_t k = 0; k < calls; ++k) {
+    start[k] = random_batch(series.geometry(), 500 + 300 * k, static_cast<unsigned>(k + 1));
+    for (std::size_t i = 0; i < start[k].size(); ++i) start[k].t[i] = 0.02 * static_cast<double>(k);
+    t_end[k] = 0.4 + 0.04 * static_cast<double>(k);
+  }
+  const auto alone = make_advector(Device::cuda);
+  MergingAdvector merging(make_advector(Device::cuda));
+  std::vector<ParticleBatch> merged = start;
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < calls; ++k)
+    threads.emplace_back([&, k] {
+      for (int repeat = 0; repeat < 4; ++repeat) {
+        ParticleBatch p = start[k];
+        merging.advect(series, p, t_end[k], o);
+        if (repeat == 0) merged[k] = std::move(p);
+      }
+    });
+  for (auto& t : threads) t.join();
+  for (std::size_t k = 0; k < calls; ++k) {
+    ParticleBatch a = start[k];
+    alone->advect(series, a, t_end[k], o);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      REQUIRE(a.status[i] == merged[k].status[i]);
+      REQUIRE(a.t[i] == merged[k].t[i]);
+      REQUIRE(a.evaluations[i] == merged[k].evaluations[i]);
+      for (std::size_t d = 0; d < 3; ++d) REQUIRE(a.x[d][i] == merged[k].x[d][i]);
+    }
+  }
+  const MergeStatistics s = merging.merge_statistics();
+  CHECK(s.requests == 4 * calls);
+  WARN("merged: " << s.requests << " calls ran as " << s.backend_calls << " backend calls (largest "
+                  << s.largest_merge << ")");
 }

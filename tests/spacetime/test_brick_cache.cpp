@@ -214,6 +214,13 @@ TEST_CASE("brick cache: too small a budget is an error naming the budget needed"
   CHECK_THROWS_WITH(cache.require_fits(29, "the front's band"),
                     Catch::Contains("too small for the front's band") &&
                         Catch::Contains("raise --cache-budget"));
+  // Room kept for a bulk backend's gathering counts against every band; the largest
+  // reservation holds.
+  cache.reserve_units(5);
+  cache.reserve_units(2);
+  CHECK_NOTHROW(cache.require_fits(23, "a band"));
+  CHECK_THROWS_WITH(cache.require_fits(24, "the front's band"),
+                    Catch::Contains("(and 5 kept free for bulk advection)"));
 }
 
 TEST_CASE("brick cache: a brick that cannot be read names the step, the brick and the file",

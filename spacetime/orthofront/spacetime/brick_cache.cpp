@@ -118,15 +118,26 @@ BrickCache::~BrickCache() {
 }
 
 std::size_t BrickCache::bytes_needed(std::size_t units) const {
-  return units * unit_bytes_ + std::max<std::size_t>(1, options_.max_live_tokens) * load_reserve_;
+  return (units + reserved_units_) * unit_bytes_ +
+         std::max<std::size_t>(1, options_.max_live_tokens) * load_reserve_;
+}
+
+void BrickCache::reserve_units(std::size_t units) {
+  std::size_t now = reserved_units_.load();
+  while (now < units && !reserved_units_.compare_exchange_weak(now, units)) {
+  }
 }
 
 void BrickCache::require_fits(std::size_t units, const std::string& what) const {
   if (bytes_needed(units) <= options_.budget_bytes) return;
   const std::string unit = layout_.bricks() == 1 ? "time steps" : "bricks";
+  const std::size_t reserved = reserved_units_;
+  const std::string bulk =
+      reserved ? " (and " + std::to_string(reserved) + " kept free for bulk advection)" : "";
   throw InvalidArgument("cache budget " + format_bytes(options_.budget_bytes) +
                         " is too small for " + what + ": " + std::to_string(units) + " resident " +
-                        unit + " of " + format_bytes(unit_bytes_) + " plus loads in flight need " +
+                        unit + " of " + format_bytes(unit_bytes_) + bulk +
+                        " plus loads in flight need " +
                         format_bytes(bytes_needed(units)) + " (" +
                         std::to_string(bytes_needed(units)) + " bytes); raise --cache-budget");
 }

@@ -5,6 +5,7 @@
 /// units the front will reach next are prefetched asynchronously through a BrickPipeline. Every
 /// load (demand and prefetch) goes through the pipeline, so the series' read functions are only
 /// ever called from its one reader thread.
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
@@ -111,8 +112,13 @@ class BrickCache {
   /// ones; units of steps before `first_step` will not be needed again and are evicted first.
   void new_epoch(std::size_t first_step);
 
-  /// Bytes `units` pinned units need, plus the loads in flight.
+  /// Bytes `units` pinned units need, plus the loads in flight and the reserved units.
   std::size_t bytes_needed(std::size_t units) const;
+  /// Keeps room for `units` more units beside every band require_fits() checks: what a bulk
+  /// advection backend pins at once as it gathers whole steps (CachedSteps). A band that leaves
+  /// less fails its check (a batch pass then sets surfaces aside) instead of a bulk call failing
+  /// part-way. The largest reservation asked for holds.
+  void reserve_units(std::size_t units);
   /// Throws InvalidArgument naming the needed budget when `units` units do not fit.
   void require_fits(std::size_t units, const std::string& what) const;
 
@@ -168,6 +174,7 @@ class BrickCache {
   std::vector<std::uint8_t> reads_;  // per unit, saturating
   std::vector<bool> used_;           // per unit: pinned at least once
   std::uint64_t epoch_ = 1;
+  std::atomic<std::size_t> reserved_units_{0};
   std::uint64_t releases_ = 0;  // units whose last pin went: progress for waiting loads
   std::size_t first_step_ = 0;
   std::size_t resident_ = 0;   // bytes of ready entries

@@ -8,7 +8,12 @@
 
 namespace orthofront::spacetime {
 
-CachedSteps::CachedSteps(BrickCache& cache) : cache_(cache) {}
+CachedSteps::CachedSteps(BrickCache& cache) : cache_(cache) {
+  // What acquire() pins at once beside the band: one group of bricks being gathered. (A step of
+  // one unit lies in the band already: the band holds the steps a front samples.)
+  const std::size_t bricks = cache.layout().bricks();
+  if (bricks > 1) cache.reserve_units(std::min(bricks, kGatherBricks));
+}
 
 const float* CachedSteps::acquire(std::size_t step) {
   if (const auto it = held_.find(step); it != held_.end()) return it->second.data;

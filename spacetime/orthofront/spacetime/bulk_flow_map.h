@@ -17,7 +17,7 @@ namespace orthofront::spacetime {
 /// Whole time steps of a cached series (a step of one brick is used in place; bricks are gathered
 /// into a step buffer, outside the cache's budget: at most three steps at once). A step is
 /// gathered kGatherBricks bricks at a time, so the cache needs room for that many beside what
-/// else it holds.
+/// else it holds: the constructor reserves it (BrickCache::reserve_units).
 class CachedSteps final : public advect::StepSource {
  public:
   static constexpr std::size_t kGatherBricks = 64;
