@@ -29,6 +29,22 @@ void StripStitcher<N>::smooth_rows(const Front<N>& f, std::vector<char>& fresh) 
       for (std::size_t k = i; k < j; ++k) fresh[k] = 0;
     i = j;
   }
+  // A short waiting run between moving vertices moves too once each of its vertices has gone
+  // 0.4 of the skip distance: a waiting run costs a triangle at each end in every step it waits
+  // (tornado across its core: 91.1 -> 92.8 % quads, edge spread 0.266 -> 0.280).
+  const double lone = 0.4 * full;
+  for (std::size_t i = 1; i < n;) {
+    if (f.v[i].origin < 0 || fresh[i]) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    bool far = true;
+    for (; j < n && f.v[j].origin >= 0 && !fresh[j]; ++j) far = far && moved(j) >= lone;
+    if (far && j - i <= 2 && j < n && moving(i - 1) && moving(j))
+      for (std::size_t k = i; k < j; ++k) fresh[k] = 1;
+    i = j;
+  }
 }
 
 template <int N>
