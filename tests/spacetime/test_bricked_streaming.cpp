@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -517,4 +518,32 @@ TEST_CASE("bricked series: whole steps gathered from bricks give a slab Streamed
         steps.release(k);
       }
     }
+}
+
+TEST_CASE("a unit the full budget cannot take fails the evaluation once; later misses fail at "
+          "once, not after another wait each",
+          "[spacetime][bricks]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 10, 10), 2);
+  CacheOptions co;
+  co.max_live_tokens = 1;
+  co.budget_bytes = 3 * series.step_bytes() + 3 * series.step_bytes();  // 3 steps + 1 in flight
+  BrickCache cache(series, co);
+  StreamedField field(cache);
+  field.update_band(5.0, 6.5);  // steps 5..7 pinned: the budget holds one more step at most
+  Vec3 v;
+  FieldStatus first = FieldStatus::inside;
+  for (const double t : {1.0, 2.0, 3.0}) {
+    first = field.velocity(Vec3(0.7, 0.3, 0), t, v);
+    if (first != FieldStatus::inside) break;
+  }
+  REQUIRE(first == FieldStatus::no_data);
+  CHECK_THAT(field.error(), Catch::Contains("full of pinned units"));
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < 20; ++k)
+    CHECK(field.velocity(Vec3(0.7, 0.3, 0), 0.2 + 0.1 * k, v) == FieldStatus::no_data);
+  // Each of these waited a second on the cache before.
+  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(3));
+  // The band itself still reads.
+  CHECK(field.velocity(Vec3(0.7, 0.3, 0), 5.5, v) == FieldStatus::inside);
 }

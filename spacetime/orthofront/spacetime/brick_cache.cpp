@@ -236,6 +236,10 @@ void BrickCache::publish(LoadedBrick&& loaded) {
   changed_.notify_all();
 }
 
+namespace {
+constexpr std::chrono::seconds kFullWait{5};
+}  // namespace
+
 BrickCache::Handle BrickCache::wait_ready(std::unique_lock<std::mutex>& lock, BrickKey key) {
   const std::uint64_t k = id(key);
   const auto t0 = Clock::now();
@@ -248,10 +252,12 @@ BrickCache::Handle BrickCache::wait_ready(std::unique_lock<std::mutex>& lock, Br
     if (it == entries_.end()) {
       if (!start_load(key, false) && in_flight_ == 0) {
         // Other threads may hold pins for one evaluation only: give them time to release them
-        // before calling the budget full.
+        // before calling the budget full. Releases that never make room (threads that pin again
+        // at once, as the surfaces of a batch pass do) end the wait after kFullWait.
         const std::uint64_t before = releases_;
         if (!changed_.wait_for(lock, std::chrono::seconds(1),
-                               [&] { return releases_ != before || in_flight_ > 0 || cancelled_; }))
+                               [&] { return releases_ != before || in_flight_ > 0 || cancelled_; }) ||
+            Clock::now() - t0 > kFullWait)
           throw Error("cache budget " + format_bytes(options_.budget_bytes) +
                       " is full of pinned units: brick " + std::to_string(key.brick) +
                       " of time step " + std::to_string(key.step) + " does not fit (each needs " +

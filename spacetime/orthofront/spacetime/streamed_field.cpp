@@ -76,7 +76,7 @@ const float* StreamedField::unit(std::size_t step, std::size_t brick, bool resid
                                  BrickCache::Handle& local) const {
   const std::size_t index = step * layout_.bricks() + brick;
   if (const float* p = table_[index].load(std::memory_order_acquire)) return p;
-  if (resident_only) return nullptr;
+  if (resident_only || failed_.load(std::memory_order_relaxed)) return nullptr;
   slow_.fetch_add(1, std::memory_order_relaxed);
   try {
     BrickCache::Handle h =
@@ -93,6 +93,7 @@ const float* StreamedField::unit(std::size_t step, std::size_t brick, bool resid
   } catch (const std::exception& e) {
     std::lock_guard lock(error_mutex_);
     if (error_.empty()) error_ = e.what();
+    failed_.store(true, std::memory_order_relaxed);
     return nullptr;
   }
 }

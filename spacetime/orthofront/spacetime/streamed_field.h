@@ -119,6 +119,8 @@ class StreamedField final : public UnsteadyField {
   mutable std::atomic<std::size_t> slow_{0};
   mutable std::mutex error_mutex_;
   mutable std::string error_;
+  /// A unit could not be had: later misses fail at once (each would wait on the cache again).
+  mutable std::atomic<bool> failed_{false};
 };
 
 }  // namespace orthofront::spacetime
