@@ -332,21 +332,34 @@ TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the w
   CHECK_THAT(s.path.message, Catch::Contains("raise --cache-budget"));
 }
 
+namespace {
+
+// The double gyre on 21 x 21 points at 10 times, and a cache budget of three of its steps plus
+// one load in flight.
+struct ThreeStepBudget {
+  std::unique_ptr<UnsteadyField> flow = make_unsteady_field("double-gyre");
+  SampledTimeSeries series{*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 10, 10), 2};
+  CacheOptions options() const {
+    CacheOptions co;
+    co.max_live_tokens = 1;
+    co.budget_bytes = 3 * series.step_bytes() + 3 * series.step_bytes();
+    return co;
+  }
+};
+
+}  // namespace
+
 TEST_CASE("a new band fits where only the band itself fits: the old band's pins go first",
           "[spacetime][bricks]") {
-  const auto flow = make_unsteady_field("double-gyre");
-  const SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 10, 10), 2);
-  CacheOptions co;
-  co.max_live_tokens = 1;
-  co.budget_bytes = 3 * series.step_bytes() + 3 * series.step_bytes();  // 3 steps + 1 in flight
-  BrickCache cache(series, co);
+  const ThreeStepBudget data;
+  BrickCache cache(data.series, data.options());
   StreamedField field(cache);
   field.update_band(0.0, 1.5);  // steps 0..2
   field.update_band(5.0, 6.5);  // steps 5..7: fits only once 0..2 are released
-  CHECK(cache.statistics().peak_bytes <= co.budget_bytes);
+  CHECK(cache.statistics().peak_bytes <= data.options().budget_bytes);
   Vec3 a, b;
   REQUIRE(field.velocity(Vec3(0.7, 0.3, 0), 5.5, a) == FieldStatus::inside);
-  REQUIRE(flow->velocity(Vec3(0.7, 0.3, 0), 5.5, b) == FieldStatus::inside);
+  REQUIRE(data.flow->velocity(Vec3(0.7, 0.3, 0), 5.5, b) == FieldStatus::inside);
   CHECK((a - b).norm() < 0.05);
   CHECK(field.slow_evaluations() == 0);
 }
@@ -523,12 +536,8 @@ TEST_CASE("bricked series: whole steps gathered from bricks give a slab Streamed
 TEST_CASE("a unit the full budget cannot take fails the evaluation once; later misses fail at "
           "once, not after another wait each",
           "[spacetime][bricks]") {
-  const auto flow = make_unsteady_field("double-gyre");
-  const SampledTimeSeries series(*flow, uniform_grid(flow->domain(), 2, 21), uniform_times(0, 10, 10), 2);
-  CacheOptions co;
-  co.max_live_tokens = 1;
-  co.budget_bytes = 3 * series.step_bytes() + 3 * series.step_bytes();  // 3 steps + 1 in flight
-  BrickCache cache(series, co);
+  const ThreeStepBudget data;
+  BrickCache cache(data.series, data.options());
   StreamedField field(cache);
   field.update_band(5.0, 6.5);  // steps 5..7 pinned: the budget holds one more step at most
   Vec3 v;
