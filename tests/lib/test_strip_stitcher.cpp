@@ -132,3 +132,33 @@ TEST_CASE("zipper places a row's extra segments as triangles at the shorter diag
   const Face& quad = mesh.faces[0].is_quad() ? mesh.faces[0] : mesh.faces[1];
   CHECK(quad.v == std::array<std::int32_t, 4>{0, 1, 3, 2});
 }
+
+TEST_CASE("row skipping by runs: a waiting run of one or two vertices between moving ones moves "
+          "once each has gone 0.4 of the skip distance; a longer run waits",
+          "[engine][stitch]") {
+  // Vertices 0 .. 6 advance by l except those in [first, first + count), which move `by`.
+  const auto skipped = [](std::size_t first, std::size_t count, double by, int& quads) {
+    Mesh mesh;
+    SurfaceReport report;
+    StreamSurfaceOptions o;
+    o.edge = 1;
+    o.row_skip = RowSkip::run;  // skip distance 0.5 l: lone runs move from 0.2 l
+    StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
+    const Front<3> old = previous_row(mesh, 7);
+    Front<3> f = advanced(old, 1.0);
+    for (std::size_t i = first; i < first + count; ++i) f.v[i].x.y() = by;
+    stitcher.emit_moved(f, old, 1);
+    stitcher.stitch(old, f);
+    CHECK(consistently_oriented(mesh));
+    quads = count_quads(mesh);
+    return report.skipped_vertex_steps;
+  };
+  int quads = 0;
+  CHECK(skipped(3, 1, 0.22, quads) == 0);  // one vertex: moves, every face a quad
+  CHECK(quads == 6);
+  CHECK(skipped(2, 2, 0.22, quads) == 0);  // two: move
+  CHECK(quads == 6);
+  CHECK(skipped(2, 2, 0.15, quads) == 2);  // not far enough: they wait, a triangle at each end
+  CHECK(quads == 3);
+  CHECK(skipped(2, 3, 0.22, quads) == 3);  // three: a run that waits
+}
