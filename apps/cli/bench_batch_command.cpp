@@ -106,6 +106,15 @@ struct Row {
   double run_seconds = 0;         // the run's own total
 };
 
+/// The mesh a batch run writes for member k of the rake "r": r-K.vtp, K zero-padded to the width
+/// of the last index.
+std::string member_file(int k, int surfaces) {
+  const int width = static_cast<int>(std::to_string(surfaces - 1).size());
+  char member[64];
+  std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
+  return member;
+}
+
 /// Fills r from a batch run's OUT/summary.json (passes, bytes, reads, peak RSS; the run's own
 /// timers) and counts the members r-K.vtp equal to the one-by-one run's in `alone_dir`.
 void read_batch_summary(Row& r, const std::filesystem::path& out,
@@ -121,14 +130,10 @@ void read_batch_summary(Row& r, const std::filesystem::path& out,
       r.bytes_read += p["cache"].value("bytes_read", std::size_t{0});
       r.max_reads = std::max(r.max_reads, p["cache"].value("max_reads_of_a_unit", std::size_t{0}));
     }
-  // Members are named r-K with K zero-padded to the width of the last index.
-  const int width = static_cast<int>(std::to_string(surfaces - 1).size());
-  for (int k = 0; k < surfaces; ++k) {
-    char member[64];
-    std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
-    if (read_file(out / member) == read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
+  for (int k = 0; k < surfaces; ++k)
+    if (read_file(out / member_file(k, surfaces)) ==
+        read_file(alone_dir / ("r-" + std::to_string(k) + ".vtp")))
       ++r.identical;
-  }
 }
 
 
@@ -165,10 +170,8 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
   }
   // Merged and turns must write the same meshes.
   std::size_t identical = 0;
-  const int width = static_cast<int>(std::to_string(a.surfaces - 1).size());
   for (int k = 0; k < a.surfaces; ++k) {
-    char member[64];
-    std::snprintf(member, sizeof member, "r-%0*d.vtp", width, k);
+    const std::string member = member_file(k, a.surfaces);
     if (read_file(work / "device-1" / member) == read_file(work / "device-2" / member))
       ++identical;
   }

@@ -24,11 +24,6 @@ struct MergingAdvector::Request {
 
 namespace {
 
-bool same_method(const MethodOptions& a, const MethodOptions& b) {
-  return a.method == b.method && a.rk4_step == b.rk4_step && a.absolute == b.absolute &&
-         a.relative == b.relative && a.max_evaluations == b.max_evaluations;
-}
-
 /// Whether the request's particles keep their results in a merged call: every moving particle on
 /// one side of t_end (the side plan_slabs would move it to), its own end between. Sets `forward`.
 bool mergeable(const ParticleBatch& p, double t_end, bool& forward) {
@@ -136,7 +131,7 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
     for (auto it = queue_.begin(); it != queue_.end();) {
       const Request& r = **it;
       if (r.mergeable && r.source == first.source && r.forward == first.forward &&
-          same_method(*r.options, *first.options)) {
+          *r.options == *first.options) {
         group.push_back(*it);
         it = queue_.erase(it);
       } else {

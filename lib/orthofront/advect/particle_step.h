@@ -18,6 +18,8 @@ struct MethodOptions {
   double absolute = 1e-9;       ///< DOPRI5: error tolerance, world units
   double relative = 1e-9;
   std::uint32_t max_evaluations = 1'000'000;  ///< per particle and call; beyond it: no_data
+
+  bool operator==(const MethodOptions&) const = default;
 };
 
 /// The state one thread advances: position, time, last accepted step size (DOPRI5's start in the
