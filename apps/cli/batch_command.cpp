@@ -583,7 +583,10 @@ class BatchRun {
                         {"front_calls", merged->requests},
                         {"backend_calls", merged->backend_calls},
                         {"largest_merge", merged->largest_merge},
-                        {"particles", merged->particles}};
+                        {"particles", merged->particles},
+                        {"backend_seconds", merged->backend_seconds},
+                        {"kernel_seconds", merged->kernel_seconds},
+                        {"wait_seconds", merged->wait_seconds}};
     passes_.push_back(pass);
   }
 

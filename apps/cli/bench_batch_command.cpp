@@ -175,16 +175,25 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
     if (read_file(work / "device-1" / member) == read_file(work / "device-2" / member))
       ++identical;
   }
-  std::printf("\n%-40s %10s %12s %14s %14s %14s\n", "front advance", "seconds", "front calls",
-              "backend calls", "largest merge", "particles");
+  std::printf("\n%-40s %10s %12s %14s %14s %14s %10s %10s %10s\n", "front advance", "seconds",
+              "front calls", "backend calls", "largest merge", "particles", "backend s",
+              "kernels s", "waited s");
   json rows = json::array();
   for (const Way& w : ways) {
     const auto field = [&](const char* key) {
       return w.device.is_null() ? std::string("-") : std::to_string(w.device.value(key, 0ul));
     };
-    std::printf("%-40s %10.2f %12s %14s %14s %14s\n", w.name.c_str(), w.seconds,
+    const auto seconds = [&](const char* key) {
+      if (w.device.is_null()) return std::string("-");
+      char text[32];
+      std::snprintf(text, sizeof text, "%.2f", w.device.value(key, 0.0));
+      return std::string(text);
+    };
+    std::printf("%-40s %10.2f %12s %14s %14s %14s %10s %10s %10s\n", w.name.c_str(), w.seconds,
                 field("front_calls").c_str(), field("backend_calls").c_str(),
-                field("largest_merge").c_str(), field("particles").c_str());
+                field("largest_merge").c_str(), field("particles").c_str(),
+                seconds("backend_seconds").c_str(), seconds("kernel_seconds").c_str(),
+                seconds("wait_seconds").c_str());
     rows.push_back({{"way", w.name}, {"seconds", w.seconds}, {"device", w.device}});
   }
   std::printf("merged vs turns: %zu/%d meshes identical; time %.3f of the turns'\n", identical,

@@ -32,6 +32,7 @@ struct BenchRow {
 struct BenchArgs {
   int repeats = 5;
   double lorenz_edge = 0.2;
+  std::size_t parallel_threshold = StreamSurfaceOptions{}.parallel_threshold;
   std::string json;
 };
 
@@ -117,6 +118,9 @@ void add_bench_command(CLI::App& app) {
   c->add_option("--lorenz-edge", args->lorenz_edge, "Edge length of the Lorenz row")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  c->add_option("--parallel-threshold", args->parallel_threshold,
+                 "Fronts with fewer vertices run their per-vertex stages on one thread")
+      ->capture_default_str();
   c->add_option("--json", args->json, "Also write the figures as JSON here");
   c->callback([args]() {
     const BenchRow rows[] = {
@@ -140,6 +144,7 @@ void add_bench_command(CLI::App& app) {
       StreamSurfaceOptions o;
       o.edge = row.edge;
       o.max_steps = row.steps;
+      o.parallel_threshold = args->parallel_threshold;
       const SurfaceResult orthogonal = best_run(*field, seed, o, args->repeats);
       // The same engine without the fold guard: what the guard costs (or saves).
       o.fold_guard = false;

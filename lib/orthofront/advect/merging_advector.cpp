@@ -3,6 +3,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <utility>
@@ -109,6 +110,7 @@ AdvectionStatistics MergingAdvector::advect(StepSource& source, ParticleBatch& p
   request.t_end = t_end;
   request.options = &options;
   request.mergeable = merge_ && mergeable(particles, t_end, request.forward);
+  const auto arrived = std::chrono::steady_clock::now();
   std::unique_lock lock(mutex_);
   ++statistics_.requests;
   queue_.push_back(&request);
@@ -118,6 +120,8 @@ AdvectionStatistics MergingAdvector::advect(StepSource& source, ParticleBatch& p
     else
       served_.wait(lock);
   }
+  statistics_.wait_seconds +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - arrived).count();
   if (request.error) std::rethrow_exception(request.error);
   return request.statistics;
 }
@@ -143,6 +147,8 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
   ++statistics_.backend_calls;
   statistics_.largest_merge = std::max(statistics_.largest_merge, group.size());
   lock.unlock();
+  const auto start = std::chrono::steady_clock::now();
+  double kernels = 0;
 
   // The backend's parallel loops must not pick up other tasks of the caller's (another
   // surface's step would call in here and wait for this very call).
@@ -151,6 +157,7 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
       Request& r = *group.front();
       try {
         r.statistics = backend_->advect(*r.source, *r.particles, r.t_end, *r.options);
+        kernels = r.statistics.compute_seconds;
       } catch (...) {
         r.error = std::current_exception();
       }
@@ -166,6 +173,7 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
     }
     try {
       const AdvectionStatistics all = backend_->advect(*first.source, merged, t_end, *first.options);
+      kernels = all.compute_seconds;
       std::size_t offset = 0;
       for (Request* r : group) {
         const std::size_t n = r->particles->size();
@@ -181,7 +189,11 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
     }
   });
 
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   lock.lock();
+  statistics_.backend_seconds += seconds;
+  statistics_.kernel_seconds += kernels;
   for (Request* r : group) {
     statistics_.particles += r->particles->size();
     r->done = true;

@@ -22,6 +22,9 @@ struct MergeStatistics {
   std::size_t backend_calls = 0;     ///< calls of the backend that ran them
   std::size_t largest_merge = 0;     ///< most requests run in one backend call
   std::size_t particles = 0;
+  double backend_seconds = 0;  ///< wall time inside backend calls
+  double kernel_seconds = 0;   ///< of which kernels or the parallel loops (the backend's compute)
+  double wait_seconds = 0;     ///< requests' time from arrival to result, summed over requests
 };
 
 class MergingAdvector final : public BatchAdvector {
