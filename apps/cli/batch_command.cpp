@@ -58,6 +58,7 @@ struct BatchArgs {
   std::string device;            // empty: per vertex; else cpu, cuda or auto
   std::string device_memory;     // empty: half the device's free memory
   bool no_merge_fronts = false;  // the fronts' calls take turns unmerged (a baseline)
+  std::size_t device_calls = 0;  // backend calls at once (0: what the backend allows)
 };
 
 std::string read_text(const std::filesystem::path& path) {
@@ -452,7 +453,8 @@ class BatchRun {
         shared = std::make_unique<spacetime::StreamedField>(*cache);
         if (!args_.device.empty())
           bulk = std::make_shared<spacetime::SharedBulkAdvance>(
-              *cache, advect::parse_device(args_.device), device_bytes(), !args_.no_merge_fronts);
+              *cache, advect::parse_device(args_.device), device_bytes(), !args_.no_merge_fronts,
+              args_.device_calls);
       }
     } catch (const std::exception& e) {
       for (std::size_t i : todo)
@@ -580,12 +582,14 @@ class BatchRun {
     if (const auto merged = bulk ? bulk->merge_statistics() : std::nullopt)
       pass["device"] = {{"backend", bulk->backend()->name()},
                         {"merged", !args_.no_merge_fronts},
+                        {"concurrent_calls", bulk->concurrent_calls()},
                         {"front_calls", merged->requests},
                         {"backend_calls", merged->backend_calls},
                         {"largest_merge", merged->largest_merge},
                         {"particles", merged->particles},
                         {"backend_seconds", merged->backend_seconds},
                         {"kernel_seconds", merged->kernel_seconds},
+                        {"host_seconds", merged->host_seconds},
                         {"wait_seconds", merged->wait_seconds}};
     passes_.push_back(pass);
   }
@@ -759,6 +763,11 @@ void add_batch_command(CLI::App& app) {
               "With --device: the fronts of a pass take turns on the backend, one call each, "
               "instead of going together in merged calls (the same meshes; a baseline to measure "
               "against)");
+  c->add_option("--device-calls", args->device_calls,
+                 "With --device: backend calls running at once (0: as many as the backend allows, "
+                 "16 on CUDA, each on a stream of its own; 1: one at a time, the fronts that come "
+                 "meanwhile merged)")
+      ->capture_default_str();
   c->add_option("--threads", args->threads,
                 "Threads of this process (0: every core; under MPI, per rank)")
       ->check(CLI::Range(0, 4096))

@@ -138,8 +138,9 @@ void read_batch_summary(Row& r, const std::filesystem::path& out,
 
 
 /// `bench-batch --device D`: the rake's shared pass with the front advance per vertex, on D with
-/// the fronts taking turns (one backend call each), and on D with the fronts of a round merged;
-/// the merged meshes against the turns' (they must be equal), backend calls and time.
+/// the fronts taking turns (one backend call each), on D with the fronts that come during a call
+/// merged into the next (one call at a time), and merged with calls running at once (the
+/// default); the merged meshes against the turns' (they must be equal), backend calls and time.
 void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
   namespace fs = std::filesystem;
   struct Way {
@@ -151,8 +152,10 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
   std::vector<Way> ways{{"per vertex (no --device)", {}, 0, json()},
                         {"--device " + a.device + ", fronts take turns",
                          {"--device", a.device, "--no-merge-fronts"}, 0, json()},
-                        {"--device " + a.device + ", fronts merged", {"--device", a.device}, 0,
-                         json()}};
+                        {"--device " + a.device + ", merged, one call at a time",
+                         {"--device", a.device, "--device-calls", "1"}, 0, json()},
+                        {"--device " + a.device + ", merged, calls at once",
+                         {"--device", a.device}, 0, json()}};
   for (Way& w : ways) {
     const fs::path out = work / ("device-" + std::to_string(&w - ways.data()));
     fs::remove_all(out);
@@ -168,16 +171,18 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
     std::printf("  %s: %.2f s\n", w.name.c_str(), w.seconds);
     std::fflush(stdout);
   }
-  // Merged and turns must write the same meshes.
+  // Merged (one call at a time or several at once) and turns must write the same meshes.
   std::size_t identical = 0;
   for (int k = 0; k < a.surfaces; ++k) {
     const std::string member = member_file(k, a.surfaces);
-    if (read_file(work / "device-1" / member) == read_file(work / "device-2" / member))
+    const std::string turns = read_file(work / "device-1" / member);
+    if (read_file(work / "device-2" / member) == turns &&
+        read_file(work / "device-3" / member) == turns)
       ++identical;
   }
-  std::printf("\n%-40s %10s %12s %14s %14s %14s %10s %10s %10s\n", "front advance", "seconds",
-              "front calls", "backend calls", "largest merge", "particles", "backend s",
-              "kernels s", "waited s");
+  std::printf("\n%-40s %10s %12s %14s %14s %14s %10s %10s %10s %10s\n", "front advance",
+              "seconds", "front calls", "backend calls", "largest merge", "particles", "backend s",
+              "kernels s", "steps s", "waited s");
   json rows = json::array();
   for (const Way& w : ways) {
     const auto field = [&](const char* key) {
@@ -189,15 +194,17 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
       std::snprintf(text, sizeof text, "%.2f", w.device.value(key, 0.0));
       return std::string(text);
     };
-    std::printf("%-40s %10.2f %12s %14s %14s %14s %10s %10s %10s\n", w.name.c_str(), w.seconds,
-                field("front_calls").c_str(), field("backend_calls").c_str(),
+    std::printf("%-40s %10.2f %12s %14s %14s %14s %10s %10s %10s %10s\n", w.name.c_str(),
+                w.seconds, field("front_calls").c_str(), field("backend_calls").c_str(),
                 field("largest_merge").c_str(), field("particles").c_str(),
                 seconds("backend_seconds").c_str(), seconds("kernel_seconds").c_str(),
-                seconds("wait_seconds").c_str());
+                seconds("host_seconds").c_str(), seconds("wait_seconds").c_str());
     rows.push_back({{"way", w.name}, {"seconds", w.seconds}, {"device", w.device}});
   }
-  std::printf("merged vs turns: %zu/%d meshes identical; time %.3f of the turns'\n", identical,
-              a.surfaces, ways[2].seconds / std::max(ways[1].seconds, 1e-9));
+  std::printf("merged (both ways) vs turns: %zu/%d meshes identical; time %.3f and %.3f of the "
+              "turns'\n",
+              identical, a.surfaces, ways[2].seconds / std::max(ways[1].seconds, 1e-9),
+              ways[3].seconds / std::max(ways[1].seconds, 1e-9));
   if (!a.json_out.empty())
     io::write_json({{"surfaces", a.surfaces},
                     {"resolution", a.resolution},

@@ -235,8 +235,8 @@ TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits
   }
 }
 
-TEST_CASE("cuda advection: calls merged from several threads give each particle the bits of a "
-          "call of its own",
+TEST_CASE("cuda advection: calls merged from several threads, one at a time or running at once, "
+          "give each particle the bits of a call of its own",
           "[gpu][advect]") {
   std::string why;
   if (!cuda_available(&why)) {
@@ -244,9 +244,10 @@ TEST_CASE("cuda advection: calls merged from several threads give each particle 
     return;
   }
   ResidentSteps series = sampled(3, true, 49, 11, true);
+  const std::size_t step_bytes = series.geometry().point_count() * 3 * sizeof(float);
   MethodOptions o;
   o.absolute = o.relative = 1e-8;
-  // Twelve fronts' worth of particles, each call with its own start and end.
+  // Twelve fronts' worth of particles, each call with its own start and end (up to 9 slabs).
   constexpr std::size_t calls = 12;
   std::vector<ParticleBatch> start(calls);
   std::vector<double> t_end(calls);
@@ -256,30 +257,52 @@ TEST_CASE("cuda advection: calls merged from several threads give each particle 
     t_end[k] = 0.4 + 0.04 * static_cast<double>(k);
   }
   const auto alone = make_advector(Device::cuda);
-  MergingAdvector merging(make_advector(Device::cuda));
-  std::vector<ParticleBatch> merged = start;
-  std::vector<std::thread> threads;
-  for (std::size_t k = 0; k < calls; ++k)
-    threads.emplace_back([&, k] {
-      for (int repeat = 0; repeat < 4; ++repeat) {
-        ParticleBatch p = start[k];
-        merging.advect(series, p, t_end[k], o);
-        if (repeat == 0) merged[k] = std::move(p);
+  std::vector<ParticleBatch> expected = start;
+  for (std::size_t k = 0; k < calls; ++k) alone->advect(series, expected[k], t_end[k], o);
+
+  struct Way {
+    const char* name;
+    std::size_t concurrent_calls;  // 0: the backend's
+    std::size_t device_steps;      // 0: the default budget
+  };
+  // Seven steps on the device: three calls at once ((7 - 1) / 2), evicting each other's steps
+  // as their slabs move on; three steps: one call at a time.
+  const Way ways[] = {{"one call at a time", 1, 0},
+                      {"calls at once", 0, 0},
+                      {"calls at once, 7 steps on the device", 0, 7},
+                      {"calls at once, 3 steps on the device", 0, 3}};
+  for (const Way& way : ways) {
+    SECTION(way.name) {
+      MergingAdvector merging(make_advector(Device::cuda, way.device_steps * step_bytes), true,
+                              way.concurrent_calls);
+      CHECK(merging.concurrent_calls() == (way.concurrent_calls == 1 ? 1 : 16));
+      std::vector<ParticleBatch> merged = start;
+      std::vector<std::thread> threads;
+      for (std::size_t k = 0; k < calls; ++k)
+        threads.emplace_back([&, k] {
+          for (int repeat = 0; repeat < 4; ++repeat) {
+            ParticleBatch p = start[k];
+            merging.advect(series, p, t_end[k], o);
+            if (repeat == 0) merged[k] = std::move(p);
+          }
+        });
+      for (auto& t : threads) t.join();
+      for (std::size_t k = 0; k < calls; ++k) {
+        const ParticleBatch& a = expected[k];
+        for (std::size_t i = 0; i < a.size(); ++i) {
+          REQUIRE(a.status[i] == merged[k].status[i]);
+          REQUIRE(a.t[i] == merged[k].t[i]);
+          REQUIRE(a.evaluations[i] == merged[k].evaluations[i]);
+          for (std::size_t d = 0; d < 3; ++d) REQUIRE(a.x[d][i] == merged[k].x[d][i]);
+        }
       }
-    });
-  for (auto& t : threads) t.join();
-  for (std::size_t k = 0; k < calls; ++k) {
-    ParticleBatch a = start[k];
-    alone->advect(series, a, t_end[k], o);
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      REQUIRE(a.status[i] == merged[k].status[i]);
-      REQUIRE(a.t[i] == merged[k].t[i]);
-      REQUIRE(a.evaluations[i] == merged[k].evaluations[i]);
-      for (std::size_t d = 0; d < 3; ++d) REQUIRE(a.x[d][i] == merged[k].x[d][i]);
+      const MergeStatistics s = merging.merge_statistics();
+      CHECK(s.requests == 4 * calls);
+      CHECK(s.backend_calls <= s.requests);
+      WARN(way.name << ": " << s.requests << " calls ran as " << s.backend_calls
+                    << " backend calls (largest " << s.largest_merge << "), backend "
+                    << s.backend_seconds << " s summed over calls, kernels " << s.kernel_seconds
+                    << " s");
     }
   }
-  const MergeStatistics s = merging.merge_statistics();
-  CHECK(s.requests == 4 * calls);
-  WARN("merged: " << s.requests << " calls ran as " << s.backend_calls << " backend calls (largest "
-                  << s.largest_merge << ")");
 }

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -204,4 +205,75 @@ TEST_CASE("merged calls: without merging, calls take turns one at a time; an err
   bad.absolute = -1;
   ParticleBatch p = calls[0].particles;
   CHECK_THROWS(turns.advect(series, p, 0.5, bad));
+}
+
+namespace {
+
+// The CPU backend (on resident steps: safe from several threads) declaring `limit` calls at once;
+// each of the first `together` calls waits until that many are inside, so the test sees them run
+// side by side; it counts the most calls inside at one time.
+class ConcurrentBackend final : public BatchAdvector {
+ public:
+  ConcurrentBackend(std::size_t limit, std::size_t together)
+      : limit_(limit), together_(together), cpu_(make_cpu_advector()) {}
+  std::string name() const override { return "concurrent cpu"; }
+  std::size_t max_concurrent_calls() const override { return limit_; }
+  AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
+                             const MethodOptions& options) override {
+    const std::size_t inside = ++inside_;
+    std::size_t most = most_.load();
+    while (inside > most && !most_.compare_exchange_weak(most, inside)) {
+    }
+    if (started_++ < together_) {
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (most_.load() < together_ && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const AdvectionStatistics s = cpu_->advect(source, particles, t_end, options);
+    --inside_;
+    return s;
+  }
+  std::size_t most_at_once() const { return most_.load(); }
+
+ private:
+  std::size_t limit_, together_;
+  std::unique_ptr<BatchAdvector> cpu_;
+  std::atomic<std::size_t> inside_{0}, most_{0}, started_{0};
+};
+
+}  // namespace
+
+TEST_CASE("merged calls: a backend that takes calls at once runs that many side by side, never "
+          "more, each particle exactly as in a call of its own",
+          "[advect]") {
+  ResidentSteps series = swirl_series();
+  MethodOptions dopri;
+  dopri.absolute = dopri.relative = 1e-8;
+  std::mt19937 rng(23);
+  std::vector<Call> calls;
+  for (int k = 0; k < 9; ++k)
+    calls.push_back(make_call(rng, 50 + 40 * static_cast<std::size_t>(k), 0.05 * k,
+                              0.5 + 0.05 * k, k % 2 == 0));
+  for (const std::size_t limit : {std::size_t{3}, std::size_t{1}}) {
+    auto backend = std::make_unique<ConcurrentBackend>(3, limit);
+    const ConcurrentBackend& concurrent = *backend;
+    MergingAdvector merging(std::move(backend), true, limit);
+    CHECK(merging.concurrent_calls() == limit);
+    std::vector<ParticleBatch> out(calls.size());
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < calls.size(); ++k) {
+      out[k] = calls[k].particles;
+      threads.emplace_back([&, k] { merging.advect(series, out[k], calls[k].t_end, dopri); });
+    }
+    for (auto& t : threads) t.join();
+    const auto cpu = make_cpu_advector();
+    for (std::size_t k = 0; k < calls.size(); ++k) {
+      INFO("limit " << limit << ", call " << k);
+      ParticleBatch p = calls[k].particles;
+      cpu->advect(series, p, calls[k].t_end, dopri);
+      require_same(out[k], p);
+    }
+    CHECK(concurrent.most_at_once() == limit);
+    CHECK(merging.merge_statistics().requests == calls.size());
+  }
 }

@@ -149,6 +149,9 @@ class BatchAdvector {
   /// depend on the others, the batch size or the number of threads.
   virtual AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
                                      const MethodOptions& options) = 0;
+  /// How many advect() calls may run at once from different threads (each with its own
+  /// particles; sources are then read under the backend's own lock). 1: one at a time.
+  virtual std::size_t max_concurrent_calls() const { return 1; }
 };
 
 enum class Device : unsigned char { cpu, cuda, auto_select };

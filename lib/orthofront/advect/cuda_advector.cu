@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <memory>
 #include <cstring>
 #include <type_traits>
@@ -206,6 +208,27 @@ double overlap(double a0, double a1, double b0, double b1) {
   return std::max(0.0, std::min(a1, b1) - std::max(a0, b0));
 }
 
+/// What one call needs of its own, so that calls from several threads run at once (a batch
+/// pass's small fronts each leave most of the device idle): a stream, the particle arrays and
+/// their pinned staging, the counters, the axis tables, and per step slot an event marking the
+/// last kernel of this lane's current call that read it (an upload into that slot waits for it).
+struct Lane {
+  Stream compute;
+  std::array<DeviceArray<double>, 3> px;
+  DeviceArray<double> pt, ph, pstop;
+  DeviceArray<std::uint32_t> pe;
+  DeviceArray<ParticleStatus> ps;
+  std::size_t capacity = 0;
+  std::unique_ptr<PinnedBuffer> host;  // pinned staging of the particle arrays
+  DeviceArray<unsigned long long> counters{2};  // accepted steps, evaluations
+  std::array<DeviceArray<double>, 3> coordinates, inverse_widths;
+  std::vector<std::unique_ptr<Event>> used_event;  // per slot (kept between calls)
+  std::vector<char> used;                          // per slot: read by this call's kernels
+  std::vector<int> mine;                           // slots pinned: the slab's steps, the next
+  Event base;                                      // a call's start
+  std::vector<std::unique_ptr<Event>> marks;       // a call's timing events
+};
+
 class CudaAdvector final : public BatchAdvector {
  public:
   explicit CudaAdvector(std::size_t device_bytes) : device_budget_(device_bytes) {
@@ -217,10 +240,11 @@ class CudaAdvector final : public BatchAdvector {
   }
   ~CudaAdvector() override {
     // Nothing may still read the buffers freed next.
-    cudaStreamSynchronize(compute_.get());
+    for (const auto& lane : lanes_) cudaStreamSynchronize(lane->compute.get());
     cudaStreamSynchronize(upload_.get());
   }
   std::string name() const override { return name_; }
+  std::size_t max_concurrent_calls() const override { return kMaxLanes; }
 
   AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
                              const MethodOptions& options) override {
@@ -233,10 +257,42 @@ class CudaAdvector final : public BatchAdvector {
       stats.total_seconds = seconds_since(start);
       return stats;
     }
+    const std::size_t floats =
+        source.geometry().point_count() * static_cast<std::size_t>(source.components());
+    Lane& lane = begin_lane(floats);
+    try {
+      run(lane, source, particles, plan, t_end, options, stats);
+    } catch (...) {
+      end_lane(lane);
+      throw;
+    }
+    end_lane(lane);
+    stats.total_seconds = seconds_since(start);
+    return stats;
+  }
+
+ private:
+  /// A device buffer for one step, with what it holds, an event for when its upload ends, and
+  /// how many calls in flight read it (a slot read by another call is never overwritten).
+  struct Slot {
+    DeviceArray<float> data;
+    std::uint64_t source = 0;
+    std::size_t step = 0;
+    std::uint64_t last_use = 0;
+    Event ready_event;
+    bool ready = false;
+    int pins = 0;
+  };
+
+  void run(Lane& lane, StepSource& source, ParticleBatch& particles, const SlabPlan& plan,
+           double t_end, const MethodOptions& options, AdvectionStatistics& stats) {
+    const std::vector<double>& times = source.times();
+    const std::size_t n = particles.size();
+    const cudaStream_t stream = lane.compute.get();
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
-    const GridView grid = device_grid(source, tables);
-    const DeviceParticles view = upload_particles(particles);
-    check(cudaMemsetAsync(counters_.get(), 0, 2 * sizeof(unsigned long long), compute_.get()),
+    const GridView grid = device_grid(lane, tables);
+    const DeviceParticles view = upload_particles(lane, particles);
+    check(cudaMemsetAsync(lane.counters.get(), 0, 2 * sizeof(unsigned long long), stream),
           "cudaMemset");
 
     // Steps in the order the slabs use them; slab j uses sequence[j] and sequence[j + 1].
@@ -246,42 +302,65 @@ class CudaAdvector final : public BatchAdvector {
       if (sequence.empty()) sequence.push_back(first);
       sequence.push_back(second);
     }
-    prepare_buffers(source.geometry().point_count() * static_cast<std::size_t>(source.components()));
-    Event base;
+    const Event& base = lane.base;
     std::vector<std::array<double, 2>> kernels, uploads;
-    std::vector<std::unique_ptr<Event>> marks;  // begin/end events of this call's work
-    const auto mark = [&](cudaStream_t stream) {
-      marks.push_back(std::make_unique<Event>());
-      check(cudaEventRecord(marks.back()->get(), stream), "cudaEventRecord");
-      return marks.size() - 1;
+    // Begin/end events of this call's work, kept by the lane between calls (making events costs
+    // more than a small call's kernels).
+    std::vector<std::unique_ptr<Event>>& marks = lane.marks;
+    std::size_t marked = 0;
+    const auto mark = [&](cudaStream_t s) {
+      if (marked == marks.size()) marks.push_back(std::make_unique<Event>());
+      check(cudaEventRecord(marks[marked]->get(), s), "cudaEventRecord");
+      return marked++;
     };
     std::vector<std::array<std::size_t, 2>> kernel_marks, upload_marks;
-    check(cudaEventRecord(base.get(), compute_.get()), "cudaEventRecord");
-    check(cudaStreamWaitEvent(upload_.get(), base.get(), 0), "cudaStreamWaitEvent");
+    check(cudaEventRecord(base.get(), stream), "cudaEventRecord");
+    {
+      std::lock_guard lock(mutex_);
+      check(cudaStreamWaitEvent(upload_.get(), base.get(), 0), "cudaStreamWaitEvent");
+    }
 
-    // Makes sequence[i] resident in a slot other than `keep0` and `keep1` (the current slab's) and
-    // returns the slot: a step already there, from an earlier call on the same source too, is
-    // not uploaded again.
+    // Makes sequence[i] resident in a slot other than `keep0` and `keep1` (the current slab's),
+    // pinned by this call, and returns the slot: a step already there, from an earlier call or
+    // another lane's, is not uploaded again. A call pins at most three slots.
     const auto need = [&](std::size_t i, int keep0, int keep1) -> int {
       const std::size_t step = sequence[i];
+      std::unique_lock lock(mutex_);
       const int slot_count = static_cast<int>(slots_.size());
+      const auto pin = [&](int s) {
+        if (std::find(lane.mine.begin(), lane.mine.end(), s) == lane.mine.end()) {
+          lane.mine.push_back(s);
+          ++slots_[s]->pins;
+        }
+        slots_[s]->last_use = ++clock_;
+      };
       for (int s = 0; s < slot_count; ++s)
         if (slots_[s]->source == source.identity() && slots_[s]->step == step) {
-          slots_[s]->last_use = ++clock_;
+          pin(s);
           return s;
         }
+      // The least recently used slot no call has pinned; while there is none, wait for one
+      // (lanes_in_use() keeps one free for a waiting call).
       int victim = -1;
-      for (int s = 0; s < slot_count; ++s)
-        if (s != keep0 && s != keep1 &&
-            (victim < 0 || slots_[s]->last_use < slots_[victim]->last_use))
-          victim = s;
+      for (;;) {
+        for (int s = 0; s < slot_count; ++s) {
+          if (s == keep0 || s == keep1 || slots_[s]->pins > 0) continue;
+          if (victim < 0 || slots_[s]->last_use < slots_[victim]->last_use) victim = s;
+        }
+        if (victim >= 0) break;
+        slot_freed_.wait(lock);
+      }
       Slot& slot = *slots_[victim];
-      // The pinned buffer is free once its last upload finished; the slot once the kernels that
-      // read its old step finished.
+      // The pinned buffer is free once its last upload finished; the slot once the kernels of
+      // calls in flight that read its old step finished (calls that ended synchronized).
       const int p = next_staging_;
       next_staging_ = 1 - next_staging_;
       if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
-      if (slot.used) check(cudaStreamWaitEvent(upload_.get(), slot.used_event.get(), 0), "cudaStreamWaitEvent");
+      const auto uv = static_cast<std::size_t>(victim);
+      for (const auto& other : lanes_)
+        if (other->used.size() > uv && other->used[uv])
+          check(cudaStreamWaitEvent(upload_.get(), other->used_event[uv]->get(), 0),
+                "cudaStreamWaitEvent");
       const auto host = std::chrono::steady_clock::now();
       const float* data = source.acquire(step);
       float* pinned = staging_[p]->get();
@@ -304,7 +383,7 @@ class CudaAdvector final : public BatchAdvector {
       slot.ready = true;
       slot.source = source.identity();
       slot.step = step;
-      slot.last_use = ++clock_;
+      pin(victim);
       stats.bytes_uploaded += floats * sizeof(float);
       return victim;
     };
@@ -319,34 +398,44 @@ class CudaAdvector final : public BatchAdvector {
       slab.t1 = times[k + 1];
       slab.step0 = slots_[plan.forward ? a : b]->data.get();
       slab.step1 = slots_[plan.forward ? b : a]->data.get();
+      // (A pinned slot's ready event is not recorded again while this call runs.)
       for (const int s : {a, b})
         if (slots_[s]->ready)
-          check(cudaStreamWaitEvent(compute_.get(), slots_[s]->ready_event.get(), 0), "cudaStreamWaitEvent");
-      const std::size_t begin = mark(compute_.get());
+          check(cudaStreamWaitEvent(stream, slots_[s]->ready_event.get(), 0), "cudaStreamWaitEvent");
+      const std::size_t begin = mark(stream);
       const unsigned threads = 128;
       const auto blocks = static_cast<unsigned>((n + threads - 1) / threads);
-      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options, counters_.get(),
-                                  blocks, threads, compute_.get()});
+      dispatch_grid(grid, Launch{slab, view, n, plan.forward, t_end, options,
+                                  lane.counters.get(), blocks, threads, stream});
       check(cudaGetLastError(), "kernel launch");
-      kernel_marks.push_back({begin, mark(compute_.get())});
-      for (const int s : {a, b}) {
-        check(cudaEventRecord(slots_[s]->used_event.get(), compute_.get()), "cudaEventRecord");
-        slots_[s]->used = true;
+      kernel_marks.push_back({begin, mark(stream)});
+      {
+        std::lock_guard lock(mutex_);
+        for (const int s : {a, b}) {
+          const auto us = static_cast<std::size_t>(s);
+          if (!lane.used_event[us]) lane.used_event[us] = std::make_unique<Event>();
+          check(cudaEventRecord(lane.used_event[us]->get(), stream), "cudaEventRecord");
+          lane.used[us] = 1;
+        }
       }
       ++stats.slabs;
       if (j + 1 < plan.slabs.size()) {
         // The next step goes up (into the third slot) while this slab computes.
         const int c = need(j + 2, a, b);
+        unpin(lane, a);  // read by this slab only: free for others once its kernel ends
         a = b;
         b = c;
       }
     }
-    check(cudaStreamSynchronize(compute_.get()), "advection kernels");
-    check(cudaStreamSynchronize(upload_.get()), "uploads");
+    check(cudaStreamSynchronize(stream), "advection kernels");
 
-    download_particles(particles);
+    download_particles(lane, particles);
     unsigned long long counts[2] = {0, 0};
-    counters_.download(counts, 2);
+    check(cudaMemcpyAsync(counts, lane.counters.get(), sizeof counts, cudaMemcpyDeviceToHost,
+                          stream),
+          "counter download");
+    check(cudaStreamSynchronize(stream), "counter download");
+    // This call's uploads have ended: its kernels waited for them.
     stats.particle_steps = static_cast<std::size_t>(counts[0]);
     stats.evaluations = static_cast<std::size_t>(counts[1]);
 
@@ -357,31 +446,68 @@ class CudaAdvector final : public BatchAdvector {
     };
     for (const auto& km : kernel_marks) kernels.push_back({at(km[0]), at(km[1])});
     for (const auto& um : upload_marks) uploads.push_back({at(um[0]), at(um[1])});
-    for (const auto& k : kernels) stats.compute_seconds += k[1] - k[0];
+    for (const auto& kn : kernels) stats.compute_seconds += kn[1] - kn[0];
     for (const auto& u : uploads) {
       stats.upload_seconds += u[1] - u[0];
-      for (const auto& k : kernels) stats.overlap_seconds += overlap(u[0], u[1], k[0], k[1]);
+      for (const auto& kn : kernels) stats.overlap_seconds += overlap(u[0], u[1], kn[0], kn[1]);
     }
-    stats.total_seconds = seconds_since(start);
-    return stats;
   }
 
- private:
-  /// A device buffer for one step, with what it holds and events for when it is ready and when
-  /// the last kernel reading it ends.
-  struct Slot {
-    DeviceArray<float> data;
-    std::uint64_t source = 0;
-    std::size_t step = 0;
-    std::uint64_t last_use = 0;
-    Event ready_event, used_event;
-    bool ready = false, used = false;
-  };
+  /// Calls that may be in flight at once: each pins up to three slots and waits for a third
+  /// holding two, so one slot more than twice the calls keeps a slot free for a waiting call.
+  std::size_t lanes_in_use() const {
+    return slots_.size() < 3 ? 1 : std::clamp<std::size_t>((slots_.size() - 1) / 2, 1, kMaxLanes);
+  }
+
+  void unpin(Lane& lane, int s) {
+    std::lock_guard lock(mutex_);
+    const auto it = std::find(lane.mine.begin(), lane.mine.end(), s);
+    if (it == lane.mine.end()) return;
+    lane.mine.erase(it);
+    --slots_[s]->pins;
+    slot_freed_.notify_all();
+  }
+
+  /// A free lane (made when every lane is busy), after the slots are laid out for steps of
+  /// `floats` floats: a new step size waits until no call is in flight, then drops the slots.
+  Lane& begin_lane(std::size_t floats) {
+    std::unique_lock lock(mutex_);
+    lane_free_.wait(lock, [&] {
+      return floats == slot_floats_ ? in_flight_ < lanes_in_use() : in_flight_ == 0;
+    });
+    if (floats != slot_floats_) prepare_buffers(floats);
+    Lane* lane = nullptr;
+    if (!free_lanes_.empty()) {
+      lane = free_lanes_.back();
+      free_lanes_.pop_back();
+    } else {
+      lanes_.push_back(std::make_unique<Lane>());
+      lane = lanes_.back().get();
+    }
+    lane->used_event.resize(slots_.size());
+    lane->used.assign(slots_.size(), 0);
+    ++in_flight_;
+    return *lane;
+  }
+
+  /// Unpins the lane's slots and gives it back (its stream has nothing left to run: the call
+  /// synchronized it, or threw; then it waits here).
+  void end_lane(Lane& lane) {
+    cudaStreamSynchronize(lane.compute.get());
+    std::lock_guard lock(mutex_);
+    for (const int s : lane.mine) --slots_[s]->pins;
+    lane.mine.clear();
+    std::fill(lane.used.begin(), lane.used.end(), 0);
+    free_lanes_.push_back(&lane);
+    --in_flight_;
+    slot_freed_.notify_all();
+    lane_free_.notify_all();
+  }
 
   // Step buffers for steps of `floats` floats (as many as the device budget holds, at least
-  // three) and two pinned staging buffers; a new size drops what the slots held.
+  // three for each lane that may run at once) and two pinned staging buffers; a new size drops
+  // what the slots held. Called with no call in flight.
   void prepare_buffers(std::size_t floats) {
-    if (floats == slot_floats_) return;
     check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
     slots_.clear();
     const std::size_t step_bytes = floats * sizeof(float);
@@ -392,7 +518,8 @@ class CudaAdvector final : public BatchAdvector {
       check(cudaMemGetInfo(&free_bytes, &total_bytes), "cudaMemGetInfo");
       budget = free_bytes / 2;
     }
-    const std::size_t count = std::clamp<std::size_t>(budget / std::max<std::size_t>(step_bytes, 1), 3, kMaxSlots);
+    const std::size_t count = std::clamp<std::size_t>(
+        budget / std::max<std::size_t>(step_bytes, 1), 3, kMaxSlots);
     for (std::size_t i = 0; i < count; ++i) {
       slots_.push_back(std::make_unique<Slot>());
       slots_.back()->data = DeviceArray<float>(floats);
@@ -403,41 +530,42 @@ class CudaAdvector final : public BatchAdvector {
   }
 
   // The grid view with device pointers to its axis tables (uploaded for every call: small).
-  GridView device_grid(const StepSource&, const GridTables& tables) {
+  static GridView device_grid(Lane& lane, const GridTables& tables) {
     GridView grid = tables.view();
     for (int a = 0; a < grid.axes && grid.rectilinear; ++a) {
       const auto ua = static_cast<std::size_t>(a);
-      coordinates_[ua] = DeviceArray<double>(tables.coordinates()[ua].size());
-      coordinates_[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size());
-      inverse_widths_[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size());
-      inverse_widths_[ua].upload(tables.inverse_widths()[ua].data(), tables.inverse_widths()[ua].size());
-      grid.axis[a].coordinates = coordinates_[ua].get();
-      grid.axis[a].inverse_width = inverse_widths_[ua].get();
+      lane.coordinates[ua] = DeviceArray<double>(tables.coordinates()[ua].size());
+      lane.coordinates[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size());
+      lane.inverse_widths[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size());
+      lane.inverse_widths[ua].upload(tables.inverse_widths()[ua].data(),
+                                     tables.inverse_widths()[ua].size());
+      grid.axis[a].coordinates = lane.coordinates[ua].get();
+      grid.axis[a].inverse_width = lane.inverse_widths[ua].get();
     }
     return grid;
   }
 
   // Particle arrays on the device and pinned staging for them on the host (grown, never shrunk),
-  // filled from `particles` on the compute stream (kernels follow in order).
-  DeviceParticles upload_particles(const ParticleBatch& particles) {
+  // filled from `particles` on the lane's stream (kernels follow in order).
+  static DeviceParticles upload_particles(Lane& lane, const ParticleBatch& particles) {
     const std::size_t n = particles.size();
-    if (n > capacity_) {
-      check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
-      const std::size_t c = std::max(n, capacity_ + capacity_ / 2);
-      for (auto& x : px_) x = DeviceArray<double>(c);
-      pt_ = DeviceArray<double>(c);
-      ph_ = DeviceArray<double>(c);
-      pe_ = DeviceArray<std::uint32_t>(c);
-      ps_ = DeviceArray<ParticleStatus>(c);
-      pstop_ = DeviceArray<double>(c);
+    const cudaStream_t s = lane.compute.get();
+    if (n > lane.capacity) {
+      check(cudaStreamSynchronize(s), "cudaStreamSynchronize");
+      const std::size_t c = std::max(n, lane.capacity + lane.capacity / 2);
+      for (auto& x : lane.px) x = DeviceArray<double>(c);
+      lane.pt = DeviceArray<double>(c);
+      lane.ph = DeviceArray<double>(c);
+      lane.pe = DeviceArray<std::uint32_t>(c);
+      lane.ps = DeviceArray<ParticleStatus>(c);
+      lane.pstop = DeviceArray<double>(c);
       // x, y, z, t, h, stop (doubles), evaluations, status.
-      host_ = std::make_unique<PinnedBuffer>(c * (6 * sizeof(double) + sizeof(std::uint32_t) +
-                                                  sizeof(ParticleStatus)));
-      capacity_ = c;
+      lane.host = std::make_unique<PinnedBuffer>(
+          c * (6 * sizeof(double) + sizeof(std::uint32_t) + sizeof(ParticleStatus)));
+      lane.capacity = c;
     }
     const bool own_ends = !particles.stop.empty();
-    const Staged h = staged(n);
-    const cudaStream_t s = compute_.get();
+    const Staged h = staged(lane);
     // An array of one value throughout (a fresh start: h = 0, no evaluations, all moving; one
     // start time for all) is filled on the device: PCIe is the slow part of a large batch.
     const auto up = [&](auto* device, auto* host, const auto& values) {
@@ -453,30 +581,30 @@ class CudaAdvector final : public BatchAdvector {
       check(cudaMemcpyAsync(device, host, n * sizeof(T), cudaMemcpyHostToDevice, s),
             "particle upload");
     };
-    for (std::size_t d = 0; d < 3; ++d) up(px_[d].get(), h.x[d], particles.x[d]);
-    up(pt_.get(), h.t, particles.t);
-    up(ph_.get(), h.h, particles.h);
-    if (own_ends) up(pstop_.get(), h.stop, particles.stop);
-    up(pe_.get(), h.evaluations, particles.evaluations);
-    up(ps_.get(), h.status, particles.status);
-    return {{px_[0].get(), px_[1].get(), px_[2].get()}, pt_.get(), ph_.get(), pe_.get(), ps_.get(),
-            own_ends ? pstop_.get() : nullptr};
+    for (std::size_t d = 0; d < 3; ++d) up(lane.px[d].get(), h.x[d], particles.x[d]);
+    up(lane.pt.get(), h.t, particles.t);
+    up(lane.ph.get(), h.h, particles.h);
+    if (own_ends) up(lane.pstop.get(), h.stop, particles.stop);
+    up(lane.pe.get(), h.evaluations, particles.evaluations);
+    up(lane.ps.get(), h.status, particles.status);
+    return {{lane.px[0].get(), lane.px[1].get(), lane.px[2].get()}, lane.pt.get(), lane.ph.get(),
+            lane.pe.get(), lane.ps.get(), own_ends ? lane.pstop.get() : nullptr};
   }
 
   // After the kernels (same stream): back through the pinned staging.
-  void download_particles(ParticleBatch& particles) {
+  static void download_particles(Lane& lane, ParticleBatch& particles) {
     const std::size_t n = particles.size();
-    const Staged h = staged(n);
-    const cudaStream_t s = compute_.get();
+    const Staged h = staged(lane);
+    const cudaStream_t s = lane.compute.get();
     const auto down = [&](auto* host, const auto* device) {
       check(cudaMemcpyAsync(host, device, n * sizeof(*host), cudaMemcpyDeviceToHost, s),
             "particle download");
     };
-    for (std::size_t d = 0; d < 3; ++d) down(h.x[d], px_[d].get());
-    down(h.t, pt_.get());
-    down(h.h, ph_.get());
-    down(h.evaluations, pe_.get());
-    down(h.status, ps_.get());
+    for (std::size_t d = 0; d < 3; ++d) down(h.x[d], lane.px[d].get());
+    down(h.t, lane.pt.get());
+    down(h.h, lane.ph.get());
+    down(h.evaluations, lane.pe.get());
+    down(h.status, lane.ps.get());
     check(cudaStreamSynchronize(s), "particle download");
     for (std::size_t d = 0; d < 3; ++d) parallel_copy(particles.x[d].data(), h.x[d], n);
     parallel_copy(particles.t.data(), h.t, n);
@@ -485,16 +613,16 @@ class CudaAdvector final : public BatchAdvector {
     parallel_copy(particles.status.data(), h.status, n);
   }
 
-  // The pinned staging arrays, laid out for the current capacity.
+  // The pinned staging arrays, laid out for the lane's capacity.
   struct Staged {
     double* x[3];
     double *t, *h, *stop;
     std::uint32_t* evaluations;
     ParticleStatus* status;
   };
-  Staged staged(std::size_t) const {
-    double* base = host_->as<double>();
-    const std::size_t c = capacity_;
+  static Staged staged(const Lane& lane) {
+    double* base = lane.host->as<double>();
+    const std::size_t c = lane.capacity;
     Staged h{{base, base + c, base + 2 * c}, base + 3 * c, base + 4 * c, base + 5 * c,
              reinterpret_cast<std::uint32_t*>(base + 6 * c), nullptr};
     h.status = reinterpret_cast<ParticleStatus*>(h.evaluations + c);
@@ -502,9 +630,16 @@ class CudaAdvector final : public BatchAdvector {
   }
 
   std::string name_;
-  Stream compute_, upload_;
   static constexpr std::size_t kMaxSlots = 1024;
+  /// Calls in flight at most (fewer where the device budget holds few steps: lanes_in_use).
+  static constexpr std::size_t kMaxLanes = 16;
   std::size_t device_budget_ = 0;  ///< bytes for resident steps (0: half the free memory)
+
+  // Under mutex_: the slots and what they hold, the staging buffers, the upload stream's work,
+  // the lanes.
+  std::mutex mutex_;
+  std::condition_variable slot_freed_, lane_free_;
+  Stream upload_;
   std::vector<std::unique_ptr<Slot>> slots_;
   std::size_t slot_floats_ = 0;
   std::array<std::unique_ptr<PinnedBuffer>, 2> staging_;
@@ -512,14 +647,9 @@ class CudaAdvector final : public BatchAdvector {
   bool staged_[2] = {false, false};
   int next_staging_ = 0;
   std::uint64_t clock_ = 0;
-  std::array<DeviceArray<double>, 3> coordinates_, inverse_widths_;
-  std::array<DeviceArray<double>, 3> px_;
-  DeviceArray<double> pt_, ph_, pstop_;
-  DeviceArray<std::uint32_t> pe_;
-  DeviceArray<ParticleStatus> ps_;
-  std::size_t capacity_ = 0;
-  std::unique_ptr<PinnedBuffer> host_;  // pinned staging of the particle arrays
-  DeviceArray<unsigned long long> counters_{2};  // accepted steps, evaluations
+  std::vector<std::unique_ptr<Lane>> lanes_;
+  std::vector<Lane*> free_lanes_;
+  std::size_t in_flight_ = 0;
 };
 
 }  // namespace

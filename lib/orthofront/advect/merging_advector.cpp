@@ -18,6 +18,7 @@ struct MergingAdvector::Request {
   const MethodOptions* options = nullptr;
   bool forward = true;
   bool mergeable = false;
+  bool taken = false;  ///< in a group a backend call runs
   bool done = false;
   AdvectionStatistics statistics;
   std::exception_ptr error;
@@ -97,8 +98,13 @@ AdvectionStatistics share_of(const AdvectionStatistics& all, std::size_t particl
 
 }  // namespace
 
-MergingAdvector::MergingAdvector(std::unique_ptr<BatchAdvector> backend, bool merge)
-    : backend_(std::move(backend)), merge_(merge) {}
+MergingAdvector::MergingAdvector(std::unique_ptr<BatchAdvector> backend, bool merge,
+                                 std::size_t concurrent_calls)
+    : backend_(std::move(backend)), merge_(merge),
+      limit_(!merge ? 1
+                    : std::clamp<std::size_t>(concurrent_calls ? concurrent_calls
+                                                               : backend_->max_concurrent_calls(),
+                                              1, backend_->max_concurrent_calls())) {}
 
 MergingAdvector::~MergingAdvector() = default;
 
@@ -115,7 +121,8 @@ AdvectionStatistics MergingAdvector::advect(StepSource& source, ParticleBatch& p
   ++statistics_.requests;
   queue_.push_back(&request);
   while (!request.done) {
-    if (!busy_)
+    // Any queued request may be served by this thread: the queue goes in order.
+    if (!request.taken && running_ < limit_)
       serve(lock);
     else
       served_.wait(lock);
@@ -143,12 +150,13 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
       }
     }
   }
-  busy_ = true;
+  for (Request* r : group) r->taken = true;
+  ++running_;
   ++statistics_.backend_calls;
   statistics_.largest_merge = std::max(statistics_.largest_merge, group.size());
   lock.unlock();
   const auto start = std::chrono::steady_clock::now();
-  double kernels = 0;
+  double kernels = 0, host = 0;
 
   // The backend's parallel loops must not pick up other tasks of the caller's (another
   // surface's step would call in here and wait for this very call).
@@ -158,6 +166,7 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
       try {
         r.statistics = backend_->advect(*r.source, *r.particles, r.t_end, *r.options);
         kernels = r.statistics.compute_seconds;
+        host = r.statistics.host_seconds;
       } catch (...) {
         r.error = std::current_exception();
       }
@@ -174,6 +183,7 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
     try {
       const AdvectionStatistics all = backend_->advect(*first.source, merged, t_end, *first.options);
       kernels = all.compute_seconds;
+      host = all.host_seconds;
       std::size_t offset = 0;
       for (Request* r : group) {
         const std::size_t n = r->particles->size();
@@ -194,11 +204,12 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
   lock.lock();
   statistics_.backend_seconds += seconds;
   statistics_.kernel_seconds += kernels;
+  statistics_.host_seconds += host;
   for (Request* r : group) {
     statistics_.particles += r->particles->size();
     r->done = true;
   }
-  busy_ = false;
+  --running_;
   served_.notify_all();
 }
 

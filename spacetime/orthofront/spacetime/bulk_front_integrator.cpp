@@ -12,8 +12,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
 SharedBulkAdvance::SharedBulkAdvance(BrickCache& cache, advect::Device device,
-                                     std::size_t device_bytes, bool merge)
+                                     std::size_t device_bytes, bool merge,
+                                     std::size_t concurrent_calls)
     : device_(device), device_bytes_(device_bytes), merge_(merge),
+      concurrent_calls_(concurrent_calls),
       steps_(std::make_unique<CachedSteps>(cache)) {
   // Asked for by name: a missing device is an error at the start.
   if (device_ != advect::Device::auto_select) backend();
@@ -32,9 +34,14 @@ std::shared_ptr<advect::BatchAdvector> SharedBulkAdvance::backend() {
           advect::make_advector(device_ == advect::Device::auto_select ? advect::Device::cuda
                                                                        : device_,
                                 device_bytes_),
-          merge_);
+          merge_, concurrent_calls_);
   }
   return backend_;
+}
+
+std::size_t SharedBulkAdvance::concurrent_calls() {
+  std::lock_guard lock(mutex_);
+  return backend_ ? backend_->concurrent_calls() : 0;
 }
 
 std::optional<advect::MergeStatistics> SharedBulkAdvance::merge_statistics() {

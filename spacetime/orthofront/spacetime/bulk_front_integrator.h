@@ -44,8 +44,9 @@ class SharedBulkAdvance {
   /// Non-owning: `cache` must outlive it. `device` auto: CUDA where present, else none (fronts
   /// stay per vertex).
   /// `merge` false: the calls take turns unmerged (the baseline `batch --no-merge-fronts` measures).
+  /// `concurrent_calls`: backend calls at once (0: what the backend allows).
   SharedBulkAdvance(BrickCache& cache, advect::Device device, std::size_t device_bytes,
-                    bool merge = true);
+                    bool merge = true, std::size_t concurrent_calls = 0);
   ~SharedBulkAdvance();
   advect::StepSource& steps();
   /// The backend (made on the first call; nullptr where auto found no CUDA device).
@@ -53,11 +54,14 @@ class SharedBulkAdvance {
   advect::Device device() const { return device_; }
   /// How the fronts' calls were merged (none while no backend was made).
   std::optional<advect::MergeStatistics> merge_statistics();
+  /// Backend calls at once (0 while no backend was made).
+  std::size_t concurrent_calls();
 
  private:
   advect::Device device_;
   std::size_t device_bytes_;
   bool merge_;
+  std::size_t concurrent_calls_;
   std::unique_ptr<advect::StepSource> steps_;
   std::mutex mutex_;
   bool made_ = false;
