@@ -81,6 +81,10 @@ class PinnedBuffer {
 template <class T>
 void parallel_copy(T* to, const T* from, std::size_t n) {
   const std::size_t parts = std::min<std::size_t>(16, std::max<std::size_t>(1, n / 65536));
+  if (parts == 1) {
+    if (n > 0) std::memcpy(to, from, n * sizeof(T));
+    return;
+  }
   tbb::parallel_for(std::size_t{0}, parts, [&](std::size_t part) {
     const std::size_t lo = n * part / parts, hi = n * (part + 1) / parts;
     if (hi > lo) std::memcpy(to + lo, from + lo, (hi - lo) * sizeof(T));
@@ -92,6 +96,11 @@ template <class T>
 bool all_same(const std::vector<T>& values, std::size_t n) {
   if (n == 0) return true;
   const T* v = values.data();
+  if (n <= 65536) {
+    for (std::size_t i = 1; i < n; ++i)
+      if (std::memcmp(v + i, v, sizeof(T)) != 0) return false;
+    return true;
+  }
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(1, n, 65536), true,
       [&](const tbb::blocked_range<std::size_t>& range, bool same) {
@@ -110,7 +119,9 @@ __global__ void fill_kernel(T* to, T value, std::size_t n) {
 
 class Event {
  public:
-  Event() { check(cudaEventCreate(&e_), "cudaEventCreate"); }
+  explicit Event(unsigned flags = cudaEventDefault) {
+    check(cudaEventCreateWithFlags(&e_, flags), "cudaEventCreate");
+  }
   ~Event() { cudaEventDestroy(e_); }
   Event(const Event&) = delete;
   Event& operator=(const Event&) = delete;
@@ -226,6 +237,10 @@ struct Lane {
   std::vector<char> used;                          // per slot: read by this call's kernels
   std::vector<int> mine;                           // slots pinned: the slab's steps, the next
   Event base;                                      // a call's start
+  /// The end of a call's work, waited for asleep: a thread spinning in a stream
+  /// synchronization takes a core from the surfaces' own work and the cache's reads.
+  Event done{cudaEventBlockingSync | cudaEventDisableTiming};
+  PinnedBuffer counts{2 * sizeof(unsigned long long)};  // accepted steps, evaluations
   std::vector<std::unique_ptr<Event>> marks;       // a call's timing events
 };
 
@@ -263,6 +278,7 @@ class CudaAdvector final : public BatchAdvector {
     try {
       run(lane, source, particles, plan, t_end, options, stats);
     } catch (...) {
+      cudaStreamSynchronize(lane.compute.get());  // nothing of the call's may still run
       end_lane(lane);
       throw;
     }
@@ -281,6 +297,7 @@ class CudaAdvector final : public BatchAdvector {
     std::uint64_t last_use = 0;
     Event ready_event;
     bool ready = false;
+    bool filling = false;  ///< a lane is reading its step in (source and step already set)
     int pins = 0;
   };
 
@@ -334,11 +351,23 @@ class CudaAdvector final : public BatchAdvector {
         }
         slots_[s]->last_use = ++clock_;
       };
-      for (int s = 0; s < slot_count; ++s)
-        if (slots_[s]->source == source.identity() && slots_[s]->step == step) {
-          pin(s);
-          return s;
-        }
+      const auto holds = [&](int s) {
+        return slots_[s]->source == source.identity() && slots_[s]->step == step;
+      };
+      for (;;) {
+        int found = -1;
+        for (int s = 0; s < slot_count && found < 0; ++s)
+          if (holds(s)) found = s;
+        if (found < 0) break;
+        pin(found);
+        // Another lane may still be reading the step in: wait for it (its upload is queued
+        // when `filling` ends; the kernels wait for the ready event).
+        slot_filled_.wait(lock, [&] { return !slots_[found]->filling; });
+        if (holds(found)) return found;
+        // Its read failed: the slot holds nothing now.
+        lane.mine.erase(std::find(lane.mine.begin(), lane.mine.end(), found));
+        --slots_[found]->pins;
+      }
       // The least recently used slot no call has pinned; while there is none, wait for one
       // (lanes_in_use() keeps one free for a waiting call).
       int victim = -1;
@@ -351,40 +380,58 @@ class CudaAdvector final : public BatchAdvector {
         slot_freed_.wait(lock);
       }
       Slot& slot = *slots_[victim];
-      // The pinned buffer is free once its last upload finished; the slot once the kernels of
-      // calls in flight that read its old step finished (calls that ended synchronized).
-      const int p = next_staging_;
-      next_staging_ = 1 - next_staging_;
-      if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
-      const auto uv = static_cast<std::size_t>(victim);
-      for (const auto& other : lanes_)
-        if (other->used.size() > uv && other->used[uv])
-          check(cudaStreamWaitEvent(upload_.get(), other->used_event[uv]->get(), 0),
-                "cudaStreamWaitEvent");
-      const auto host = std::chrono::steady_clock::now();
-      const float* data = source.acquire(step);
-      float* pinned = staging_[p]->get();
-      const std::size_t floats = slot_floats_;
-      tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
-        const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
-        std::memcpy(pinned + lo, data + lo, (hi - lo) * sizeof(float));
-      });
-      source.release(step);
-      stats.host_seconds += seconds_since(host);
-      ++stats.steps_loaded;
-      const std::size_t b = mark(upload_.get());
-      check(cudaMemcpyAsync(slot.data.get(), pinned, floats * sizeof(float), cudaMemcpyHostToDevice,
-                            upload_.get()),
-            "cudaMemcpyAsync");
-      upload_marks.push_back({b, mark(upload_.get())});
-      check(cudaEventRecord(slot.ready_event.get(), upload_.get()), "cudaEventRecord");
-      check(cudaEventRecord(staged_event_[p].get(), upload_.get()), "cudaEventRecord");
-      staged_[p] = true;
-      slot.ready = true;
       slot.source = source.identity();
       slot.step = step;
+      slot.filling = true;
       pin(victim);
-      stats.bytes_uploaded += floats * sizeof(float);
+      // The slot is free once the kernels of calls in flight that read its old step finished
+      // (calls that ended synchronized; nobody records these events again: the slot is pinned).
+      const auto uv = static_cast<std::size_t>(victim);
+      std::vector<cudaEvent_t> readers;
+      for (const auto& other : lanes_)
+        if (other->used.size() > uv && other->used[uv]) readers.push_back(other->used_event[uv]->get());
+      lock.unlock();
+      // Reading and staging the step holds the staging lock only: other lanes go on finding
+      // their steps and launching kernels meanwhile.
+      try {
+        std::lock_guard staging(staging_mutex_);
+        const int p = next_staging_;
+        next_staging_ = 1 - next_staging_;
+        // The pinned buffer is free once its last upload finished.
+        if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
+        for (const cudaEvent_t e : readers)
+          check(cudaStreamWaitEvent(upload_.get(), e, 0), "cudaStreamWaitEvent");
+        const auto host = std::chrono::steady_clock::now();
+        const float* data = source.acquire(step);
+        float* pinned = staging_[p]->get();
+        const std::size_t floats = slot_floats_;
+        tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
+          const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
+          std::memcpy(pinned + lo, data + lo, (hi - lo) * sizeof(float));
+        });
+        source.release(step);
+        stats.host_seconds += seconds_since(host);
+        ++stats.steps_loaded;
+        const std::size_t b = mark(upload_.get());
+        check(cudaMemcpyAsync(slot.data.get(), pinned, floats * sizeof(float),
+                              cudaMemcpyHostToDevice, upload_.get()),
+              "cudaMemcpyAsync");
+        upload_marks.push_back({b, mark(upload_.get())});
+        check(cudaEventRecord(slot.ready_event.get(), upload_.get()), "cudaEventRecord");
+        check(cudaEventRecord(staged_event_[p].get(), upload_.get()), "cudaEventRecord");
+        staged_[p] = true;
+        stats.bytes_uploaded += floats * sizeof(float);
+      } catch (...) {
+        lock.lock();
+        slot.source = 0;  // holds nothing (identities start at 1)
+        slot.filling = false;
+        slot_filled_.notify_all();
+        throw;
+      }
+      lock.lock();
+      slot.ready = true;
+      slot.filling = false;
+      slot_filled_.notify_all();
       return victim;
     };
 
@@ -409,14 +456,13 @@ class CudaAdvector final : public BatchAdvector {
                                   lane.counters.get(), blocks, threads, stream});
       check(cudaGetLastError(), "kernel launch");
       kernel_marks.push_back({begin, mark(stream)});
-      {
-        std::lock_guard lock(mutex_);
-        for (const int s : {a, b}) {
-          const auto us = static_cast<std::size_t>(s);
-          if (!lane.used_event[us]) lane.used_event[us] = std::make_unique<Event>();
-          check(cudaEventRecord(lane.used_event[us]->get(), stream), "cudaEventRecord");
-          lane.used[us] = 1;
-        }
+      // (Without the lock: a lane records only on slots it has pinned, which no upload takes;
+      // the flags reach an uploading lane through the lock of the unpin.)
+      for (const int s : {a, b}) {
+        const auto us = static_cast<std::size_t>(s);
+        if (!lane.used_event[us]) lane.used_event[us] = std::make_unique<Event>();
+        check(cudaEventRecord(lane.used_event[us]->get(), stream), "cudaEventRecord");
+        lane.used[us] = 1;
       }
       ++stats.slabs;
       if (j + 1 < plan.slabs.size()) {
@@ -427,15 +473,10 @@ class CudaAdvector final : public BatchAdvector {
         b = c;
       }
     }
-    check(cudaStreamSynchronize(stream), "advection kernels");
-
+    // The particles and the counters come down behind the kernels; one wait for all of it.
     download_particles(lane, particles);
-    unsigned long long counts[2] = {0, 0};
-    check(cudaMemcpyAsync(counts, lane.counters.get(), sizeof counts, cudaMemcpyDeviceToHost,
-                          stream),
-          "counter download");
-    check(cudaStreamSynchronize(stream), "counter download");
     // This call's uploads have ended: its kernels waited for them.
+    const auto* counts = lane.counts.as<unsigned long long>();
     stats.particle_steps = static_cast<std::size_t>(counts[0]);
     stats.evaluations = static_cast<std::size_t>(counts[1]);
 
@@ -490,10 +531,8 @@ class CudaAdvector final : public BatchAdvector {
     return *lane;
   }
 
-  /// Unpins the lane's slots and gives it back (its stream has nothing left to run: the call
-  /// synchronized it, or threw; then it waits here).
+  /// Unpins the lane's slots and gives it back (its stream has nothing left to run).
   void end_lane(Lane& lane) {
-    cudaStreamSynchronize(lane.compute.get());
     std::lock_guard lock(mutex_);
     for (const int s : lane.mine) --slots_[s]->pins;
     lane.mine.clear();
@@ -591,7 +630,7 @@ class CudaAdvector final : public BatchAdvector {
             lane.pe.get(), lane.ps.get(), own_ends ? lane.pstop.get() : nullptr};
   }
 
-  // After the kernels (same stream): back through the pinned staging.
+  // After the kernels (same stream): back through the pinned staging, with the counters.
   static void download_particles(Lane& lane, ParticleBatch& particles) {
     const std::size_t n = particles.size();
     const Staged h = staged(lane);
@@ -605,7 +644,11 @@ class CudaAdvector final : public BatchAdvector {
     down(h.h, lane.ph.get());
     down(h.evaluations, lane.pe.get());
     down(h.status, lane.ps.get());
-    check(cudaStreamSynchronize(s), "particle download");
+    check(cudaMemcpyAsync(lane.counts.get(), lane.counters.get(), 2 * sizeof(unsigned long long),
+                          cudaMemcpyDeviceToHost, s),
+          "counter download");
+    check(cudaEventRecord(lane.done.get(), s), "cudaEventRecord");
+    check(cudaEventSynchronize(lane.done.get()), "advection kernels and particle download");
     for (std::size_t d = 0; d < 3; ++d) parallel_copy(particles.x[d].data(), h.x[d], n);
     parallel_copy(particles.t.data(), h.t, n);
     parallel_copy(particles.h.data(), h.h, n);
@@ -635,10 +678,12 @@ class CudaAdvector final : public BatchAdvector {
   static constexpr std::size_t kMaxLanes = 16;
   std::size_t device_budget_ = 0;  ///< bytes for resident steps (0: half the free memory)
 
-  // Under mutex_: the slots and what they hold, the staging buffers, the upload stream's work,
-  // the lanes.
+  // Under mutex_: the slots and what they hold, the lanes.
   std::mutex mutex_;
-  std::condition_variable slot_freed_, lane_free_;
+  std::condition_variable slot_freed_, slot_filled_, lane_free_;
+  /// Held while a step is read from its source and staged (the source is read by one thread
+  /// at a time; the two staging buffers and the upload stream's order are this lock's).
+  std::mutex staging_mutex_;
   Stream upload_;
   std::vector<std::unique_ptr<Slot>> slots_;
   std::size_t slot_floats_ = 0;
