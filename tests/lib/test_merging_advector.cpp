@@ -76,6 +76,32 @@ void require_same(const ParticleBatch& a, const ParticleBatch& b) {
   }
 }
 
+// Each call from a thread of its own through `merging`; the particles as they came back.
+std::vector<ParticleBatch> advect_from_threads(MergingAdvector& merging, StepSource& series,
+                                               const std::vector<Call>& calls,
+                                               const MethodOptions& options) {
+  std::vector<ParticleBatch> out(calls.size());
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < calls.size(); ++k) {
+    out[k] = calls[k].particles;
+    threads.emplace_back([&, k] { merging.advect(series, out[k], calls[k].t_end, options); });
+  }
+  for (auto& t : threads) t.join();
+  return out;
+}
+
+// Every call's particles in `out` are those of a call of its own on the plain CPU backend.
+void require_as_alone(StepSource& series, const std::vector<Call>& calls,
+                      const std::vector<ParticleBatch>& out, const MethodOptions& options) {
+  const auto cpu = make_cpu_advector();
+  for (std::size_t k = 0; k < calls.size(); ++k) {
+    INFO("call " << k);
+    ParticleBatch p = calls[k].particles;
+    cpu->advect(series, p, calls[k].t_end, options);
+    require_same(out[k], p);
+  }
+}
+
 // The CPU backend, whose first call waits until `expected` requests have come in, so that the
 // others queue behind it and must be merged.
 class GatedBackend final : public BatchAdvector {
@@ -185,19 +211,7 @@ TEST_CASE("merged calls: without merging, calls take turns one at a time; an err
   MergingAdvector turns(make_cpu_advector(), /*merge=*/false);
   std::vector<Call> calls;
   for (int k = 0; k < 6; ++k) calls.push_back(make_call(rng, 100, 0.0, 0.5 + 0.05 * k, false));
-  std::vector<ParticleBatch> out(calls.size());
-  std::vector<std::thread> threads;
-  for (std::size_t k = 0; k < calls.size(); ++k) {
-    out[k] = calls[k].particles;
-    threads.emplace_back([&, k] { turns.advect(series, out[k], calls[k].t_end, dopri); });
-  }
-  for (auto& t : threads) t.join();
-  const auto cpu = make_cpu_advector();
-  for (std::size_t k = 0; k < calls.size(); ++k) {
-    ParticleBatch p = calls[k].particles;
-    cpu->advect(series, p, calls[k].t_end, dopri);
-    require_same(out[k], p);
-  }
+  require_as_alone(series, calls, advect_from_threads(turns, series, calls, dopri), dopri);
   CHECK(turns.merge_statistics().backend_calls == 6);
   CHECK(turns.merge_statistics().largest_merge == 1);
   // A method the backend refuses: the caller gets the backend's exception.
@@ -259,20 +273,8 @@ TEST_CASE("merged calls: a backend that takes calls at once runs that many side 
     const ConcurrentBackend& concurrent = *backend;
     MergingAdvector merging(std::move(backend), true, limit);
     CHECK(merging.concurrent_calls() == limit);
-    std::vector<ParticleBatch> out(calls.size());
-    std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < calls.size(); ++k) {
-      out[k] = calls[k].particles;
-      threads.emplace_back([&, k] { merging.advect(series, out[k], calls[k].t_end, dopri); });
-    }
-    for (auto& t : threads) t.join();
-    const auto cpu = make_cpu_advector();
-    for (std::size_t k = 0; k < calls.size(); ++k) {
-      INFO("limit " << limit << ", call " << k);
-      ParticleBatch p = calls[k].particles;
-      cpu->advect(series, p, calls[k].t_end, dopri);
-      require_same(out[k], p);
-    }
+    INFO("limit " << limit);
+    require_as_alone(series, calls, advect_from_threads(merging, series, calls, dopri), dopri);
     CHECK(concurrent.most_at_once() == limit);
     CHECK(merging.merge_statistics().requests == calls.size());
   }
