@@ -205,10 +205,15 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
       p.t = last ? t_end : t_start + dir * done;
       ++p.steps;
       rejections_in_row = 0;
-      const double grow = norm == 0 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
-      h = last ? planned : h * grow;
+      // The root only where it decides: not after the slab's last step (the planned step goes
+      // on), nor where the growth is capped (0.9 norm^(-1/5) > 5.04 below 1.8e-4).
+      if (last)
+        h = planned;
+      else
+        h *= norm < 1.8e-4 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
     } else {
-      h *= detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm));
+      // (0.9 norm^(-1/5) < 0.197 from 2000 on: the cut is capped at 0.2.)
+      h *= norm >= 2000 ? 0.2 : detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm));
       if (h < h_min || ++rejections_in_row > 60) {
         p.status = ParticleStatus::no_data;  // step control failed: no usable flow
         return;
