@@ -259,7 +259,11 @@ class CudaAdvector final : public BatchAdvector {
     cudaStreamSynchronize(upload_.get());
   }
   std::string name() const override { return name_; }
-  std::size_t max_concurrent_calls() const override { return kMaxLanes; }
+  /// As many as the slots allow once they are laid out (lanes_in_use); 16 before the first call.
+  std::size_t max_concurrent_calls() const override {
+    std::lock_guard lock(mutex_);
+    return slots_.empty() ? kMaxLanes : lanes_in_use();
+  }
 
   AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
                              const MethodOptions& options) override {
@@ -367,6 +371,7 @@ class CudaAdvector final : public BatchAdvector {
         // Its read failed: the slot holds nothing now.
         lane.mine.erase(std::find(lane.mine.begin(), lane.mine.end(), found));
         --slots_[found]->pins;
+        slot_freed_.notify_all();
       }
       // The least recently used slot no call has pinned; while there is none, wait for one
       // (lanes_in_use() keeps one free for a waiting call).
@@ -380,16 +385,17 @@ class CudaAdvector final : public BatchAdvector {
         slot_freed_.wait(lock);
       }
       Slot& slot = *slots_[victim];
-      slot.source = source.identity();
-      slot.step = step;
-      slot.filling = true;
-      pin(victim);
       // The slot is free once the kernels of calls in flight that read its old step finished
       // (calls that ended synchronized; nobody records these events again: the slot is pinned).
       const auto uv = static_cast<std::size_t>(victim);
       std::vector<cudaEvent_t> readers;
       for (const auto& other : lanes_)
         if (other->used.size() > uv && other->used[uv]) readers.push_back(other->used_event[uv]->get());
+      // (Nothing below throws before the read: `mine` has room for three.)
+      pin(victim);
+      slot.source = source.identity();
+      slot.step = step;
+      slot.filling = true;
       lock.unlock();
       // Reading and staging the step holds the staging lock only: other lanes go on finding
       // their steps and launching kernels meanwhile.
@@ -512,6 +518,7 @@ class CudaAdvector final : public BatchAdvector {
   /// A free lane (made when every lane is busy), after the slots are laid out for steps of
   /// `floats` floats: a new step size waits until no call is in flight, then drops the slots.
   Lane& begin_lane(std::size_t floats) {
+    if (floats == 0) throw Error("CUDA: a step of the source has no samples");
     std::unique_lock lock(mutex_);
     lane_free_.wait(lock, [&] {
       return floats == slot_floats_ ? in_flight_ < lanes_in_use() : in_flight_ == 0;
@@ -527,6 +534,7 @@ class CudaAdvector final : public BatchAdvector {
     }
     lane->used_event.resize(slots_.size());
     lane->used.assign(slots_.size(), 0);
+    lane->mine.reserve(3);
     ++in_flight_;
     return *lane;
   }
@@ -548,7 +556,9 @@ class CudaAdvector final : public BatchAdvector {
   // what the slots held. Called with no call in flight.
   void prepare_buffers(std::size_t floats) {
     check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
+    // Until the new slots are all there, the buffers fit no step size.
     slots_.clear();
+    slot_floats_ = 0;
     const std::size_t step_bytes = floats * sizeof(float);
     std::size_t budget = device_budget_;
     if (budget == 0) {
@@ -679,7 +689,7 @@ class CudaAdvector final : public BatchAdvector {
   std::size_t device_budget_ = 0;  ///< bytes for resident steps (0: half the free memory)
 
   // Under mutex_: the slots and what they hold, the lanes.
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable slot_freed_, slot_filled_, lane_free_;
   /// Held while a step is read from its source and staged (the source is read by one thread
   /// at a time; the two staging buffers and the upload stream's order are this lock's).

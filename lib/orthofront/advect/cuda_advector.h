@@ -19,8 +19,10 @@ double cuda_pinned_upload_rate(std::size_t bytes);
 /// and uploaded on its own stream while the kernels of the slab before it run (two pinned staging
 /// buffers). Steps stay on the device between calls, least recently used first out, as many as
 /// `device_bytes` holds (at least three; 0: half the device memory free at the first call), so a
-/// front spread over many steps does not upload them again every call. Arithmetic in double on
-/// float samples, FMA contraction off so a sample and an RK4 step give the CPU's bits.
+/// front spread over many steps does not upload them again every call. Calls from different
+/// threads run at once (up to 16, each on a stream of its own), sharing the resident steps.
+/// Arithmetic in double on float samples, FMA contraction off so a sample and an RK4 step give
+/// the CPU's bits.
 std::unique_ptr<BatchAdvector> make_cuda_advector(std::size_t device_bytes = 0);
 
 }  // namespace orthofront::advect

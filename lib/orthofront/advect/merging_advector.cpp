@@ -121,8 +121,9 @@ AdvectionStatistics MergingAdvector::advect(StepSource& source, ParticleBatch& p
   ++statistics_.requests;
   queue_.push_back(&request);
   while (!request.done) {
-    // Any queued request may be served by this thread: the queue goes in order.
-    if (!request.taken && running_ < limit_)
+    // Any queued request may be served by this thread: the queue goes in order. (The backend
+    // may allow fewer calls at once than asked for, e.g. a device holding few steps.)
+    if (!request.taken && running_ < std::min(limit_, backend_->max_concurrent_calls()))
       serve(lock);
     else
       served_.wait(lock);
@@ -134,8 +135,11 @@ AdvectionStatistics MergingAdvector::advect(StepSource& source, ParticleBatch& p
 }
 
 void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
-  // Take the first request and every queued one that merges with it.
-  std::vector<Request*> group{queue_.front()};
+  // Take the first request and every queued one that merges with it (room first: nothing
+  // below throws once requests leave the queue).
+  std::vector<Request*> group;
+  group.reserve(queue_.size());
+  group.push_back(queue_.front());
   queue_.pop_front();
   const Request& first = *group.front();
   if (first.mergeable) {
@@ -172,15 +176,15 @@ void MergingAdvector::serve(std::unique_lock<std::mutex>& lock) {
       }
       return;
     }
-    ParticleBatch merged;
-    double t_end = first.t_end;
-    std::size_t total = 0;
-    for (const Request* r : group) {
-      append(merged, *r->particles, r->t_end);
-      t_end = first.forward ? std::max(t_end, r->t_end) : std::min(t_end, r->t_end);
-      total += r->particles->size();
-    }
     try {
+      ParticleBatch merged;
+      double t_end = first.t_end;
+      std::size_t total = 0;
+      for (const Request* r : group) {
+        append(merged, *r->particles, r->t_end);
+        t_end = first.forward ? std::max(t_end, r->t_end) : std::min(t_end, r->t_end);
+        total += r->particles->size();
+      }
       const AdvectionStatistics all = backend_->advect(*first.source, merged, t_end, *first.options);
       kernels = all.compute_seconds;
       host = all.host_seconds;
