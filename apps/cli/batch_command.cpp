@@ -767,6 +767,7 @@ void add_batch_command(CLI::App& app) {
                  "With --device: backend calls running at once (0: as many as the backend allows, "
                  "16 on CUDA, each on a stream of its own; 1: one at a time, the fronts that come "
                  "meanwhile merged)")
+      ->check(CLI::Range(0, 4096))
       ->capture_default_str();
   c->add_option("--threads", args->threads,
                 "Threads of this process (0: every core; under MPI, per rank)")

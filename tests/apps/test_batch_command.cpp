@@ -457,4 +457,12 @@ TEST_CASE("batch --device: the surfaces of a pass share one bulk backend and giv
   const auto cuda = run("batch " + quoted(dir / "rake.toml") + " --out " + quoted(dir / "cuda") +
                         " --device cuda --quiet");
   if (cuda.status != 0) CHECK(cuda.output.find("--device cuda:") != std::string::npos);
+  // A negative number of calls at once is refused by name, before any file is written.
+  const auto calls = run("batch " + quoted(dir / "rake.toml") + " --out " +
+                         quoted(dir / "calls") + " --device cpu --device-calls -1 --quiet");
+  CHECK(calls.status != 0);
+  CHECK(calls.output.find("--device-calls") != std::string::npos);
+  CHECK(!fs::exists(dir / "calls"));
+  // The pass says how many backend calls could run at once (the CPU backend: one).
+  CHECK(pass["device"]["concurrent_calls"] == 1);
 }
