@@ -127,6 +127,38 @@ class GatedBackend final : public BatchAdvector {
   std::vector<std::size_t> sizes_;
 };
 
+// The CPU backend (on resident steps: safe from several threads) declaring `limit` calls at once;
+// each of the first `together` calls waits until that many are inside, so the test sees them run
+// side by side; it counts the most calls inside at one time.
+class ConcurrentBackend final : public BatchAdvector {
+ public:
+  ConcurrentBackend(std::size_t limit, std::size_t together)
+      : limit_(limit), together_(together), cpu_(make_cpu_advector()) {}
+  std::string name() const override { return "concurrent cpu"; }
+  std::size_t max_concurrent_calls() const override { return limit_; }
+  AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
+                             const MethodOptions& options) override {
+    const std::size_t inside = ++inside_;
+    std::size_t most = most_.load();
+    while (inside > most && !most_.compare_exchange_weak(most, inside)) {
+    }
+    if (started_++ < together_) {
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (most_.load() < together_ && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const AdvectionStatistics s = cpu_->advect(source, particles, t_end, options);
+    --inside_;
+    return s;
+  }
+  std::size_t most_at_once() const { return most_.load(); }
+
+ private:
+  std::size_t limit_, together_;
+  std::unique_ptr<BatchAdvector> cpu_;
+  std::atomic<std::size_t> inside_{0}, most_{0}, started_{0};
+};
+
 }  // namespace
 
 TEST_CASE("merged calls: calls queued behind a busy backend run as one, each particle exactly "
@@ -220,42 +252,6 @@ TEST_CASE("merged calls: without merging, calls take turns one at a time; an err
   ParticleBatch p = calls[0].particles;
   CHECK_THROWS(turns.advect(series, p, 0.5, bad));
 }
-
-namespace {
-
-// The CPU backend (on resident steps: safe from several threads) declaring `limit` calls at once;
-// each of the first `together` calls waits until that many are inside, so the test sees them run
-// side by side; it counts the most calls inside at one time.
-class ConcurrentBackend final : public BatchAdvector {
- public:
-  ConcurrentBackend(std::size_t limit, std::size_t together)
-      : limit_(limit), together_(together), cpu_(make_cpu_advector()) {}
-  std::string name() const override { return "concurrent cpu"; }
-  std::size_t max_concurrent_calls() const override { return limit_; }
-  AdvectionStatistics advect(StepSource& source, ParticleBatch& particles, double t_end,
-                             const MethodOptions& options) override {
-    const std::size_t inside = ++inside_;
-    std::size_t most = most_.load();
-    while (inside > most && !most_.compare_exchange_weak(most, inside)) {
-    }
-    if (started_++ < together_) {
-      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-      while (most_.load() < together_ && std::chrono::steady_clock::now() < give_up)
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    const AdvectionStatistics s = cpu_->advect(source, particles, t_end, options);
-    --inside_;
-    return s;
-  }
-  std::size_t most_at_once() const { return most_.load(); }
-
- private:
-  std::size_t limit_, together_;
-  std::unique_ptr<BatchAdvector> cpu_;
-  std::atomic<std::size_t> inside_{0}, most_{0}, started_{0};
-};
-
-}  // namespace
 
 TEST_CASE("merged calls: a backend that takes calls at once runs that many side by side, never "
           "more, each particle exactly as in a call of its own",

@@ -368,10 +368,7 @@ class CudaAdvector final : public BatchAdvector {
         // when `filling` ends; the kernels wait for the ready event).
         slot_filled_.wait(lock, [&] { return !slots_[found]->filling; });
         if (holds(found)) return found;
-        // Its read failed: the slot holds nothing now.
-        lane.mine.erase(std::find(lane.mine.begin(), lane.mine.end(), found));
-        --slots_[found]->pins;
-        slot_freed_.notify_all();
+        drop_pin(lane, found);  // its read failed: the slot holds nothing now
       }
       // The least recently used slot no call has pinned; while there is none, wait for one
       // (lanes_in_use() keeps one free for a waiting call).
@@ -506,13 +503,18 @@ class CudaAdvector final : public BatchAdvector {
     return slots_.size() < 3 ? 1 : std::clamp<std::size_t>((slots_.size() - 1) / 2, 1, kMaxLanes);
   }
 
-  void unpin(Lane& lane, int s) {
-    std::lock_guard lock(mutex_);
+  /// The lane lets go of slot s (under mutex_).
+  void drop_pin(Lane& lane, int s) {
     const auto it = std::find(lane.mine.begin(), lane.mine.end(), s);
     if (it == lane.mine.end()) return;
     lane.mine.erase(it);
     --slots_[s]->pins;
     slot_freed_.notify_all();
+  }
+
+  void unpin(Lane& lane, int s) {
+    std::lock_guard lock(mutex_);
+    drop_pin(lane, s);
   }
 
   /// A free lane (made when every lane is busy), after the slots are laid out for steps of
@@ -552,8 +554,8 @@ class CudaAdvector final : public BatchAdvector {
   }
 
   // Step buffers for steps of `floats` floats (as many as the device budget holds, at least
-  // three for each lane that may run at once) and two pinned staging buffers; a new size drops
-  // what the slots held. Called with no call in flight.
+  // three; lanes_in_use() follows from their number) and two pinned staging buffers; a new size
+  // drops what the slots held. Called with no call in flight.
   void prepare_buffers(std::size_t floats) {
     check(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
     // Until the new slots are all there, the buffers fit no step size.
