@@ -98,6 +98,7 @@ nlohmann::json to_json(const SurfaceReport& r) {
         {"merges", r.merges},
         {"streamline_insertions", r.streamline_insertions},
         {"previous_row_insertions", r.previous_row_insertions},
+        {"seed_shots_skipped", r.seed_shots_skipped},
         {"insertion_fallbacks", r.insertion_fallbacks},
         {"insertion_fallbacks_by_cause",
          {{"left_domain_or_no_data", r.fallback_left_domain},

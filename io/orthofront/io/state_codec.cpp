@@ -86,6 +86,7 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::gap_stretches,
     &SurfaceReport::gap_faces,
     &SurfaceReport::gaps_refused,
+    &SurfaceReport::seed_shots_skipped,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,
@@ -210,6 +211,7 @@ void write_engine_state(ByteWriter& out, const EngineState<N>& state) {
       out.f64(fv.t);
       out.i32(fv.mesh);
       out.i32(fv.origin);
+      out.u8(fv.seed_misses);
     }
   }
   out.i32(state.step);
@@ -232,7 +234,7 @@ EngineState<N> read_engine_state(ByteReader& in) {
   for (Front<N>& f : state.fronts) {
     f.closed = in.u8() != 0;
     f.id = in.i32();
-    f.v.resize(in.count((2 * N + 2) * 8 + 2 * 4));
+    f.v.resize(in.count((2 * N + 2) * 8 + 2 * 4 + 1));
     for (FrontVertex<N>& fv : f.v) {
       for (int a = 0; a < N; ++a) fv.x[a] = in.f64();
       for (int a = 0; a < N; ++a) fv.anchor[a] = in.f64();
@@ -240,6 +242,7 @@ EngineState<N> read_engine_state(ByteReader& in) {
       fv.t = in.f64();
       fv.mesh = in.i32();
       fv.origin = in.i32();
+      fv.seed_misses = in.u8();
     }
   }
   state.step = in.i32();

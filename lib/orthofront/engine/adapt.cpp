@@ -1,6 +1,8 @@
 #include "orthofront/engine/adapt.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <utility>
 
@@ -62,6 +64,21 @@ void FrontAdapter<N>::merge_short(Front<N>& f) {
 }
 
 template <int N>
+bool FrontAdapter<N>::along_one_stream_line(const Front<N>& f, std::size_t i, std::size_t j,
+                                            double s_next) const {
+  // Seed parameters a few rounding steps apart, which seed points may still tell apart by a
+  // rounding step; a segment that is not across the flow shows they name one stream line.
+  const double s = std::abs(f.v[i].s) + std::abs(s_next);
+  if (!(std::abs(s_next - f.v[i].s) <= 64 * std::numeric_limits<double>::epsilon() * s))
+    return false;
+  const Vec<N> d = f.v[j].x - f.v[i].x;
+  Vec<N> v;
+  if (field_.velocity(0.5 * (f.v[i].x + f.v[j].x), v) != FieldStatus::inside) return false;
+  const double dv = d.norm() * v.norm();
+  return dv > 0 && std::abs(d.dot(v)) > 0.5 * dv;
+}
+
+template <int N>
 bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
                                  std::vector<char>& cut) {
   const std::size_t n = f.v.size();
@@ -83,7 +100,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
     const std::size_t first = jobs_.size();
     Vec<N> previous = seed_point(f.v[i].s);
     const Vec<N> last = seed_point(s_next);
-    bool resolved = true;
+    bool resolved = !along_one_stream_line(f, i, j, s_next);
     for (int k = 1; k < pieces && resolved; ++k) {
       InsertionJob job;
       job.segment = i;
@@ -122,11 +139,28 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
     out.push_back(f.v[i]);
     if (any_cut) cut.push_back(unresolved[i]);
     const std::size_t j = (i + 1) % n;
+    // The segment's seed shots update its ends' count of misses in a row, and the vertices
+    // inserted on it start with that count: a hit clears it, a miss adds one.
+    bool hit = false, missed = false;
+    for (std::size_t k = next_job; k < jobs_.size() && jobs_[k].segment == i; ++k) {
+      hit = hit || jobs_[k].seed_shot_hit;
+      missed = missed || jobs_[k].seed_shot_missed;
+    }
+    FrontVertex<N>& end = j == 0 ? out.front() : f.v[j];
+    std::uint8_t misses = std::max(out.back().seed_misses, end.seed_misses);
+    if (hit)
+      misses = 0;
+    else if (missed && misses < 255)
+      ++misses;
+    if (hit || missed) out.back().seed_misses = end.seed_misses = misses;
     for (; next_job < jobs_.size() && jobs_[next_job].segment == i; ++next_job) {
       const InsertionJob& job = jobs_[next_job];
       report_.field_evaluations += static_cast<std::size_t>(job.evaluations);
       if (job.outcome == InsertionJob::Outcome::streamline) ++report_.streamline_insertions;
-      if (job.outcome == InsertionJob::Outcome::previous_row) ++report_.previous_row_insertions;
+      if (job.outcome == InsertionJob::Outcome::previous_row) {
+        ++report_.previous_row_insertions;
+        if (job.seed_shot_skipped) ++report_.seed_shots_skipped;
+      }
       if (job.outcome == InsertionJob::Outcome::fallback && !job.interrupted) {
         ++report_.insertion_fallbacks;
         ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
@@ -137,6 +171,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
       nv.x = job.x;
       nv.anchor = nv.x;
       nv.origin = -1;
+      nv.seed_misses = misses;
       const double a =
           mesh_.alpha.empty() ? 0.0 : 0.5 * (alpha_or_zero(f.v[i]) + alpha_or_zero(f.v[j]));
       nv.mesh = emit_vertex(mesh_, nv, seed_.closed, a, f.id, step);
@@ -212,15 +247,24 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     FieldStatus status = FieldStatus::inside;
     // streamline: from the seed (exact), then from the previous row where that fails;
     // previous-row: from the previous row (one step's integration), else from the seed.
-    const bool row_first = opt_.insertion == Insertion::previous_row && row_start;
+    // Where seed shots kept missing the front beside the segment, streamline starts from the
+    // previous row too: there the seed's stream lines (chaotic flow, or a front that drifted
+    // from its exact place) would cost the surface's whole age in integration to miss again.
+    const bool missed_before =
+        std::max(f.v[i].seed_misses, f.v[j].seed_misses) >= kSeedMissesBeforeRowFirst;
+    const bool row_first =
+        row_start && (opt_.insertion == Insertion::previous_row || missed_before);
+    job.seed_shot_skipped = row_first && opt_.insertion == Insertion::streamline;
     for (int attempt = 0; attempt < 2; ++attempt) {
       const bool from_row = (attempt == 0) == row_first;
       if (from_row && !row_start) break;
       const Vec<N> start = from_row ? row_start->first : seed_.point(s - std::floor(s));
       if (shoot(f, i, j, guess, start, from_row ? row_start->second : job.t, job, status)) {
         job.outcome = from_row ? Outcome::previous_row : Outcome::streamline;
+        job.seed_shot_hit = !from_row;
         return;
       }
+      if (!from_row) job.seed_shot_missed = true;
     }
     job.outcome = Outcome::fallback;
     job.left_domain = status != FieldStatus::inside;

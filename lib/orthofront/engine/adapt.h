@@ -2,6 +2,7 @@
 /// Adapt (paper §5): merge short front segments, split long ones with vertices on their true
 /// stream lines (insertion), and cut segments that no stream line can fill.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "orthofront/engine/front.h"
@@ -13,6 +14,11 @@
 #include "orthofront/seed/seed.h"
 
 namespace orthofront {
+
+/// Seed shots missing in a row beside a segment before its insertions start from the previous
+/// row (FrontVertex::seed_misses). Lorenz: every shot after the first few misses; abc: isolated
+/// misses, where starting from the row after the first gave twice the fallbacks.
+inline constexpr std::uint8_t kSeedMissesBeforeRowFirst = 3;
 
 template <int N>
 class FrontAdapter {
@@ -30,7 +36,8 @@ class FrontAdapter {
   /// Splits segments longer than split_factor·ℓ with vertices on the stream lines of seed
   /// parameters between those of their ends. Where the seed parameter cannot tell those stream
   /// lines apart any more (some of them would start from the seed point of an end or of another
-  /// insertion on the segment), the segment is cut instead: cut[k] != 0 after vertex k of the
+  /// insertion on the segment, or the segment runs along one stream line: along_one_stream_line),
+  /// the segment is cut instead: cut[k] != 0 after vertex k of the
   /// returned front (split_front's convention); returns whether any segment was cut.
   ///
   /// Near a separating stream line, neighbouring stream lines diverge exponentially and
@@ -60,7 +67,17 @@ class FrontAdapter {
     } outcome{};
     bool left_domain = false;  ///< a fallback whose stream line left the domain or met no data
     bool interrupted = false;  ///< a stop request ended its integration (counted as no fallback)
+    bool seed_shot_hit = false;      ///< its stream line from the seed met the front
+    bool seed_shot_missed = false;   ///< its stream line from the seed missed the front
+    bool seed_shot_skipped = false;  ///< started from the previous row after an earlier miss
   };
+
+  /// Whether segment (i, j) runs along one stream line: its ends' seed parameters (the end's
+  /// `s_next` wrapped on a closed front) are a few rounding steps apart and it is not across
+  /// the flow. A vertex inserted there, from the seed or from the previous row, lands on the
+  /// same line (zero-area faces).
+  bool along_one_stream_line(const Front<N>& f, std::size_t i, std::size_t j,
+                             double s_next) const;
 
   /// The α of the mesh vertex a front vertex stands for (0 for none).
   double alpha_or_zero(const FrontVertex<N>& fv) const;

@@ -19,6 +19,10 @@ struct FrontVertex {
   double t = 0;   ///< integration time in v since the seed
   std::int32_t mesh = -1;
   std::int32_t origin = -1;  ///< index in the previous front (-1: inserted this step)
+  /// Seed shots beside this vertex (insertions integrated from the seed) that missed the front
+  /// in a row, none hitting it since: where they keep missing, insertions beside it start from
+  /// the previous row (FrontAdapter::split_long).
+  std::uint8_t seed_misses = 0;
 };
 
 /// One front line; a surface has several after rips, domain exits and no-data cuts.

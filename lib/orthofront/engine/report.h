@@ -63,6 +63,9 @@ struct SurfaceReport {
   /// Insertions on the stream line through the previous front's interpolated point (the
   /// previous-row mode, and the streamline mode where the seed's stream line failed).
   std::size_t previous_row_insertions = 0;
+  /// Insertions that started from the previous row because the stream lines from the seed
+  /// beside them had missed the front several times in a row (FrontVertex::seed_misses).
+  std::size_t seed_shots_skipped = 0;
   /// Why a stream-line insertion fell back to the cubic point (the two add up to
   /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
   /// quarter of the segment or more away from the front.

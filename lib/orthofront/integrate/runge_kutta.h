@@ -155,7 +155,8 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
     if (norm <= 1.0) {
       out.x = y;
       k1 = k7;  // first same as last
-      done = last ? span : done + h;
+      if (last) break;  // no next step to size (a front step is usually one step: no pow)
+      done += h;
       rejections_in_row = 0;
       // 0.9 norm^-0.2 >= 5 for norm <= 1.8896e-4: the capped factor needs no pow there.
       const double grow = norm < 1.8e-4 ? 5.0 : std::min(5.0, 0.9 * std::pow(norm, -0.2));

@@ -1,0 +1,133 @@
+// Insertion on hand-made fronts in a uniform flow: a vertex goes on the stream line from the
+// seed where that meets the front, from the previous row where it missed; the vertices beside
+// count the misses in a row, and where they kept missing later insertions skip the seed's shot.
+#include <catch2/catch.hpp>
+#include <vector>
+
+#include "orthofront/engine/adapt.h"
+
+using namespace orthofront;
+
+namespace {
+
+/// v = (1, 0, 0) everywhere.
+class Uniform final : public Field3 {
+ public:
+  FieldStatus velocity(const Vec3&, Vec3& v) const override {
+    v = Vec3(1, 0, 0);
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
+    j.setZero();
+    return velocity(x, v);
+  }
+  Box<3> domain() const override { return Box<3>{Vec3::Constant(-10), Vec3::Constant(10)}; }
+  std::string describe() const override { return "uniform"; }
+};
+
+FrontVertex<3> vertex(const Vec3& x, double s, double t, std::int32_t origin) {
+  FrontVertex<3> fv;
+  fv.x = fv.anchor = x;
+  fv.s = s;
+  fv.t = t;
+  fv.origin = origin;
+  return fv;
+}
+
+/// The seed runs along y from (0, 0, 0) to (0, 2, 0); ℓ = 0.5, so a segment 2 long gets three
+/// vertices. The previous front stands at x = 0.9 (t = 0.9), the front at x = 1 (t = 1), both
+/// shifted by `shift` in y: 0 puts them on the seed's stream lines, 1 off them (as a front that
+/// drifted from its exact place would be).
+struct Setup {
+  explicit Setup(double shift) {
+    options.edge = 0.5;
+    old.v = {vertex(Vec3(0.9, shift, 0), 0, 0.9, 0), vertex(Vec3(0.9, 2 + shift, 0), 1, 0.9, 1)};
+    front.v = {vertex(Vec3(1, shift, 0), 0, 1, 0), vertex(Vec3(1, 2 + shift, 0), 1, 1, 1)};
+  }
+  Uniform field;
+  Seed<3> seed = make_seed(SeedCurve::line(Vec3(0, 0, 0), Vec3(0, 2, 0)), 2);
+  StreamSurfaceOptions options;
+  Tolerance tolerance;
+  StopRequest stop = [] { return false; };
+  Mesh mesh;
+  SurfaceReport report;
+  Front<3> old, front;
+
+  void split() {
+    FrontAdapter<3> adapter(field, seed, options, tolerance, stop, mesh, report);
+    std::vector<char> cut;
+    REQUIRE_FALSE(adapter.split_long(front, &old, 1, cut));
+    REQUIRE(front.v.size() == 5);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("insertion: on the seed's stream line where it meets the front", "[engine][adapt]") {
+  Setup s(0.0);
+  s.front.v[1].seed_misses = kSeedMissesBeforeRowFirst - 1;  // a hit clears misses in a row
+  s.split();
+  CHECK(s.report.splits == 3);
+  CHECK(s.report.streamline_insertions == 3);
+  CHECK(s.report.previous_row_insertions == 0);
+  CHECK(s.report.seed_shots_skipped == 0);
+  for (std::size_t i = 0; i < 5; ++i) {
+    INFO("vertex " << i);
+    CHECK(s.front.v[i].x.isApprox(Vec3(1, 0.5 * static_cast<double>(i), 0), 1e-9));
+    CHECK(s.front.v[i].seed_misses == 0);
+  }
+}
+
+TEST_CASE("insertion: seed shots that miss the front are counted by the vertices beside them",
+          "[engine][adapt]") {
+  Setup s(1.0);
+  s.front.v[0].seed_misses = 1;
+  s.split();
+  // Each seed shot ends a whole segment length off (y 0.5 where the front has 1.5): the previous
+  // row's point carried over the step lands on the front instead.
+  CHECK(s.report.streamline_insertions == 0);
+  CHECK(s.report.previous_row_insertions == 3);
+  CHECK(s.report.insertion_fallbacks == 0);
+  CHECK(s.report.seed_shots_skipped == 0);  // one miss before: each shot was tried
+  for (std::size_t i = 0; i < 5; ++i) {
+    INFO("vertex " << i);
+    CHECK(s.front.v[i].seed_misses == 2);  // the segment's misses in a row, and this one
+    CHECK(s.front.v[i].x.isApprox(Vec3(1, 1 + 0.5 * static_cast<double>(i), 0), 1e-9));
+  }
+}
+
+TEST_CASE("insertion: where seed shots kept missing, the seed's shot is skipped",
+          "[engine][adapt]") {
+  for (const std::size_t marked : {0, 1}) {
+    Setup s(0.0);
+    s.front.v[marked].seed_misses = kSeedMissesBeforeRowFirst;
+    s.split();
+    INFO("marked end " << marked);
+    // The previous row gives the same points here (the flow is uniform), at a step's cost.
+    CHECK(s.report.streamline_insertions == 0);
+    CHECK(s.report.previous_row_insertions == 3);
+    CHECK(s.report.seed_shots_skipped == 3);
+    for (std::size_t i = 1; i < 4; ++i)
+      CHECK(s.front.v[i].x.isApprox(Vec3(1, 0.5 * static_cast<double>(i), 0), 1e-9));
+    // No shot was tried: the marked end keeps its count and the new vertices take it on.
+    CHECK(s.front.v[0].seed_misses == (marked == 0 ? kSeedMissesBeforeRowFirst : 0));
+    CHECK(s.front.v[4].seed_misses == (marked == 1 ? kSeedMissesBeforeRowFirst : 0));
+    for (std::size_t i = 1; i < 4; ++i) CHECK(s.front.v[i].seed_misses == kSeedMissesBeforeRowFirst);
+  }
+  // One miss short of it, the shot is tried (and hits).
+  Setup s(0.0);
+  s.front.v[0].seed_misses = kSeedMissesBeforeRowFirst - 1;
+  s.split();
+  CHECK(s.report.streamline_insertions == 3);
+  CHECK(s.report.seed_shots_skipped == 0);
+}
+
+TEST_CASE("insertion: in previous-row mode nothing counts as a skipped seed shot",
+          "[engine][adapt]") {
+  Setup s(0.0);
+  s.options.insertion = Insertion::previous_row;
+  s.front.v[0].seed_misses = kSeedMissesBeforeRowFirst;
+  s.split();
+  CHECK(s.report.previous_row_insertions == 3);
+  CHECK(s.report.seed_shots_skipped == 0);
+}
