@@ -170,6 +170,7 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
         {"advect", r.advect_seconds},
         {"refine", r.refine_seconds},
         {"frames", r.frame_seconds},
+        {"frames_finish", r.frame_finish_seconds},
         {"wait", r.wait_seconds},
         {"io", r.io_seconds},
         {"decode", r.decode_seconds}}}};

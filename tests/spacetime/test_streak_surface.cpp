@@ -1,7 +1,11 @@
 #include <catch2/catch.hpp>
 
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <limits>
 #include <cstring>
 #include <fstream>
@@ -392,5 +396,87 @@ TEST_CASE("streak surface: one thread and many give the same frames, bit for bit
       CHECK(a.speed == b.speed);
       for (std::size_t f = 0; f < a.face_count(); ++f) REQUIRE(a.faces[f].v == b.faces[f].v);
     }
+  }
+}
+
+TEST_CASE("streak surface: frames finished aside are the frames finished in line, in order, "
+          "while the particles move on",
+          "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.2, 0.2, 0), Vec3(0.4, 0.8, 0));
+  StreakOptions o = gyre_options();
+  o.finish_frames_aside = false;
+  StreakReport in_line_report, aside_report;
+  const std::vector<StreakFrame> in_line = collect(*flow, seed, o, &in_line_report);
+  o.finish_frames_aside = true;
+  // The first frame's sink waits until the driver reports a later time: the particles moved on
+  // while it was being finished (in line this would wait for ever).
+  std::mutex m;
+  std::condition_variable moved_on;
+  double t_reported = 0;
+  bool overlapped = false;
+  o.progress = [&](const StreakProgress& p) {
+    const std::lock_guard lock(m);
+    t_reported = p.t;
+    moved_on.notify_all();
+    return true;
+  };
+  std::vector<StreakFrame> aside;
+  const std::thread::id driver = std::this_thread::get_id();
+  bool sink_on_driver = false;
+  aside_report = build_streak_surface(*flow, seed, o, [&](const StreakFrame& f) {
+    sink_on_driver = sink_on_driver || std::this_thread::get_id() == driver;
+    if (aside.empty()) {
+      std::unique_lock lock(m);
+      overlapped = moved_on.wait_for(lock, std::chrono::seconds(30),
+                                     [&] { return t_reported > f.time; });
+    }
+    aside.push_back(f);
+  });
+  CHECK(overlapped);
+  CHECK_FALSE(sink_on_driver);
+  REQUIRE(aside.size() == o.frames.size());
+  REQUIRE(in_line.size() == aside.size());
+  REQUIRE(aside_report.frames.size() == aside.size());
+  for (std::size_t k = 0; k < aside.size(); ++k) {
+    INFO("frame " << k);
+    const Mesh& a = in_line[k].mesh;
+    const Mesh& b = aside[k].mesh;
+    CHECK(aside[k].index == static_cast<int>(k));
+    CHECK(aside[k].time == in_line[k].time);
+    REQUIRE(a.vertex_count() > 100);
+    REQUIRE(a.vertex_count() == b.vertex_count());
+    CHECK(a.positions == b.positions);
+    CHECK(a.speed == b.speed);
+    CHECK(a.particle_id == b.particle_id);
+    REQUIRE(a.face_count() == b.face_count());
+    for (std::size_t f = 0; f < a.face_count(); ++f) REQUIRE(a.faces[f].v == b.faces[f].v);
+    CHECK(aside[k].quality.quads == in_line[k].quality.quads);
+    CHECK(aside[k].quality.folds == in_line[k].quality.folds);
+    const StreakFrameRecord& ra = in_line_report.frames[k];
+    const StreakFrameRecord& rb = aside_report.frames[k];
+    CHECK(ra.index == rb.index);
+    CHECK(ra.vertices == rb.vertices);
+    CHECK(ra.faces == rb.faces);
+    CHECK(ra.max_edge == rb.max_edge);
+    CHECK(ra.quality.degenerate_faces == rb.quality.degenerate_faces);
+  }
+  CHECK(aside_report.frame_finish_seconds > 0);
+}
+
+TEST_CASE("streak surface: a sink that throws stops the run, aside or in line", "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.2, 0.2, 0), Vec3(0.4, 0.8, 0));
+  for (const bool aside : {false, true}) {
+    StreakOptions o = gyre_options();
+    o.finish_frames_aside = aside;
+    std::vector<int> handed;
+    const auto sink = [&](const StreakFrame& f) {
+      handed.push_back(f.index);
+      if (f.index == 1) throw io::IoError("frame.vtp: disk full");
+    };
+    INFO((aside ? "aside" : "in line"));
+    CHECK_THROWS_WITH(build_streak_surface(*flow, seed, o, sink), Catch::Contains("disk full"));
+    CHECK(handed == std::vector<int>{0, 1});  // the last frame was never handed over
   }
 }

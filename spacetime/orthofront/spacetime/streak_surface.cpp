@@ -6,11 +6,15 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
-#include <memory>
-#include <optional>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <memory>
+#include <optional>
+#include <thread>
+#include <utility>
 
 #include "orthofront/error.h"
 #include "orthofront/seed/seed_check.h"
@@ -77,6 +81,13 @@ class StreakBuilder {
         integrated_(access.flow, options.tolerance),
         map_(access.map ? *access.map : integrated_) {}
 
+  // A run that throws leaves a frame being finished: wait for it (its own error is dropped).
+  ~StreakBuilder() {
+    if (finisher_.joinable()) finisher_.join();
+  }
+  StreakBuilder(const StreakBuilder&) = delete;
+  StreakBuilder& operator=(const StreakBuilder&) = delete;
+
   StreakReport run();
 
  private:
@@ -99,6 +110,13 @@ class StreakBuilder {
                           std::vector<ParticleStatus>& status);
   void coarsen();
   void emit(int index);
+  // Quality, longest edge and the sink of the frame in finishing_ (built: the seconds its
+  // vertices and faces took); an exception is kept for collect_frame().
+  void finish_frame(double built);
+  // Waits for the frame being finished aside, if any, and collects it.
+  void join_finisher();
+  // Rethrows what the finished frame's sink threw; files its record; keeps its mesh as spare.
+  void collect_frame();
   double row_distance(const Row& a, const Row& b) const;
   Vec3 seed_point(double s) const {
     Vec3 p = seed_.point(s);
@@ -126,6 +144,14 @@ class StreakBuilder {
   // The last frame's mesh, kept for its memory: a frame of millions of vertices written into
   // fresh arrays spends most of its time in page faults and zero fills.
   Mesh spare_mesh_;
+  // The frame being finished (quality, sink) on a thread of its own while the particles move
+  // on; its record and mesh come back when it is joined. frame_failed_: its sink threw.
+  std::thread finisher_;
+  StreakFrame finishing_;
+  StreakFrameRecord finishing_record_;
+  double finishing_seconds_ = 0;
+  std::exception_ptr finisher_error_;
+  std::atomic<bool> frame_failed_{false};
   std::vector<Vec3> x_;
   std::vector<double> from_;
   std::vector<ParticleStatus> status_;
@@ -579,8 +605,22 @@ void StreakBuilder::adapt() {
   report_.refine_seconds += seconds_since(t0);
 }
 
+void StreakBuilder::join_finisher() {
+  if (!finisher_.joinable()) return;
+  finisher_.join();
+  collect_frame();
+}
+
+void StreakBuilder::collect_frame() {
+  if (finisher_error_) std::rethrow_exception(std::exchange(finisher_error_, nullptr));
+  report_.frame_finish_seconds += finishing_seconds_;
+  report_.frames.push_back(finishing_record_);
+  spare_mesh_ = std::move(finishing_.mesh);
+}
+
 void StreakBuilder::emit(int index) {
   const auto t0 = Clock::now();
+  join_finisher();  // its mesh becomes this frame's
   StreakFrame frame;
   frame.index = index;
   frame.time = t_;
@@ -638,7 +678,6 @@ void StreakBuilder::emit(int index) {
     std::copy(strips[r].begin(), strips[r].end(),
               mesh.faces.begin() + static_cast<std::ptrdiff_t>(first_face[r]));
   });
-  frame.quality = measure_quality(mesh);
   StreakFrameRecord rec;
   rec.index = index;
   rec.time = t_;
@@ -646,25 +685,47 @@ void StreakBuilder::emit(int index) {
   rec.faces = mesh.face_count();
   rec.rows = rows_.size();
   rec.dead_particles = dead;
-  rec.quality = frame.quality;
-  rec.max_edge = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, mesh.faces.size(), 4096), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& range, double longest) {
-        for (std::size_t k = range.begin(); k != range.end(); ++k) {
-          const Face& f = mesh.faces[k];
-          for (int c = 0; c < f.size; ++c)
-            longest = std::max(longest, (mesh.positions[static_cast<std::size_t>(f.v[c])] -
-                                         mesh.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
-                                            .norm());
-        }
-        return longest;
-      },
-      [](double a, double b) { return std::max(a, b); });
-  if (sink_) sink_(frame);
-  spare_mesh_ = std::move(frame.mesh);
-  rec.seconds = seconds_since(t0);
-  report_.frame_seconds += rec.seconds;
-  report_.frames.push_back(rec);
+  const double built = seconds_since(t0);
+  report_.frame_seconds += built;
+  // The rest needs the mesh only: it runs while the particles move on (its parallel loops share
+  // the threads with theirs).
+  finishing_ = std::move(frame);
+  finishing_record_ = rec;
+  if (o_.finish_frames_aside) {
+    finisher_ = std::thread([this, built] { finish_frame(built); });
+  } else {
+    finish_frame(built);
+    report_.frame_seconds += finishing_seconds_;
+    collect_frame();
+  }
+}
+
+void StreakBuilder::finish_frame(double built) {
+  const auto t1 = Clock::now();
+  try {
+    Mesh& m = finishing_.mesh;
+    finishing_.quality = measure_quality(m);
+    finishing_record_.quality = finishing_.quality;
+    finishing_record_.max_edge = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, m.faces.size(), 4096), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& range, double longest) {
+          for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            const Face& f = m.faces[k];
+            for (int c = 0; c < f.size; ++c)
+              longest = std::max(longest, (m.positions[static_cast<std::size_t>(f.v[c])] -
+                                           m.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
+                                              .norm());
+          }
+          return longest;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    if (sink_) sink_(finishing_);
+  } catch (...) {
+    finisher_error_ = std::current_exception();
+    frame_failed_ = true;
+  }
+  finishing_seconds_ = seconds_since(t1);
+  finishing_record_.seconds = built + finishing_seconds_;
 }
 
 // The faces between rows r and r + 1 (`va`, `vb`: their particles' vertices, -1 for stopped
@@ -781,6 +842,7 @@ StreakReport StreakBuilder::run() {
       emit(static_cast<int>(next_frame));
       ++next_frame;
     }
+    if (frame_failed_) join_finisher();  // the sink threw: stop here
     if (o_.progress) {
       StreakProgress p;
       p.t = t_;
@@ -797,6 +859,9 @@ StreakReport StreakBuilder::run() {
       }
     }
   }
+  const auto t_join = Clock::now();
+  join_finisher();
+  report_.frame_seconds += seconds_since(t_join);
   report_.total_seconds = seconds_since(start_);
   return report_;
 }

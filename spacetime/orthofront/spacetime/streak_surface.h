@@ -59,6 +59,9 @@ struct StreakOptions {
   int max_refinement_rounds = 12;   ///< split passes after each time step
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.
   bool adaptive = true;
+  /// Finish each frame (quality, the sink) on a thread of its own while the particles move on;
+  /// false: in line, before they move on (the baseline of bench-gpu-streak --frames-in-line).
+  bool finish_frames_aside = true;
   std::function<bool(const StreakProgress&)> progress;  ///< false stops (frames are kept)
   std::string seed_name, field_name;  ///< how messages name the seed and field (may be empty)
 };
@@ -79,7 +82,7 @@ struct StreakFrameRecord {
   std::size_t vertices = 0, faces = 0, rows = 0, dead_particles = 0;
   QualityReport quality;
   double max_edge = 0;              ///< longest mesh edge
-  double seconds = 0;               ///< building and handing over the frame
+  double seconds = 0;               ///< building and handing over the frame (both parts)
 };
 
 struct StreakReport {
@@ -107,14 +110,20 @@ struct StreakReport {
   std::vector<StreakFrameRecord> frames;
   CacheStatistics cache;            ///< streamed only
   std::size_t slow_evaluations = 0; ///< streamed: evaluations outside the pinned band
-  double total_seconds = 0, advect_seconds = 0, refine_seconds = 0, frame_seconds = 0;
+  double total_seconds = 0, advect_seconds = 0, refine_seconds = 0;
+  /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
+  /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
+  /// frame_finish_seconds, summed over frames.
+  double frame_seconds = 0, frame_finish_seconds = 0;
   double wait_seconds = 0, io_seconds = 0, decode_seconds = 0;  ///< streamed only
   std::string device;               ///< bulk advection backend ("" when not used)
   advect::AdvectionStatistics bulk; ///< what it did
 };
 
-/// Called with each frame as soon as it is built (e.g. to write it). An exception stops the run
-/// and propagates; frames handed over before are the caller's.
+/// Called with each frame once it is built (e.g. to write it), from a thread of its own while the
+/// particles move on: one frame at a time, in order, and every frame before the run returns. An
+/// exception stops the run (at its next time step) and propagates; frames handed over before are
+/// the caller's.
 using StreakFrameSink = std::function<void(const StreakFrame&)>;
 
 /// Streak surface of an analytic (or in-memory) unsteady field. Throws InvalidArgument naming
