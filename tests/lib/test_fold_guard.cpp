@@ -98,3 +98,26 @@ TEST_CASE("the fold guard's boundary is the mesh's boundary, edge for edge", "[e
   CHECK(from_guard.size() == 8);  // a 2 x 2 sheet of quads
   CHECK(from_guard == sorted(boundary_edges(m)));
 }
+
+TEST_CASE("faces accepted aside are checked against like faces accepted in line",
+          "[engine][fold]") {
+  // Rows 0-1, then row 2 accepted aside while row 3's vertices are added (the next step's
+  // inserted vertices); row 3 turned back over row 2 must be found against the faces accepted
+  // aside, and the boundary must be the whole mesh's.
+  Mesh m = previous_strip();
+  FoldGuard guard;
+  guard.rebuild(m);
+  const std::size_t row2_faces = m.face_count();
+  add_next_row(m, Vec3(0, 2, 0), Vec3(1, 2, 0), Vec3(2, 2, 0));
+  REQUIRE(guard.folded_vertices(m, row2_faces, 6).empty());
+  guard.accept_aside(m, row2_faces);
+  for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 1.5, 0.01), 2, 2, 0, 0, 0, 3);
+  guard.wait();
+  const std::size_t row3_faces = m.face_count();
+  m.add_quad(6, 7, 10, 9);
+  m.add_quad(7, 8, 11, 10);
+  CHECK(guard.folded_vertices(m, row3_faces, 9) == std::vector<std::int32_t>{9, 10, 11});
+  m.faces.resize(row3_faces);  // undone: rows 0-2 are a 2 x 2 sheet of quads
+  CHECK(guard.boundary().size() == 8);
+  CHECK(boundary_edges(m).size() == 8);
+}

@@ -183,6 +183,7 @@ class Engine {
   }
 
   SurfaceResult finish() {
+    fold_guard_.wait();
     // Only a surface that tore (its front was cut into parts) has gaps to close.
     if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
       StageTimer timer(report_.times.gaps);
@@ -426,6 +427,7 @@ class Engine {
   void link_guarded(Front<N>&& part, const Front<N>& old, int step, std::size_t first_inserted,
                     std::vector<Front<N>>& out) {
     constexpr int kRounds = 3;
+    fold_guard_.wait();  // the faces stitched last are accepted before any is added
     std::vector<Front<N>> pieces;
     pieces.push_back(std::move(part));
     for (int round = 0;; ++round) {
@@ -441,7 +443,8 @@ class Engine {
       }
       if (folded.empty() || round + 1 == kRounds) {
         if (!folded.empty()) report_.folds_left += folded.size();
-        fold_guard_.accept(mesh_, faces);
+        // The next front step (α, rips, advance, adapt) adds no face: it runs meanwhile.
+        fold_guard_.accept_aside(mesh_, faces);
         for (auto& piece : pieces) out.push_back(std::move(piece));
         return;
       }

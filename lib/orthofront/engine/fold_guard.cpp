@@ -83,6 +83,11 @@ void FoldGuard::rebuild(const Mesh& mesh) {
   accept(mesh, 0);
 }
 
+void FoldGuard::accept_aside(const Mesh& mesh, std::size_t first_face) {
+  pending_.wait();
+  pending_.run([this, &mesh, first_face] { accept(mesh, first_face); });
+}
+
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
   const std::size_t end = mesh.faces.size();
   // The faces just checked are the ones accepted, their normals already known.

@@ -2,6 +2,8 @@
 /// Folds caught at stitch time: a face of the strip just stitched whose normal turns by more than
 /// 90° from a neighbour's across a shared edge (the quality measure's definition of a fold), the
 /// neighbour being another face of that strip or a face of the surface so far.
+#include <tbb/task_group.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -13,6 +15,11 @@ namespace orthofront {
 
 class FoldGuard {
  public:
+  FoldGuard() = default;
+  FoldGuard(const FoldGuard&) = delete;
+  FoldGuard& operator=(const FoldGuard&) = delete;
+  ~FoldGuard() { pending_.wait(); }
+
   /// Starts from a surface made elsewhere (a restored engine): every face of `mesh` is accepted.
   void rebuild(const Mesh& mesh);
 
@@ -24,6 +31,14 @@ class FoldGuard {
 
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
+
+  /// accept() as a task beside the caller, which goes on with the next front step: it reads
+  /// only `mesh.faces` from first_face on, so the caller may change any other part of the mesh
+  /// (add vertices, set attributes) but must call wait() before it adds, removes or moves faces
+  /// or calls any other member.
+  void accept_aside(const Mesh& mesh, std::size_t first_face);
+  /// Waits for accept_aside's task (rethrows what it threw).
+  void wait() { pending_.wait(); }
 
   /// The accepted surface's boundary edges, as their faces walk them: those with one face (and,
   /// on a non-manifold mesh, those with an odd number: boundary_edges() leaves those out).
@@ -89,6 +104,7 @@ class FoldGuard {
   /// Unit normals of the faces checked since the last accept(), from face checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
+  tbb::task_group pending_;  ///< accept_aside's task
 };
 
 }  // namespace orthofront

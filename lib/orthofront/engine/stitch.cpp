@@ -8,7 +8,7 @@ void StripStitcher<N>::smooth_rows(const Front<N>& f, std::vector<char>& fresh) 
   const double full = opt_.skip_fraction * opt_.edge;
   const double low = 0.5 * full;
   const double high = 0.9 * opt_.edge;
-  auto moved = [&](std::size_t i) { return (f.v[i].x - f.v[i].anchor).norm(); };
+  auto moved = [&](std::size_t i) { return moved_[i]; };
   auto movable = [&](std::size_t i) { return f.v[i].origin >= 0 && moved(i) >= low; };
   // Inserted vertices count as moving (they are new mesh vertices).
   auto moving = [&](std::size_t i) { return f.v[i].origin < 0 || fresh[i]; };
@@ -50,11 +50,14 @@ void StripStitcher<N>::smooth_rows(const Front<N>& f, std::vector<char>& fresh) 
 template <int N>
 void StripStitcher<N>::emit_moved(Front<N>& f, const Front<N>& old, int step) {
   const std::size_t n = f.v.size();
-  std::vector<char> fresh(n, 0);
+  std::vector<char>& fresh = fresh_;
+  fresh.assign(n, 0);
+  moved_.resize(n);
   const double min_move = opt_.skip_fraction * opt_.edge;
   for (std::size_t i = 0; i < n; ++i) {
+    moved_[i] = 0;
     if (f.v[i].origin < 0) continue;  // inserted: already a mesh vertex
-    const double distance = (f.v[i].x - f.v[i].anchor).norm();
+    const double distance = moved_[i] = (f.v[i].x - f.v[i].anchor).norm();
     // Without row skipping every vertex that moved at all gets a new mesh vertex; one whose α
     // was clamped to 0 did not move and keeps its own (a copy would make a zero-area face).
     const bool every_row = row_skip_ == RowSkip::off;
@@ -80,9 +83,9 @@ bool StripStitcher<N>::lands_on_mesh_vertex(const Front<N>& f, const Front<N>& o
                                              const std::vector<char>& fresh,
                                              std::size_t i) const {
   const double tolerance = 1e-8 * opt_.edge;
-  const auto near = [&](const Vec3& p) {
-    return (p - f.v[i].x.template head<3>()).norm() <= tolerance;
-  };
+  const double tolerance2 = tolerance * tolerance;
+  const Vec3 x = f.v[i].x.template head<3>();
+  const auto near = [&](const Vec3& p) { return (p - x).squaredNorm() <= tolerance2; };
   const auto near_mesh = [&](std::int32_t m) {
     return m >= 0 && near(mesh_.positions[static_cast<std::size_t>(m)]);
   };

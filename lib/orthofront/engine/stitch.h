@@ -43,6 +43,7 @@ class StripStitcher {
   /// Row skipping leaves one triangle wherever a waiting vertex neighbours a moving one. Grow
   /// moving regions into neighbours that went at least half the way, and let short waiting
   /// or moving runs join their surroundings, so rows start and end in few places.
+  /// moved_[i]: how far vertex i went from its mesh vertex (emit_moved fills it).
   void smooth_rows(const Front<N>& f, std::vector<char>& fresh) const;
 
   /// Whether moved vertex i of the front, if it got a new mesh vertex, would lie on (within
@@ -95,6 +96,10 @@ class StripStitcher {
   bool closed_seed_;
   Mesh& mesh_;
   SurfaceReport& report_;
+  // emit_moved's scratch, kept between steps: which vertices get a new mesh vertex, and how far
+  // each went from its old one (one square root per vertex for all of row skipping's rules).
+  std::vector<char> fresh_;
+  std::vector<double> moved_;
 };
 
 extern template class StripStitcher<3>;
