@@ -94,7 +94,7 @@ void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
   const bool checked = first_face == checked_first_ && end - first_face == checked_normals_.size();
   for (std::size_t f = first_face; f < end; ++f) {
     const Vec3 normal =
-        checked ? checked_normals_[f - first_face] : unit_normal(mesh, mesh.faces[f]);
+        checked ? checked_normals_[f - first_face] : area_vector(mesh, mesh.faces[f]);
     for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
       // An edge's second face puts it inside the surface.
       if (!open_.remove(a, b)) open_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
@@ -130,7 +130,9 @@ std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size
   };
   for (std::size_t f = first_face; f < end; ++f) {
     const Face& face = mesh.faces[f];
-    const Vec3 n0 = unit_normal(mesh, face);
+    // The area vector, not the unit normal: a fold is a negative dot product, whose sign does not
+    // depend on the lengths (and a face's area vector is zero exactly where its normal is).
+    const Vec3 n0 = area_vector(mesh, face);
     checked_normals_.push_back(n0);
     const auto face_id = static_cast<std::uint32_t>(f);
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {

@@ -51,7 +51,7 @@ class FoldGuard {
   class EdgeLists {
    public:
     struct Entry {
-      Vec3 normal;           ///< the face's unit normal (zero for a face without area)
+      Vec3 normal;           ///< the face's area vector (zero for a face without area)
       std::int32_t other;    ///< the edge's higher vertex
       std::uint32_t face;
       bool forward;          ///< the face walks the edge from its lower to its higher vertex
@@ -101,7 +101,7 @@ class FoldGuard {
   /// every edge a new strip can share with it (the front's rows among them).
   EdgeLists open_;
   EdgeLists strip_;  ///< scratch: the faces of the part being checked
-  /// Unit normals of the faces checked since the last accept(), from face checked_first_ on.
+  /// Area vectors of the faces checked since the last accept(), from face checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
   tbb::task_group pending_;  ///< accept_aside's task
