@@ -22,9 +22,10 @@ void FrontAdapter<N>::merge_short(Front<N>& f) {
   const std::size_t n = f.v.size();
   if (n < 3) return;
   const double limit = opt_.merge_factor * opt_.edge;
-  std::vector<FrontVertex<N>> out;
-  out.reserve(n);
-  out.push_back(f.v[0]);
+  // Kept vertices are compacted in place: v[0, kept) is the merged front so far (most steps
+  // merge nothing, and a copy of the front each step cost more than the checks).
+  std::vector<FrontVertex<N>>& v = f.v;
+  std::size_t kept = 1;
   // A vertex that keeps its mesh vertex between two others that keep theirs is not merged:
   // the three old mesh vertices would close a flat triangle on the previous front.
   const double still = opt_.row_skip == RowSkip::off ? 0.0 : opt_.skip_fraction * opt_.edge;
@@ -38,29 +39,30 @@ void FrontAdapter<N>::merge_short(Front<N>& f) {
     return !has_moved(a, opt_.edge) && !has_moved(b, opt_.edge);
   };
   for (std::size_t i = 1; i + 1 < n; ++i) {
-    const double joined = (f.v[i].x - out.back().x).norm() + (f.v[i + 1].x - f.v[i].x).norm();
+    const FrontVertex<N>& last = v[kept - 1];
+    const double joined = (v[i].x - last.x).norm() + (v[i + 1].x - v[i].x).norm();
     // A closed front keeps three vertices at least: with two, both of its segments join the
     // same two vertices, and the faces stitched to them share both edges (non-manifold).
-    const bool loop_kept = !f.closed || out.size() + (n - 1 - i) >= 3;
-    if (joined < limit && loop_kept &&
-        !(waiting(out.back()) && waiting(f.v[i]) && waiting(f.v[i + 1])) &&
-        !stuck(out.back(), f.v[i + 1])) {
+    const bool loop_kept = !f.closed || kept + (n - 1 - i) >= 3;
+    if (joined < limit && loop_kept && !(waiting(last) && waiting(v[i]) && waiting(v[i + 1])) &&
+        !stuck(last, v[i + 1])) {
       ++report_.merges;
       continue;
     }
-    out.push_back(f.v[i]);
+    if (kept != i) v[kept] = v[i];
+    ++kept;
   }
-  out.push_back(f.v[n - 1]);
-  if (f.closed && out.size() > 3 && !stuck(out[out.size() - 2], out.front())) {
+  if (kept != n - 1) v[kept] = v[n - 1];
+  ++kept;
+  v.resize(kept);
+  if (f.closed && kept > 3 && !stuck(v[kept - 2], v.front())) {
     // The closing pair: drop the last vertex when it and its closing segment are short.
-    const double joined =
-        (out.back().x - out[out.size() - 2].x).norm() + (out.front().x - out.back().x).norm();
+    const double joined = (v.back().x - v[kept - 2].x).norm() + (v.front().x - v.back().x).norm();
     if (joined < limit) {
-      out.pop_back();
+      v.pop_back();
       ++report_.merges;
     }
   }
-  f.v = std::move(out);
 }
 
 template <int N>
