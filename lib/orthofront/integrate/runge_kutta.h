@@ -96,6 +96,7 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
   }
   double done = 0;
   int rejections_in_row = 0;
+  bool rejected_before = false;  // the last attempt was rejected
   int next_stop_check = kStopCheckEvaluations;
   while (done < span) {
     if (stop && out.evaluations >= next_stop_check) {
@@ -159,10 +160,17 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
       done += h;
       rejections_in_row = 0;
       // 0.9 norm^-0.2 >= 5 for norm <= 1.8896e-4: the capped factor needs no pow there.
-      const double grow = norm < 1.8e-4 ? 5.0 : std::min(5.0, 0.9 * std::pow(norm, -0.2));
+      double grow = norm < 1.8e-4 ? 5.0 : std::min(5.0, 0.9 * std::pow(norm, -0.2));
+      // No growth right after a rejection (Hairer & Wanner's DOPRI5): on gridded data the
+      // trilinear field's kinks at cell faces reject a step that grew back at once, so a stream
+      // line crossing cells paid more rejected steps than accepted ones (tornado: 235,468
+      // rejected against 192,572 accepted; with this rule 138,715 against 199,710).
+      if (rejected_before) grow = std::min(grow, 1.0);
+      rejected_before = false;
       h *= grow;
     } else {
       h *= std::max(0.2, 0.9 * std::pow(norm, -0.2));
+      rejected_before = true;
       if (h < h_min || ++rejections_in_row > 60) {
         out.status = FieldStatus::no_data;  // step control failed: treat as no usable flow
         out.reached = dir * done;
