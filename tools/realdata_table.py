@@ -2,8 +2,8 @@
 """Stream surfaces on the shared real data sets in three variants side by side: without the fold
 guard, the stall cut and gap closing (the engine as it was before them), with the guard only, and
 the default (all three): quads, angles, edge spread, folds, non-manifold edges, T-junctions, fold
-rips, stall cuts, gap faces, boundary edges, why α was clamped and insertions fell back, and time
-by stage.
+rips, stall cuts, gap faces, boundary edges, why α was clamped and insertions fell back, seed
+shots skipped, field evaluations, and time by stage.
 
     tools/realdata_table.py [--binary build/apps/orthofront] [--data ../shared/datasets]
                             [--json table.json]
@@ -70,6 +70,8 @@ def row(name, variant, r):
         "clamped_by_cause": c["clamped_alpha_by_cause"],
         "fallback_pct": 100.0 * c["insertion_fallbacks"] / max(1, inserted),
         "previous_row_insertions": c["previous_row_insertions"],
+        "seed_shots_skipped": c.get("seed_shots_skipped", 0),
+        "evaluations": c["field_evaluations"],
         "fallbacks_by_cause": c["insertion_fallbacks_by_cause"],
         "skipped_pct": 100.0 * c["skipped_vertex_steps"] / max(1, c["vertex_steps"]),
         "times_s": {k: t[k] for k in ("total", "alpha", "advance", "adapt", "stitch", "quality")
@@ -86,7 +88,7 @@ def main():
     a = parser.parse_args()
     rows = []
     header = ("case", "variant", "verts", "quads%", "ang±10%", "spread", "folds", "nm", "tj",
-              "degen", "rips", "stall", "gap faces", "boundary", "clamp%", "fallb%", "skip%", "total s", "alpha", "advance",
+              "degen", "rips", "stall", "gap faces", "boundary", "clamp%", "fallb%", "skip%", "shots skipped", "evals M", "total s", "alpha", "advance",
               "adapt", "stitch", "quality")
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
@@ -101,12 +103,13 @@ def main():
                 rows.append(x)
                 t = x["times_s"]
                 print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %d | %d | %d | %.1f | %.1f | "
-                      "%.1f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |" % (
+                      "%.1f | %d | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |" % (
                           name, variant, x["vertices"], x["quads_pct"],
                           x["angles_within_10_pct"], x["edge_spread"], x["folds"],
                           x["non_manifold_edges"], x["t_junctions"], x["degenerate_faces"],
                           x["fold_rips"], x["stall_cuts"], x["gap_faces"], x["boundary_edges"],
                           x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
+                          x["seed_shots_skipped"], x["evaluations"] / 1e6,
                           t.get("total", 0), t.get("alpha", 0), t.get("advance", 0),
                           t.get("adapt", 0), t.get("stitch", 0), t.get("quality", 0)))
     print()

@@ -1,7 +1,8 @@
 #pragma once
 /// One particle through one slab: fixed-step RK4, or Dormand-Prince 5(4) with per-particle step
 /// control (the controller of integrate/runge_kutta.h: same coefficients, growth and rejection
-/// rules; the factor norm^(-1/5) by a fixed Newton iteration). Written once for the CPU and a CUDA kernel: plain arrays, no Eigen, no exceptions.
+/// rules, no growth right after a rejection; the factor norm^(-1/5) by a fixed Newton
+/// iteration). Written once for the CPU and a CUDA kernel: plain arrays, no Eigen, no exceptions.
 #include <cstdint>
 
 #include "orthofront/advect/particle_status.h"
@@ -140,6 +141,7 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
   double done = 0;
   double planned = h;  // the controller's step before a cut to the span's end
   int rejections_in_row = 0;
+  bool rejected_before = false;  // the last attempt was rejected: the next accepted one keeps h
   while (done < span) {
     bool last = false;
     planned = h;
@@ -209,9 +211,13 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
       // on), nor where the growth is capped (0.9 norm^(-1/5) > 5.04 below 1.8e-4).
       if (last)
         h = planned;
-      else
+      else if (!rejected_before)
         h *= norm < 1.8e-4 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
+      else if (norm >= 1.8e-4)
+        h *= detail::min_of(1.0, 0.9 * detail::inverse_fifth_root(norm));
+      rejected_before = false;
     } else {
+      rejected_before = true;
       // (0.9 norm^(-1/5) < 0.197 from 2000 on: the cut is capped at 0.2.)
       h *= norm >= 2000 ? 0.2 : detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm));
       if (h < h_min || ++rejections_in_row > 60) {
