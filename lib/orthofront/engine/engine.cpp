@@ -443,8 +443,12 @@ class Engine {
       }
       if (folded.empty() || round + 1 == kRounds) {
         if (!folded.empty()) report_.folds_left += folded.size();
-        // The next front step (α, rips, advance, adapt) adds no face: it runs meanwhile.
-        fold_guard_.accept_aside(mesh_, faces);
+        // The next front step (α, rips, advance, adapt) adds no face: it runs meanwhile, where
+        // the strip is large enough to pay for waking a thread (the per-vertex stages' rule).
+        if (mesh_.face_count() - faces >= opt_.parallel_threshold)
+          fold_guard_.accept_aside(mesh_, faces);
+        else
+          fold_guard_.accept(mesh_, faces);
         for (auto& piece : pieces) out.push_back(std::move(piece));
         return;
       }
