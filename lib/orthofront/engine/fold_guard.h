@@ -18,7 +18,14 @@ class FoldGuard {
   FoldGuard() = default;
   FoldGuard(const FoldGuard&) = delete;
   FoldGuard& operator=(const FoldGuard&) = delete;
-  ~FoldGuard() { pending_.wait(); }
+  /// Waits for accept_aside's task; what it threw is dropped here (the surface is being
+  /// abandoned: an engine that goes on calls wait() first).
+  ~FoldGuard() {
+    try {
+      pending_.wait();
+    } catch (...) {
+    }
+  }
 
   /// Starts from a surface made elsewhere (a restored engine): every face of `mesh` is accepted.
   void rebuild(const Mesh& mesh);
