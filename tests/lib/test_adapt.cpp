@@ -4,26 +4,12 @@
 #include <catch2/catch.hpp>
 #include <vector>
 
+#include "lib/uniform_field.h"
 #include "orthofront/engine/adapt.h"
 
 using namespace orthofront;
 
 namespace {
-
-/// v = (1, 0, 0) everywhere.
-class Uniform final : public Field3 {
- public:
-  FieldStatus velocity(const Vec3&, Vec3& v) const override {
-    v = Vec3(1, 0, 0);
-    return FieldStatus::inside;
-  }
-  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
-    j.setZero();
-    return velocity(x, v);
-  }
-  Box<3> domain() const override { return Box<3>{Vec3::Constant(-10), Vec3::Constant(10)}; }
-  std::string describe() const override { return "uniform"; }
-};
 
 FrontVertex<3> vertex(const Vec3& x, double s, double t, std::int32_t origin) {
   FrontVertex<3> fv;
@@ -44,7 +30,7 @@ struct Setup {
     old.v = {vertex(Vec3(0.9, shift, 0), 0, 0.9, 0), vertex(Vec3(0.9, 2 + shift, 0), 1, 0.9, 1)};
     front.v = {vertex(Vec3(1, shift, 0), 0, 1, 0), vertex(Vec3(1, 2 + shift, 0), 1, 1, 1)};
   }
-  Uniform field;
+  test::UniformField field;
   Seed<3> seed = make_seed(SeedCurve::line(Vec3(0, 0, 0), Vec3(0, 2, 0)), 2);
   StreamSurfaceOptions options;
   Tolerance tolerance;

@@ -4,26 +4,12 @@
 #include <cmath>
 #include <vector>
 
+#include "lib/uniform_field.h"
 #include "orthofront/engine/alpha_step.h"
 
 using namespace orthofront;
 
 namespace {
-
-/// v = (1, 0, 0) everywhere.
-class Uniform final : public Field3 {
- public:
-  FieldStatus velocity(const Vec3&, Vec3& v) const override {
-    v = Vec3(1, 0, 0);
-    return FieldStatus::inside;
-  }
-  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
-    j.setZero();
-    return velocity(x, v);
-  }
-  Box<3> domain() const override { return Box<3>{Vec3::Constant(-10), Vec3::Constant(10)}; }
-  std::string describe() const override { return "uniform"; }
-};
 
 /// n vertices from (0, 0, 0) along `direction`, spaced 0.1.
 Front<3> straight_front(const Vec3& direction, int n) {
@@ -37,7 +23,7 @@ Front<3> straight_front(const Vec3& direction, int n) {
 }
 
 struct Setup {
-  Uniform field;
+  test::UniformField field;
   StreamSurfaceOptions options;
   Mesh mesh;
   SurfaceReport report;

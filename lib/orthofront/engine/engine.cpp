@@ -183,7 +183,7 @@ class Engine {
   }
 
   SurfaceResult finish() {
-    fold_guard_.wait();
+    fold_guard_.wait();  // gap closing and the unused-vertex sweep change faces
     // Only a surface that tore (its front was cut into parts) has gaps to close.
     if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
       StageTimer timer(report_.times.gaps);

@@ -70,6 +70,7 @@ bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
 }
 
 std::vector<BoundaryEdge> FoldGuard::boundary() const {
+  pending_.wait();
   std::vector<BoundaryEdge> out;
   open_.for_each([&](std::int32_t lo, const EdgeLists::Entry& e) {
     const auto face = static_cast<std::int32_t>(e.face);
@@ -79,16 +80,22 @@ std::vector<BoundaryEdge> FoldGuard::boundary() const {
 }
 
 void FoldGuard::rebuild(const Mesh& mesh) {
+  pending_.wait();
   open_.clear();
-  accept(mesh, 0);
+  add_to_boundary(mesh, 0);
 }
 
 void FoldGuard::accept_aside(const Mesh& mesh, std::size_t first_face) {
   pending_.wait();
-  pending_.run([this, &mesh, first_face] { accept(mesh, first_face); });
+  pending_.run([this, &mesh, first_face] { add_to_boundary(mesh, first_face); });
 }
 
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
+  pending_.wait();
+  add_to_boundary(mesh, first_face);
+}
+
+void FoldGuard::add_to_boundary(const Mesh& mesh, std::size_t first_face) {
   const std::size_t end = mesh.faces.size();
   // The faces just checked are the ones accepted, their normals already known.
   const bool checked = first_face == checked_first_ && end - first_face == checked_normals_.size();
@@ -105,6 +112,7 @@ void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
                                                      std::size_t first_new_vertex) {
+  pending_.wait();
   std::vector<std::int32_t> out;
   const std::size_t end = mesh.faces.size();
   // Parts of one step are checked one after another: keep their normals for accept().

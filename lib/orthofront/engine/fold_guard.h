@@ -41,8 +41,8 @@ class FoldGuard {
 
   /// accept() as a task beside the caller, which goes on with the next front step: it reads
   /// only `mesh.faces` from first_face on, so the caller may change any other part of the mesh
-  /// (add vertices, set attributes) but must call wait() before it adds, removes or moves faces
-  /// or calls any other member.
+  /// (add vertices, set attributes) but must call wait() before it adds, removes or moves faces.
+  /// The other members wait for it themselves.
   void accept_aside(const Mesh& mesh, std::size_t first_face);
   /// Waits for accept_aside's task (rethrows what it threw).
   void wait() { pending_.wait(); }
@@ -52,6 +52,9 @@ class FoldGuard {
   std::vector<BoundaryEdge> boundary() const;
 
  private:
+  /// accept()'s work, without waiting for accept_aside's task (it is that task's body).
+  void add_to_boundary(const Mesh& mesh, std::size_t first_face);
+
   /// Faces on undirected edges, listed with the edge's lower vertex: a list head per mesh vertex
   /// and pooled entries, so a step allocates nothing once the pool has grown (a hash map's node
   /// per edge made the guard cost more than the rest of stitching).
@@ -111,7 +114,7 @@ class FoldGuard {
   /// Area vectors of the faces checked since the last accept(), from face checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
-  tbb::task_group pending_;  ///< accept_aside's task
+  mutable tbb::task_group pending_;  ///< accept_aside's task (boundary() const waits too)
 };
 
 }  // namespace orthofront
