@@ -1,6 +1,7 @@
 // Grid fields: exact reproduction of linear fields, convergence order, no-data handling, 2D
 // grids, and stream surfaces on sampled data against the analytic fields they came from.
 #include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
@@ -412,4 +413,135 @@ TEST_CASE("sample_field writes NaN outside the field and validates its input", "
   CHECK(std::isnan(grid.values[3 * grid.geometry.index(4, 1, 1)]));
   options.resolution = {5, 1, 5};
   CHECK_THROWS_WITH(sample_field(*saddle, options), Catch::Contains("along y must be at least 2"));
+}
+
+namespace {
+
+// Which cell of the grid's interior faces a point is in, per axis: the number of interior
+// sample coordinates at or below it (defined beyond the bounds too).
+std::array<long, 3> face_count_below(const GridGeometry& g, const Vec3& p) {
+  std::array<long, 3> key{0, 0, 0};
+  for (int a = 0; a < g.dimension; ++a)
+    for (std::int64_t i = 1; i + 1 < g.size[static_cast<std::size_t>(a)]; ++i)
+      key[static_cast<std::size_t>(a)] += g.coordinate(a, i) <= p[a];
+  return key;
+}
+
+// next_cell_face against counting: no face between `after` and the answer, one at it.
+void check_next_face(const GridGeometry& g, const Vec3& x, const Vec3& w, double after) {
+  const double tau = g.next_cell_face(x, w, after);
+  const double end = std::isfinite(tau) ? tau : after + 50;
+  const auto inside = face_count_below(g, x + 0.5 * (after + end) * w);
+  for (int i = 0; i < 64; ++i) {
+    const double s = after + (end - after) * (i + 0.5) / 64;
+    REQUIRE(face_count_below(g, x + s * w) == inside);
+  }
+  if (std::isfinite(tau)) {
+    REQUIRE(tau > after);
+    const double eps = 1e-9 * std::max(1.0, tau);
+    REQUIRE(face_count_below(g, x + (tau - eps) * w) != face_count_below(g, x + (tau + eps) * w));
+  }
+}
+
+// A field that hides its kinks from the integrator: DOPRI5 steps across cell faces as before.
+class WithoutKinks final : public Field3 {
+ public:
+  explicit WithoutKinks(const Field3& base) : base_(base) {}
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override { return base_.velocity(x, v); }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override {
+    return base_.velocity_jacobian(x, v, J);
+  }
+  Box<3> domain() const override { return base_.domain(); }
+  std::string describe() const override { return base_.describe(); }
+
+ private:
+  const Field3& base_;
+};
+
+}  // namespace
+
+TEST_CASE("cell faces: the first interior face a straight path crosses", "[grid][kinks]") {
+  GridGeometry uniform;
+  uniform.size = {9, 9, 9};
+  uniform.origin = Vec3(-4, -4, -4);
+  // Hand-made: faces at integers strictly inside [-4, 4].
+  CHECK(uniform.next_cell_face(Vec3(0.25, 0.5, -3.5), Vec3(1, -2, 0), 0) == 0.25);
+  CHECK(uniform.next_cell_face(Vec3(0.25, 0.5, -3.5), Vec3(1, -2, 0), 0.25) == 0.75);
+  CHECK(std::isinf(uniform.next_cell_face(Vec3(3.5, 0, 0), Vec3(1, 0, 0), 0)));  // the bound
+  CHECK(std::isinf(uniform.next_cell_face(Vec3(0.5, 0.5, 0.5), Vec3::Zero(), 0)));
+  GridField field(std::make_shared<const VectorGrid>(
+                      VectorGrid{uniform, 3, std::vector<float>(uniform.point_count() * 3, 1.0f)}),
+                  analytic_samples());
+  CHECK(field.next_kink(Vec3(0.25, 0.5, -3.5), Vec3(1, -2, 0), 0, 0.3) == 0.25);
+  CHECK(std::isinf(field.next_kink(Vec3(0.25, 0.5, -3.5), Vec3(1, -2, 0), 0, 0.2)));
+
+  GridGeometry rectilinear = uniform;
+  for (int a = 0; a < 3; ++a) rectilinear.axes[static_cast<std::size_t>(a)] = uneven_axis(-1, 1.5, 3 + a);
+  for (int a = 0; a < 3; ++a)
+    rectilinear.size[static_cast<std::size_t>(a)] =
+        static_cast<std::int64_t>(rectilinear.axes[static_cast<std::size_t>(a)].size());
+  GridGeometry flat = uniform;  // 2D: no faces across z
+  flat.dimension = 2;
+  flat.size[2] = 1;
+  CHECK(std::isinf(flat.next_cell_face(Vec3(0.5, 0.5, 0.5), Vec3(0, 0, 1), 0)));
+
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (const GridGeometry* g : {&uniform, &rectilinear, &flat}) {
+    for (int i = 0; i < 300; ++i) {
+      const Vec3 x(u(rng) * 1.5, u(rng) * 1.5, u(rng) * 1.5);
+      const Vec3 w(u(rng), u(rng), i % 7 == 0 ? 0.0 : u(rng));
+      const double after = i % 3 == 0 ? 0.0 : 0.3 * (u(rng) + 1);
+      check_next_face(*g, x, w, after);
+    }
+    // From a face, the next one.
+    const Vec3 on_face(g->coordinate(0, 2), 0.1, 0.1);
+    check_next_face(*g, on_face, Vec3(1, 0, 0), 0);
+    check_next_face(*g, on_face, Vec3(-1, 0, 0), 0);
+  }
+}
+
+TEST_CASE("cell-aware DOPRI5 steps: the same stream lines for fewer evaluations",
+          "[grid][kinks][integrate]") {
+  // A nonlinear field on a coarse grid: its trilinear interpolant has kinks at every face.
+  const auto abc = make_analytic_field("abc");
+  const GridField grid(sampled(*abc, 17, 17, 17), analytic_samples());
+  const WithoutKinks hidden(grid);
+  const Tolerance tol{1e-9, 1e-9};
+  std::mt19937_64 rng(23);
+  const Box<3> box = grid.domain();
+  const Box<3> inner{box.lo + 0.25 * (box.hi - box.lo), box.hi - 0.25 * (box.hi - box.lo)};
+  long with_kinks = 0, without = 0, compared = 0;
+  double worst_with = 0, worst_without = 0;
+  for (const Vec3& x0 : random_points(inner, 40, 29)) {
+    for (const double tau : {1.5, -1.5}) {
+      const IntegrationResult<3> a = integrate_dopri5(grid, x0, tau, tol);
+      const IntegrationResult<3> b = integrate_dopri5(hidden, x0, tau, tol);
+      REQUIRE(a.status == b.status);
+      if (a.status != FieldStatus::inside) continue;
+      ++compared;
+      // Against the interpolant's stream line at a far tighter tolerance: cell-aware steps are
+      // at least as close to it as steps across the faces.
+      const IntegrationResult<3> exact = integrate_dopri5(grid, x0, tau, Tolerance{1e-14, 1e-14});
+      REQUIRE(exact.status == FieldStatus::inside);
+      const double error_with = (a.x - exact.x).norm(), error_without = (b.x - exact.x).norm();
+      UNSCOPED_INFO("errors " << error_with << " " << error_without);
+      worst_with = std::max(worst_with, error_with);
+      worst_without = std::max(worst_without, error_without);
+      with_kinks += a.evaluations;
+      without += b.evaluations;
+    }
+  }
+  REQUIRE(compared > 40);
+  INFO("worst errors " << worst_with << " " << worst_without);
+  CHECK(worst_with <= worst_without);
+  CHECK(worst_with < 1e-6);
+  INFO("evaluations with cell-aware steps " << with_kinks << ", without " << without);
+  CHECK(static_cast<double>(with_kinks) < 0.8 * static_cast<double>(without));
+  // Smooth fields have no kinks: their integrations are the same as before, bit for bit.
+  const WithoutKinks smooth(*abc);
+  const IntegrationResult<3> a = integrate_dopri5(*abc, Vec3(0.1, 0.2, 0.3), 3.0, tol);
+  const IntegrationResult<3> b = integrate_dopri5(smooth, Vec3(0.1, 0.2, 0.3), 3.0, tol);
+  CHECK(a.x == b.x);
+  CHECK(a.evaluations == b.evaluations);
 }

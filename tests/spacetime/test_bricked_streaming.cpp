@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include "orthofront/io/vdb_grid.h"
 #include "orthofront/advect/dispatch.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
+#include "orthofront/spacetime/lifted_field.h"
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -555,4 +557,55 @@ TEST_CASE("a unit the full budget cannot take fails the evaluation once; later m
   CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(3));
   // The band itself still reads.
   CHECK(field.velocity(Vec3(0.7, 0.3, 0), 5.5, v) == FieldStatus::inside);
+}
+
+TEST_CASE("a streamed field's kinks are its cell faces and time steps; the lifted field "
+          "forwards them",
+          "[spacetime][bricks][kinks]") {
+  TempDir dir("bricks-kinks");
+  for (int dimension : {2, 3})
+    for (bool rectilinear : {false, true}) {
+      INFO(dimension << "D, " << (rectilinear ? "rectilinear" : "uniform"));
+      const GridGeometry g = test_grid(dimension, rectilinear);
+      const auto file = write_series(dir, g, dimension, 5, 4, false);
+      const auto series = io::open_hdf5_series(file);
+      CacheOptions options;
+      options.budget_bytes = 64 << 20;
+      BrickCache cache(*series, options);
+      const StreamedField field(cache);
+      // Interior faces and interior time steps below a space-time point, counted.
+      const auto key = [&](const Vec3& p, double t) {
+        std::array<long, 4> k{0, 0, 0, 0};
+        for (int a = 0; a < dimension; ++a)
+          for (std::int64_t i = 1; i + 1 < g.size[static_cast<std::size_t>(a)]; ++i)
+            k[static_cast<std::size_t>(a)] += g.coordinate(a, i) <= p[a];
+        for (std::size_t s = 1; s + 1 < series->step_count(); ++s) k[3] += series->time(s) <= t;
+        return k;
+      };
+      std::mt19937_64 rng(31);
+      std::uniform_real_distribution<double> u(0, 1);
+      const Box<3> box = g.bounds();
+      for (int i = 0; i < 200; ++i) {
+        Vec3 x = box.lo + (box.hi - box.lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+        Vec3 w(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+        const double t = 2 * u(rng), w_t = i % 5 == 0 ? 0.0 : u(rng) - 0.3;
+        const double after = i % 2 ? 0.0 : 0.05 * u(rng), before = 0.4;
+        const double tau = field.next_kink(x, t, w, w_t, after, before);
+        const double end = std::isfinite(tau) ? tau : before;
+        const auto at = [&](double s) { return key(x + s * w, t + s * w_t); };
+        const auto inside = at(0.5 * (after + end));
+        for (int j = 0; j < 40; ++j) REQUIRE(at(after + (end - after) * (j + 0.5) / 40) == inside);
+        if (std::isfinite(tau)) {
+          REQUIRE(tau > after);
+          REQUIRE(tau < before);
+          REQUIRE(at(tau - 1e-9) != at(tau + 1e-9));
+        }
+        // The lifted field: coordinates (x, c t), velocity (w, c w_t).
+        if (dimension == 3) {
+          const LiftedField<4> lifted(field, 2.0, field.time_range());
+          const Vec<4> X(x.x(), x.y(), x.z(), 2.0 * t), W(w.x(), w.y(), w.z(), 2.0 * w_t);
+          CHECK(lifted.next_kink(X, W, after, before) == tau);
+        }
+      }
+    }
 }

@@ -1,5 +1,6 @@
 #pragma once
 /// The vector-field interface every engine runs on.
+#include <limits>
 #include <string>
 
 #include "orthofront/types.h"
@@ -27,6 +28,15 @@ class Field {
   virtual Box<N> domain() const = 0;
   /// Short human-readable description (name and parameters).
   virtual std::string describe() const = 0;
+  /// The first τ in (after, before) at which the straight path x + τ w crosses a face where the
+  /// field's derivative may jump (a face between two cells of an interpolated grid), or +inf
+  /// where there is none: integrators end their steps just past such faces instead of stepping
+  /// across them, since a step across a kink fails the error test unless it is tiny. Smooth
+  /// fields keep the default.
+  virtual double next_kink(const Vec<N>& x, const Vec<N>& w, double after, double before) const {
+    (void)x, (void)w, (void)after, (void)before;
+    return std::numeric_limits<double>::infinity();
+  }
 };
 
 using Field3 = Field<3>;

@@ -38,11 +38,19 @@ struct GridGeometry {
     }
     return b;
   }
+  /// The first τ > after at which the straight path x + τ w crosses a face between two cells
+  /// (an interior sample plane of one of the grid's `dimension` axes); +inf where it crosses none.
+  double next_cell_face(const Vec3& x, const Vec3& w, double after) const;
   /// Linear index of point (i, j, k): x fastest.
   std::size_t index(std::int64_t i, std::int64_t j, std::int64_t k) const {
     return static_cast<std::size_t>(i + size[0] * (j + size[1] * k));
   }
 };
+
+/// The first of the interior coordinates coords[1 .. size - 2] (increasing) strictly above
+/// `from` (`up`) or strictly below it; NaN where there is none. Interior sample planes (and
+/// interior time steps of a series) are where an interpolant's derivative jumps.
+double next_interior_coordinate(const std::vector<double>& coords, double from, bool up);
 
 /// Vector samples on a grid: `components` floats per point (2 or 3), interleaved, x fastest.
 /// NaN marks a missing value (fill values are turned into NaN by the readers).

@@ -5,8 +5,9 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <cmath>
 #include <charconv>
+#include <cmath>
+#include <limits>
 #include <utility>
 
 #include "orthofront/error.h"
@@ -207,6 +208,11 @@ FieldStatus GridField::dispatch(const Vec3& x, Vec3& v, Mat3* J) const {
     default:
       return evaluate<3, 3, true, WithJacobian>(x, v, J);
   }
+}
+
+double GridField::next_kink(const Vec3& x, const Vec3& w, double after, double before) const {
+  const double tau = grid_->geometry.next_cell_face(x, w, after);
+  return tau < before ? tau : std::numeric_limits<double>::infinity();
 }
 
 FieldStatus GridField::velocity(const Vec3& x, Vec3& v) const {

@@ -49,6 +49,8 @@ class GridField final : public Field3 {
   FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override;
   Box<3> domain() const override { return domain_; }
   std::string describe() const override;
+  /// The cell faces inside the grid (the interpolant is smooth within a cell only).
+  double next_kink(const Vec3& x, const Vec3& w, double after, double before) const override;
 
   const VectorGrid& grid() const { return *grid_; }
   const std::shared_ptr<const VectorGrid>& shared_grid() const { return grid_; }

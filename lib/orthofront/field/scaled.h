@@ -53,6 +53,9 @@ class BasicScaledField final : public Field<N> {
     return status;
   }
   Box<N> domain() const override { return box_; }
+  double next_kink(const Vec<N>& x, const Vec<N>& w, double after, double before) const override {
+    return base_.next_kink(to_base(x), w / length_, after, before);
+  }
   std::string describe() const override {
     return "scaled(speed=" + format(speed_) + ",length=" + format(length_) +
            "):" + base_.describe();

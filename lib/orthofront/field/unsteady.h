@@ -38,6 +38,15 @@ class UnsteadyField {
   /// Times at which the field is defined.
   virtual TimeRange time_range() const = 0;
   virtual std::string describe() const = 0;
+  /// The first τ in (after, before) at which the straight space-time path (x + τ w, t + τ w_t)
+  /// crosses a face where the field's derivative may jump (a grid cell's face, a time step of
+  /// a series that is linear in time between steps), or +inf (the default: smooth fields).
+  /// See Field::next_kink.
+  virtual double next_kink(const Vec3& x, double t, const Vec3& w, double w_t, double after,
+                           double before) const {
+    (void)x, (void)t, (void)w, (void)w_t, (void)after, (void)before;
+    return std::numeric_limits<double>::infinity();
+  }
   /// Exact flow map: the position at time t of the particle that is at x0 at time t0. Returns
   /// false when the field has no closed form (the default).
   virtual bool exact_flow_map(const Vec3& x0, double t0, double t, Vec3& x) const {

@@ -28,6 +28,12 @@ inline constexpr int kMaxEvaluations = 1'000'000;
 using StopRequest = std::function<bool()>;
 inline constexpr int kStopCheckEvaluations = 4096;
 
+/// How far past a kink of the field (Field::next_kink) a DOPRI5 step that would cross it ends,
+/// as a share of the controller's step size (tornado, seed across the core: 1e-2 → 1.62 M field
+/// evaluations, 1e-3 → 1.23 M, 1e-4 → 1.20 M, 1e-6 → 1.24 M, 1e-11 → 1.34 M, against 2.26 M
+/// without cell-aware steps; the smallest margins make steps that land just short of a face).
+inline constexpr double kKinkMargin = 1e-4;
+
 struct Tolerance {
   double absolute = 1e-9;  ///< world units (the engine scales it with ℓ)
   double relative = 1e-9;
@@ -108,14 +114,29 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
         return out;
       }
     }
+    // Cell-aware steps: a step that would cross a kink of the field (a grid cell's face, where
+    // the interpolant's derivative jumps) ends just past it instead, at the controller's step
+    // size otherwise. A kink within kKinkMargin·h of a step's end costs an error of order
+    // (kKinkMargin·h)² times the jump, a kink inside it one of order h²: on gridded data the
+    // steps rejected at faces were a third of all attempts. The straight path along v(x)
+    // estimates where the face is; where the path bends away, error control still decides.
+    double step = h;
+    bool clipped = false;
+    const double kink = field.next_kink(out.x, dir * k1, kKinkMargin * h, h);
+    if (kink + kKinkMargin * h < h) {
+      step = kink + kKinkMargin * h;
+      clipped = true;
+    }
     // The last step lands exactly on the span end, so rounding can never leave a sliver of
     // time that no step size covers (done + h == done would loop forever).
     bool last = false;
-    if (span - done <= h * (1 + 1e-12)) {
-      h = span - done;
+    if (span - done <= step * (1 + 1e-12)) {
+      step = span - done;
       last = true;
+      clipped = false;
+      h = step;
     }
-    const double sh = dir * h;
+    const double sh = dir * step;
     const Vec<N>& x = out.x;
     st = field.velocity(x + sh * (a21 * k1), k2);
     if (st == FieldStatus::inside) st = field.velocity(x + sh * (a31 * k1 + a32 * k2), k3);
@@ -138,7 +159,7 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
     }
     if (st != FieldStatus::inside) {
       // A stage left the valid region: shrink towards the boundary, then give up there.
-      h *= 0.5;
+      h = 0.5 * step;
       if (h < h_min || ++rejections_in_row > 60) {
         out.status = st;
         out.reached = dir * done;
@@ -157,7 +178,7 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
       out.x = y;
       k1 = k7;  // first same as last
       if (last) break;  // no next step to size (a front step is usually one step: no pow)
-      done += h;
+      done += step;
       rejections_in_row = 0;
       // 0.9 norm^-0.2 >= 5 for norm <= 1.8896e-4: the capped factor needs no pow there.
       double grow = norm < 1.8e-4 ? 5.0 : std::min(5.0, 0.9 * std::pow(norm, -0.2));
@@ -167,9 +188,10 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
       // rejected against 192,572 accepted; with this rule 138,715 against 199,710).
       if (rejected_before) grow = std::min(grow, 1.0);
       rejected_before = false;
-      h *= grow;
+      // A step cut short at a kink says nothing against the controller's size.
+      h = clipped ? std::max(h, step * grow) : h * grow;
     } else {
-      h *= std::max(0.2, 0.9 * std::pow(norm, -0.2));
+      h = step * std::max(0.2, 0.9 * std::pow(norm, -0.2));
       rejected_before = true;
       if (h < h_min || ++rejections_in_row > 60) {
         out.status = FieldStatus::no_data;  // step control failed: treat as no usable flow

@@ -58,6 +58,12 @@ class TimeLifted final : public Field<N> {
     return b;
   }
   std::string describe() const override { return flow_.describe(); }
+  double next_kink(const Vec<N>& X, const Vec<N>& W, double after, double before) const override {
+    Vec3 x = Vec3::Zero(), w = Vec3::Zero();
+    x.template head<d>() = X.template head<d>();
+    w.template head<d>() = W.template head<d>();
+    return flow_.next_kink(x, X[d], w, W[d], after, before);
+  }
 
  private:
   const UnsteadyField& flow_;

@@ -74,6 +74,9 @@ class LiftedField final : public Field<N> {
     return st;
   }
   Box<N> domain() const override { return box_; }
+  double next_kink(const Vec<N>& X, const Vec<N>& W, double after, double before) const override {
+    return flow_.next_kink(spatial(X), time(X), spatial(W), W[d] / c_, after, before);
+  }
   std::string describe() const override {
     return "spacetime(c=" + std::to_string(c_) + "):" + flow_.describe();
   }

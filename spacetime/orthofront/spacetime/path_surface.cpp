@@ -44,6 +44,10 @@ class TrackedFlow final : public UnsteadyField {
   Box<3> domain() const override { return flow_.domain(); }
   TimeRange time_range() const override { return flow_.time_range(); }
   std::string describe() const override { return flow_.describe(); }
+  double next_kink(const Vec3& x, double t, const Vec3& w, double w_t, double after,
+                   double before) const override {
+    return flow_.next_kink(x, t, w, w_t, after, before);
+  }
 
   /// Widens the range by a time evaluated elsewhere (by a bulk front advance).
   void note(double t) const {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "orthofront/error.h"
 #include "orthofront/field/multilinear.h"
@@ -63,6 +64,18 @@ StreamedField::StreamedField(BrickCache& cache)
 
 TimeRange StreamedField::time_range() const {
   return TimeRange{cache_.times().front(), cache_.times().back()};
+}
+
+double StreamedField::next_kink(const Vec3& x, double t, const Vec3& w, double w_t,
+                                double after, double before) const {
+  double first = grid_.next_cell_face(x, w, after);
+  if (w_t != 0) {
+    // The first interior time step beyond t + after w_t in the direction of w_t.
+    const double step = next_interior_coordinate(cache_.times(), t + after * w_t, w_t > 0);
+    const double tau = (step - t) / w_t;
+    if (tau > after && tau < first) first = tau;
+  }
+  return first < before ? first : std::numeric_limits<double>::infinity();
 }
 
 std::string StreamedField::describe() const { return "time series " + cache_.series().describe(); }

@@ -58,6 +58,9 @@ class StreamedField final : public UnsteadyField {
   Box<3> domain() const override { return box_; }
   TimeRange time_range() const override;
   std::string describe() const override;
+  /// Cell faces and time steps.
+  double next_kink(const Vec3& x, double t, const Vec3& w, double w_t, double after,
+                   double before) const override;
 
   /// Pins every unit of the steps whose intervals cover [t_lo, t_hi] (the whole domain). Not
   /// concurrent with evaluations. Throws what the cache throws.
