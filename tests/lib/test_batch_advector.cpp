@@ -294,3 +294,33 @@ TEST_CASE("bulk advection: each particle stops at its own end time", "[advect]")
   short_stop.stop = {0.5};
   CHECK_THROWS_AS(advector->advect(series, short_stop, 0.75, o), InvalidArgument);
 }
+
+TEST_CASE("bulk advection: the bulk step's cell faces are the grid's", "[advect][kinks]") {
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int dimension : {2, 3})
+    for (bool rectilinear : {false, true}) {
+      INFO(dimension << "D, " << (rectilinear ? "rectilinear" : "uniform"));
+      const GridGeometry g = grid_of(dimension, rectilinear);
+      const GridTables tables(g, dimension, false);
+      for (int i = 0; i < 2000; ++i) {
+        // Points anywhere, on faces too (multiples of 1/8 lie on the rectilinear axis' faces).
+        Vec3 x(2.5 * u(rng), 2.5 * u(rng), dimension == 3 ? 2.5 * u(rng) : 0.0);
+        if (i % 4 == 0) x = (8 * x).array().round().matrix() / 8;
+        const Vec3 w(u(rng), i % 5 == 0 ? 0.0 : u(rng), u(rng));
+        const double after = i % 3 == 0 ? 0.0 : 0.2 * (u(rng) + 1);
+        const double want = g.next_cell_face(x, w, after);
+        const GridView& view = tables.view();
+        const double got =
+            dimension == 3
+                ? (rectilinear ? detail::next_face<3, true>(view, x.data(), w.data(), after)
+                               : detail::next_face<3, false>(view, x.data(), w.data(), after))
+                : (rectilinear ? detail::next_face<2, true>(view, x.data(), w.data(), after)
+                               : detail::next_face<2, false>(view, x.data(), w.data(), after));
+        if (std::isinf(want))
+          REQUIRE(got == -1);
+        else
+          REQUIRE(got == Approx(want).epsilon(1e-12));
+      }
+    }
+}

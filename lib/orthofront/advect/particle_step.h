@@ -7,6 +7,7 @@
 
 #include "orthofront/advect/particle_status.h"
 #include "orthofront/advect/slab.h"
+#include "orthofront/integrate/kinks.h"
 
 namespace orthofront::advect {
 
@@ -143,13 +144,25 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
   int rejections_in_row = 0;
   bool rejected_before = false;  // the last attempt was rejected: the next accepted one keeps h
   while (done < span) {
+    // Cell-aware steps (integrate/kinks.h): end a step that would cross a cell face just past it.
+    double step = h;
+    bool clipped = false;
+    {
+      const double w[3] = {dir * k1[0], dir * k1[1], dir * k1[2]};
+      const double face = detail::next_face<Axes, Rectilinear>(s.grid, p.x, w, kKinkMargin * h);
+      if (face >= 0 && face + kKinkMargin * h < h) {
+        step = face + kKinkMargin * h;
+        clipped = true;
+      }
+    }
     bool last = false;
     planned = h;
-    if (span - done <= h * (1 + 1e-12)) {
-      h = span - done;
+    if (span - done <= step * (1 + 1e-12)) {
+      step = span - done;
       last = true;
+      clipped = false;
     }
-    const double sh = dir * h;
+    const double sh = dir * step;
     const double t = t_start + dir * done;
     for (int d = 0; d < 3; ++d) z[d] = p.x[d] + sh * (a21 * k1[d]);
     st = sample_slab<Axes, Components, Rectilinear>(s, z, t + c2 * sh, k2);
@@ -183,7 +196,7 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
       return;
     }
     if (st != SampleStatus::inside) {
-      h *= 0.5;
+      h = 0.5 * step;
       if (h < h_min || ++rejections_in_row > 60) {
         p.status = detail::stopped_by(st);
         return;
@@ -203,23 +216,30 @@ ORTHOFRONT_HD inline void advance_dopri5(const SlabView& s, ParticleState& p, do
         p.x[d] = y[d];
         k1[d] = k7[d];  // first same as last
       }
-      done = last ? span : done + h;
+      done = last ? span : done + step;
       p.t = last ? t_end : t_start + dir * done;
       ++p.steps;
       rejections_in_row = 0;
       // The root only where it decides: not after the slab's last step (the planned step goes
-      // on), nor where the growth is capped (0.9 norm^(-1/5) > 5.04 below 1.8e-4).
-      if (last)
+      // on), nor where the growth is capped (0.9 norm^(-1/5) > 5.04 below 1.8e-4). A step cut
+      // short at a face says nothing against the controller's size.
+      if (last) {
         h = planned;
-      else if (!rejected_before)
-        h *= norm < 1.8e-4 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
-      else if (norm >= 1.8e-4)
-        h *= detail::min_of(1.0, 0.9 * detail::inverse_fifth_root(norm));
+      } else {
+        double next = step;
+        if (!rejected_before)
+          next *=
+              norm < 1.8e-4 ? 5.0 : detail::min_of(5.0, 0.9 * detail::inverse_fifth_root(norm));
+        else if (norm >= 1.8e-4)
+          next *= detail::min_of(1.0, 0.9 * detail::inverse_fifth_root(norm));
+        h = clipped ? detail::max_of(h, next) : next;
+      }
       rejected_before = false;
     } else {
       rejected_before = true;
       // (0.9 norm^(-1/5) < 0.197 from 2000 on: the cut is capped at 0.2.)
-      h *= norm >= 2000 ? 0.2 : detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm));
+      h = step *
+          (norm >= 2000 ? 0.2 : detail::max_of(0.2, 0.9 * detail::inverse_fifth_root(norm)));
       if (h < h_min || ++rejections_in_row > 60) {
         p.status = ParticleStatus::no_data;  // step control failed: no usable flow
         return;

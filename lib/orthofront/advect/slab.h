@@ -133,6 +133,64 @@ ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t
   return true;
 }
 
+/// floor / ceil of u from + - and casts (device code without <cmath>); |u| < 2^62.
+ORTHOFRONT_HD inline double floor_of(double u) {
+  const double f = static_cast<double>(static_cast<std::int64_t>(u));
+  return f > u ? f - 1 : f;
+}
+ORTHOFRONT_HD inline double ceil_of(double u) {
+  const double c = static_cast<double>(static_cast<std::int64_t>(u));
+  return c < u ? c + 1 : c;
+}
+
+/// The first τ > after at which the straight path x + τ w crosses an interior face between two
+/// cells (GridGeometry::next_cell_face on the view), or -1 where it crosses none. A point on a
+/// face (rounding may put that face at τ <= after) looks on to the next one.
+template <int Axes, bool Rectilinear>
+ORTHOFRONT_HD inline double next_face(const GridView& g, const double* x, const double* w,
+                                      double after) {
+  double first = -1;
+  for (int d = 0; d < Axes; ++d) {
+    if (!(w[d] != 0)) continue;
+    const AxisView& a = g.axis[d];
+    const bool up = w[d] > 0;
+    double from = x[d] + after * w[d];
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      double face = 0;
+      if constexpr (Rectilinear) {
+        // Interior coordinates c[1 .. cells - 1]: the first above `from` (upper bound), or the
+        // last below it (lower bound, minus one).
+        std::int64_t lo = 1, count = a.cells - 1;
+        while (count > 0) {
+          const std::int64_t step = count / 2;
+          const double c = a.coordinates[lo + step];
+          if (up ? !(from < c) : c < from) {
+            lo += step + 1;
+            count -= step + 1;
+          } else {
+            count = step;
+          }
+        }
+        if (up ? lo > a.cells - 1 : lo - 1 < 1) break;
+        face = a.coordinates[up ? lo : lo - 1];
+      } else {
+        const double u = (from - a.origin) * a.inverse_spacing;
+        if (!(u > -4e18 && u < 4e18)) break;
+        const double k = up ? floor_of(u) + 1 : ceil_of(u) - 1;
+        if (!(k >= 1 && k <= static_cast<double>(a.cells - 1))) break;
+        face = a.origin + k / a.inverse_spacing;
+      }
+      const double tau = (face - x[d]) / w[d];
+      if (tau > after) {
+        if (first < 0 || tau < first) first = tau;
+        break;
+      }
+      from = face;
+    }
+  }
+  return first;
+}
+
 }  // namespace detail
 
 /// v(x, t) for t in [s.t0, s.t1]: multilinear in space, linear in time. `outside` when x leaves

@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "orthofront/field/field.h"
+#include "orthofront/integrate/kinks.h"
 
 namespace orthofront {
 
@@ -27,12 +28,6 @@ inline constexpr int kMaxEvaluations = 1'000'000;
 /// thread-safe (reading an atomic or a sig_atomic_t flag, a clock).
 using StopRequest = std::function<bool()>;
 inline constexpr int kStopCheckEvaluations = 4096;
-
-/// How far past a kink of the field (Field::next_kink) a DOPRI5 step that would cross it ends,
-/// as a share of the controller's step size (tornado, seed across the core: 1e-2 → 1.62 M field
-/// evaluations, 1e-3 → 1.23 M, 1e-4 → 1.20 M, 1e-6 → 1.24 M, 1e-11 → 1.34 M, against 2.26 M
-/// without cell-aware steps; the smallest margins make steps that land just short of a face).
-inline constexpr double kKinkMargin = 1e-4;
 
 struct Tolerance {
   double absolute = 1e-9;  ///< world units (the engine scales it with ℓ)
@@ -114,12 +109,9 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
         return out;
       }
     }
-    // Cell-aware steps: a step that would cross a kink of the field (a grid cell's face, where
-    // the interpolant's derivative jumps) ends just past it instead, at the controller's step
-    // size otherwise. A kink within kKinkMargin·h of a step's end costs an error of order
-    // (kKinkMargin·h)² times the jump, a kink inside it one of order h²: on gridded data the
-    // steps rejected at faces were a third of all attempts. The straight path along v(x)
-    // estimates where the face is; where the path bends away, error control still decides.
+    // Cell-aware steps (kinks.h): a step that would cross a kink of the field ends just past it,
+    // at the controller's step size otherwise. The straight path along v(x) estimates where the
+    // kink is; where the path bends away, error control still decides.
     double step = h;
     bool clipped = false;
     const double kink = field.next_kink(out.x, dir * k1, kKinkMargin * h, h);
