@@ -19,6 +19,7 @@
 #include "orthofront/spacetime/lifted_field.h"
 #include "orthofront/spacetime/path_surface.h"
 #include "orthofront/spacetime/sampled_series.h"
+#include "orthofront/spacetime/streak_line_field.h"
 #include "orthofront/spacetime/streamed_field.h"
 
 #include "bricked_series.h"
@@ -608,4 +609,77 @@ TEST_CASE("a streamed field's kinks are its cell faces and time steps; the lifte
         }
       }
     }
+}
+
+namespace {
+
+// A flow that hides its kinks from integrators: steps cross cell faces and time steps as before.
+class KinksHidden final : public UnsteadyField {
+ public:
+  explicit KinksHidden(const UnsteadyField& flow) : flow_(flow) {}
+  int dimension() const override { return flow_.dimension(); }
+  FieldStatus velocity(const Vec3& x, double t, Vec3& v) const override {
+    return flow_.velocity(x, t, v);
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J,
+                                Vec3& dvdt) const override {
+    return flow_.velocity_jacobian(x, t, v, J, dvdt);
+  }
+  Box<3> domain() const override { return flow_.domain(); }
+  TimeRange time_range() const override { return flow_.time_range(); }
+  std::string describe() const override { return flow_.describe(); }
+
+ private:
+  const UnsteadyField& flow_;
+};
+
+}  // namespace
+
+TEST_CASE("flow-map gradients through a streamed series step to its cell faces and time steps: "
+          "closer to the interpolant's, for fewer evaluations",
+          "[spacetime][bricks][kinks]") {
+  TempDir dir("bricks-kink-paths");
+  const auto flow = make_unsteady_field("double-gyre-3d");
+  const GridGeometry g = uniform_grid(flow->domain(), 3, 17);
+  const SampledTimeSeries memory(*flow, g, uniform_times(0, 2, 9));
+  const auto series = write_bricked(dir.path() / "gyre.h5", memory, 4);
+  CacheOptions options;
+  options.budget_bytes = 64 << 20;
+  BrickCache cache(*series, options);
+  StreamedField field(cache);
+  field.update_band(series->time(0), series->time(series->step_count() - 1));
+  const KinksHidden hidden(field);
+  const Tolerance tol{1e-9, 1e-9}, tight{1e-13, 1e-13};
+  const Box<3> box = g.bounds();
+  const Vec3 center = 0.5 * (box.lo + box.hi), half = 0.3 * (box.hi - box.lo);
+  std::mt19937_64 rng(37);
+  std::uniform_real_distribution<double> u(-1, 1);
+  long with_kinks = 0, without = 0, compared = 0;
+  double worst_with = 0, worst_without = 0, gradient_with = 0, gradient_without = 0;
+  for (int i = 0; i < 30; ++i) {
+    const Vec3 x = center + half.cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+    const double t0 = 0.1, t1 = 0.1 + 0.8 * (1 + u(rng));  // across up to seven time steps
+    const FlowMapGradient a = flow_map_gradient(field, x, t0, t1, tol);
+    const FlowMapGradient b = flow_map_gradient(hidden, x, t0, t1, tol);
+    const FlowMapGradient exact = flow_map_gradient(field, x, t0, t1, tight);
+    if (a.status != FieldStatus::inside || b.status != FieldStatus::inside ||
+        exact.status != FieldStatus::inside)
+      continue;
+    ++compared;
+    with_kinks += a.evaluations;
+    without += b.evaluations;
+    worst_with = std::max(worst_with, (a.x - exact.x).norm());
+    worst_without = std::max(worst_without, (b.x - exact.x).norm());
+    gradient_with = std::max(gradient_with, (a.gradient - exact.gradient).norm());
+    gradient_without = std::max(gradient_without, (b.gradient - exact.gradient).norm());
+  }
+  REQUIRE(compared >= 10);
+  INFO("evaluations " << with_kinks << " against " << without << "; position errors " << worst_with
+                      << " against " << worst_without << "; gradient errors " << gradient_with
+                      << " against " << gradient_without);
+  // Sampled double-gyre-3d, 17^3 x 9 steps: 20,694 against 23,382 evaluations, position errors
+  // 3.3e-9 against 9.2e-8, gradient errors 6.6e-8 against 5.9e-7.
+  CHECK(with_kinks < without);
+  CHECK(worst_with < 0.25 * worst_without);
+  CHECK(gradient_with < 0.25 * gradient_without);
 }

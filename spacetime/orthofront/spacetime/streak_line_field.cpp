@@ -46,6 +46,13 @@ class Variational final : public Field<d + d * d + 1> {
     return b;
   }
   std::string describe() const override { return flow_.describe(); }
+  /// The flow's kinks along the path's (x, t) part: where ∇v jumps (a cell face), Y' jumps.
+  double next_kink(const Vec<N>& Y, const Vec<N>& W, double after, double before) const override {
+    Vec3 x = Vec3::Zero(), w = Vec3::Zero();
+    x.template head<d>() = Y.template head<d>();
+    w.template head<d>() = W.template head<d>();
+    return flow_.next_kink(x, Y[N - 1], w, W[N - 1], after, before);
+  }
 
  private:
   const UnsteadyField& flow_;
