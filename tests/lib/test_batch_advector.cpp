@@ -12,6 +12,7 @@
 
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/error.h"
+#include "lib/grid_faces.h"
 
 using namespace orthofront;
 using namespace orthofront::advect;
@@ -298,29 +299,40 @@ TEST_CASE("bulk advection: each particle stops at its own end time", "[advect]")
 TEST_CASE("bulk advection: the bulk step's cell faces are the grid's", "[advect][kinks]") {
   std::mt19937_64 rng(41);
   std::uniform_real_distribution<double> u(-1, 1);
+  GridGeometry decimal;  // (x - origin) / spacing on a face rounds to either side of its index
+  decimal.size = {61, 23, 37};
+  decimal.origin = Vec3(0.03, -1.1, 0.7);
+  decimal.spacing = Vec3(0.1, 0.3, 0.07);
+  std::vector<GridGeometry> grids{decimal};
   for (int dimension : {2, 3})
-    for (bool rectilinear : {false, true}) {
-      INFO(dimension << "D, " << (rectilinear ? "rectilinear" : "uniform"));
-      const GridGeometry g = grid_of(dimension, rectilinear);
-      const GridTables tables(g, dimension, false);
-      for (int i = 0; i < 2000; ++i) {
-        // Points anywhere, on faces too (multiples of 1/8 lie on the rectilinear axis' faces).
-        Vec3 x(2.5 * u(rng), 2.5 * u(rng), dimension == 3 ? 2.5 * u(rng) : 0.0);
-        if (i % 4 == 0) x = (8 * x).array().round().matrix() / 8;
-        const Vec3 w(u(rng), i % 5 == 0 ? 0.0 : u(rng), u(rng));
-        const double after = i % 3 == 0 ? 0.0 : 0.2 * (u(rng) + 1);
-        const double want = g.next_cell_face(x, w, after);
-        const GridView& view = tables.view();
-        const double got =
-            dimension == 3
-                ? (rectilinear ? detail::next_face<3, true>(view, x.data(), w.data(), after)
-                               : detail::next_face<3, false>(view, x.data(), w.data(), after))
-                : (rectilinear ? detail::next_face<2, true>(view, x.data(), w.data(), after)
-                               : detail::next_face<2, false>(view, x.data(), w.data(), after));
-        if (std::isinf(want))
-          REQUIRE(got == -1);
-        else
-          REQUIRE(got == Approx(want).epsilon(1e-12));
-      }
+    for (bool rectilinear : {false, true}) grids.push_back(grid_of(dimension, rectilinear));
+  for (const GridGeometry& g : grids) {
+    INFO(g.dimension << "D, " << (g.rectilinear() ? "rectilinear" : "uniform"));
+    const GridTables tables(g, g.dimension, false);
+    const GridView& view = tables.view();
+    const Box<3> box = g.bounds();
+    for (int i = 0; i < 3000; ++i) {
+      Vec3 x = 0.5 * (box.lo + box.hi) +
+               0.6 * (box.hi - box.lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng)));
+      if (i % 2 == 0)  // on a face of every axis
+        for (int a = 0; a < g.dimension; ++a) {
+          const std::int64_t n = g.size[static_cast<std::size_t>(a)];
+          x[a] = g.coordinate(a, 1 + static_cast<std::int64_t>((u(rng) + 1) * 0.5 *
+                                                               static_cast<double>(n - 3)));
+        }
+      const Vec3 w(u(rng), i % 5 == 0 ? 0.0 : u(rng), u(rng));
+      const double after = i % 3 == 0 ? 0.0 : 0.2 * (u(rng) + 1);
+      const double want = test::first_face_brute_force(g, x, w, after);
+      const double got =
+          g.dimension == 3
+              ? (g.rectilinear() ? detail::next_face<3, true>(view, x.data(), w.data(), after)
+                                 : detail::next_face<3, false>(view, x.data(), w.data(), after))
+              : (g.rectilinear() ? detail::next_face<2, true>(view, x.data(), w.data(), after)
+                                 : detail::next_face<2, false>(view, x.data(), w.data(), after));
+      if (std::isinf(want))
+        REQUIRE(got == -1);
+      else
+        REQUIRE(got == Approx(want).epsilon(1e-12).margin(1e-15));
     }
+  }
 }

@@ -114,6 +114,7 @@ GridTables::GridTables(const GridGeometry& g, int components, bool zero_is_no_da
     } else {
       axis.origin = g.origin[a];
       axis.inverse_spacing = 1.0 / g.spacing[a];
+      axis.spacing = g.spacing[a];
     }
   }
 }

@@ -16,6 +16,7 @@ struct AxisView {
   const double* inverse_width = nullptr;  ///< rectilinear: 1 / (c[i+1] - c[i]), `cells` values
   double origin = 0;                      ///< uniform
   double inverse_spacing = 1;             ///< uniform
+  double spacing = 1;                     ///< uniform (faces at origin + k spacing)
   std::int64_t cells = 1;                 ///< sample points - 1
   double lo = 0, hi = 1;                  ///< first and last sample
 };
@@ -142,6 +143,8 @@ ORTHOFRONT_HD inline double ceil_of(double u) {
   const double c = static_cast<double>(static_cast<std::int64_t>(u));
   return c < u ? c + 1 : c;
 }
+ORTHOFRONT_HD inline double max_face(double a, double b) { return a < b ? b : a; }
+ORTHOFRONT_HD inline double min_face(double a, double b) { return a < b ? a : b; }
 
 /// The first τ > after at which the straight path x + τ w crosses an interior face between two
 /// cells (GridGeometry::next_cell_face on the view), or -1 where it crosses none. A point on a
@@ -155,6 +158,7 @@ ORTHOFRONT_HD inline double next_face(const GridView& g, const double* x, const 
     const AxisView& a = g.axis[d];
     const bool up = w[d] > 0;
     double from = x[d] + after * w[d];
+    double k = -1;  // uniform: the face's index, stepped on where the first is at τ <= after
     for (int attempt = 0; attempt < 2; ++attempt) {
       double face = 0;
       if constexpr (Rectilinear) {
@@ -174,11 +178,17 @@ ORTHOFRONT_HD inline double next_face(const GridView& g, const double* x, const 
         if (up ? lo > a.cells - 1 : lo - 1 < 1) break;
         face = a.coordinates[up ? lo : lo - 1];
       } else {
-        const double u = (from - a.origin) * a.inverse_spacing;
-        if (!(u > -4e18 && u < 4e18)) break;
-        const double k = up ? floor_of(u) + 1 : ceil_of(u) - 1;
+        if (attempt == 0) {
+          const double u = (from - a.origin) * a.inverse_spacing;
+          if (!(u > -4e18 && u < 4e18)) break;
+          // From outside the grid the nearest interior face comes first.
+          const double last = static_cast<double>(a.cells - 1);
+          k = up ? max_face(floor_of(u) + 1, 1.0) : min_face(ceil_of(u) - 1, last);
+        } else {
+          k += up ? 1 : -1;
+        }
         if (!(k >= 1 && k <= static_cast<double>(a.cells - 1))) break;
-        face = a.origin + k / a.inverse_spacing;
+        face = a.origin + k * a.spacing;
       }
       const double tau = (face - x[d]) / w[d];
       if (tau > after) {

@@ -27,13 +27,20 @@ double GridGeometry::next_cell_face(const Vec3& x, const Vec3& w, double after) 
     // The face beyond where the search starts along this axis; rounding may put that one at
     // τ <= after (a point on a face), and then the next one is meant.
     double from = x[a] + after * w[a];
+    double k = -1;  // uniform: the face's index, stepped on where the first is at τ <= after
     for (int attempt = 0; attempt < 2; ++attempt) {
       double face = 0;
       if (rectilinear()) {
         face = next_interior_coordinate(axes[ua], from, up);
       } else {
-        const double u = (from - origin[a]) / spacing[a];
-        const double k = up ? std::floor(u) + 1 : std::ceil(u) - 1;
+        if (attempt == 0) {
+          const double u = (from - origin[a]) / spacing[a];
+          // From outside the grid the nearest interior face comes first.
+          const double last = static_cast<double>(size[ua] - 2);
+          k = up ? std::max(std::floor(u) + 1, 1.0) : std::min(std::ceil(u) - 1, last);
+        } else {
+          k += up ? 1 : -1;
+        }
         if (!(k >= 1 && k <= static_cast<double>(size[ua] - 2))) break;
         face = origin[a] + k * spacing[a];
       }

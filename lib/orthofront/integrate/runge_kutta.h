@@ -115,7 +115,7 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
     double step = h;
     bool clipped = false;
     const double kink = field.next_kink(out.x, dir * k1, kKinkMargin * h, h);
-    if (kink + kKinkMargin * h < h) {
+    if (kink > 0 && kink + kKinkMargin * h < h) {
       step = kink + kKinkMargin * h;
       clipped = true;
     }
