@@ -635,8 +635,8 @@ class KinksHidden final : public UnsteadyField {
 
 }  // namespace
 
-TEST_CASE("flow-map gradients through a streamed series step to its cell faces and time steps: "
-          "closer to the interpolant's, for fewer evaluations",
+// Closer to the interpolant's flow map than steps across the kinks, for fewer evaluations.
+TEST_CASE("flow-map gradients step to a streamed series' cell faces and time steps",
           "[spacetime][bricks][kinks]") {
   TempDir dir("bricks-kink-paths");
   const auto flow = make_unsteady_field("double-gyre-3d");
