@@ -40,9 +40,6 @@ namespace detail {
 ORTHOFRONT_HD inline ParticleStatus stopped_by(SampleStatus s) {
   return s == SampleStatus::outside ? ParticleStatus::left_domain : ParticleStatus::no_data;
 }
-ORTHOFRONT_HD inline double abs_of(double a) { return a < 0 ? -a : a; }
-ORTHOFRONT_HD inline double max_of(double a, double b) { return a < b ? b : a; }
-ORTHOFRONT_HD inline double min_of(double a, double b) { return a < b ? a : b; }
 
 /// norm^(-1/5) for the step controller, from + - * / only: scaled by powers of 32 (exact) into
 /// [1, 32), then ten Newton steps for the fifth root from 2 (above the root; converged to an ulp).

@@ -143,8 +143,10 @@ ORTHOFRONT_HD inline double ceil_of(double u) {
   const double c = static_cast<double>(static_cast<std::int64_t>(u));
   return c < u ? c + 1 : c;
 }
-ORTHOFRONT_HD inline double max_face(double a, double b) { return a < b ? b : a; }
-ORTHOFRONT_HD inline double min_face(double a, double b) { return a < b ? a : b; }
+/// |a|, max and min for host and device code alike (no <cmath>, no std::).
+ORTHOFRONT_HD inline double abs_of(double a) { return a < 0 ? -a : a; }
+ORTHOFRONT_HD inline double max_of(double a, double b) { return a < b ? b : a; }
+ORTHOFRONT_HD inline double min_of(double a, double b) { return a < b ? a : b; }
 
 /// The first τ > after at which the straight path x + τ w crosses an interior face between two
 /// cells (GridGeometry::next_cell_face on the view), or -1 where it crosses none. A point on a
@@ -183,7 +185,7 @@ ORTHOFRONT_HD inline double next_face(const GridView& g, const double* x, const 
           if (!(u > -4e18 && u < 4e18)) break;
           // From outside the grid the nearest interior face comes first.
           const double last = static_cast<double>(a.cells - 1);
-          k = up ? max_face(floor_of(u) + 1, 1.0) : min_face(ceil_of(u) - 1, last);
+          k = up ? max_of(floor_of(u) + 1, 1.0) : min_of(ceil_of(u) - 1, last);
         } else {
           k += up ? 1 : -1;
         }
