@@ -19,30 +19,29 @@ void for_each_edge(const Face& face, Visit&& visit) {
 
 void FoldGuard::EdgeLists::clear() {
   if (++generation_ == 0) {  // wrapped: no old head may read as current
-    std::fill(generation_of_head_.begin(), generation_of_head_.end(), 0u);
+    for (Head& h : heads_) h.generation = 0;
     generation_ = 1;
   }
   entries_.clear();
   free_ = kNone;
+  vertex_end_ = 0;
 }
 
 std::uint32_t& FoldGuard::EdgeLists::head_slot(std::int32_t v) {
   const auto i = static_cast<std::size_t>(v);
-  if (i >= head_.size()) {
-    const std::size_t size = std::max(i + 1, 2 * head_.size());
-    head_.resize(size, kNone);
-    generation_of_head_.resize(size, 0);
+  if (i >= heads_.size()) heads_.resize(std::max(i + 1, 2 * heads_.size()));
+  Head& h = heads_[i];
+  if (h.generation != generation_) {
+    h.generation = generation_;
+    h.first = kNone;
   }
-  if (generation_of_head_[i] != generation_) {
-    generation_of_head_[i] = generation_;
-    head_[i] = kNone;
-  }
-  return head_[i];
+  return h.first;
 }
 
 void FoldGuard::EdgeLists::add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward,
                                const Vec3& normal) {
   const auto [lo, hi] = ordered(a, b);
+  vertex_end_ = std::max(vertex_end_, hi + 1);
   std::uint32_t& first = head_slot(lo);
   std::uint32_t e = free_;
   if (e != kNone) {
@@ -57,7 +56,7 @@ void FoldGuard::EdgeLists::add(std::int32_t a, std::int32_t b, std::uint32_t fac
 
 bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
   const auto [lo, hi] = ordered(a, b);
-  if (head(lo) == kNone) return false;
+  if (hi >= vertex_end_ || head(lo) == kNone) return false;
   for (std::uint32_t* link = &head_slot(lo); *link != kNone; link = &entries_[*link].next) {
     const std::uint32_t e = *link;
     if (entries_[e].other != hi) continue;

@@ -77,7 +77,7 @@ class FoldGuard {
     /// Calls visit(lower vertex, entry) for every entry.
     template <class Visit>
     void for_each(Visit&& visit) const {
-      for (std::size_t v = 0; v < head_.size(); ++v)
+      for (std::size_t v = 0; v < heads_.size(); ++v)
         for (std::uint32_t e = head(static_cast<std::int32_t>(v)); e != kNone; e = entries_[e].next)
           visit(static_cast<std::int32_t>(v), entries_[e]);
     }
@@ -86,6 +86,7 @@ class FoldGuard {
     template <class Visit>
     bool any_of(std::int32_t a, std::int32_t b, Visit&& visit) const {
       const auto [lo, hi] = ordered(a, b);
+      if (hi >= vertex_end_) return false;
       for (std::uint32_t e = head(lo); e != kNone; e = entries_[e].next)
         if (entries_[e].other == hi && visit(entries_[e])) return true;
       return false;
@@ -97,12 +98,23 @@ class FoldGuard {
     }
     std::uint32_t head(std::int32_t v) const {
       const auto i = static_cast<std::size_t>(v);
-      return i < head_.size() && generation_of_head_[i] == generation_ ? head_[i] : kNone;
+      return i < heads_.size() && heads_[i].generation == generation_ ? heads_[i].first : kNone;
     }
     std::uint32_t& head_slot(std::int32_t v);
 
-    std::vector<std::uint32_t> head_, generation_of_head_;
+    /// A vertex's list: its first entry, valid while `generation` is the lists' (one cache line
+    /// for both).
+    struct Head {
+      std::uint32_t first = kNone;
+      std::uint32_t generation = 0;
+    };
+    std::vector<Head> heads_;
     std::uint32_t generation_ = 1;
+    /// One past the highest vertex of any edge added since the last clear(): an edge whose
+    /// higher vertex is at or above it has no entry, found without a look. The strip's new
+    /// vertices are numbered after everything accepted, and in the order stitch makes faces, so
+    /// most of a strip's edges are new to both lists.
+    std::int32_t vertex_end_ = 0;
     std::vector<Entry> entries_;
     std::uint32_t free_ = kNone;  ///< removed entries, chained through `next`
   };
