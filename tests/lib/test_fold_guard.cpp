@@ -2,6 +2,7 @@
 // crease sharper than 90° between two faces of one strip, and strips that only bend.
 #include <catch2/catch.hpp>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <tuple>
@@ -120,4 +121,61 @@ TEST_CASE("faces accepted aside are checked against like faces accepted in line"
   m.faces.resize(row3_faces);  // undone: rows 0-2 are a 2 x 2 sheet of quads
   CHECK(guard.boundary().size() == 8);
   CHECK(boundary_edges(m).size() == 8);
+}
+
+TEST_CASE("a strip checked while it is stitched gives the in-line answer", "[engine][fold]") {
+  // A sheet of rows 600 columns wide; the next row turns back over the last one at some columns
+  // and creases by 100 degrees at others. The faces are added one at a time, the count published
+  // now and then, while the check runs beside.
+  constexpr int kColumns = 600;
+  const auto sheet = [&] {
+    Mesh m;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < kColumns; ++c) m.add_vertex(Vec3(c, r, 0), 0, 0, 0, 0, 0, r);
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c + 1 < kColumns; ++c)
+        m.add_quad(r * kColumns + c, r * kColumns + c + 1, (r + 1) * kColumns + c + 1,
+                   (r + 1) * kColumns + c);
+    return m;
+  };
+  const auto next_row = [&](int c) -> Vec3 {
+    if (c % 97 == 13) return Vec3(c, 1.5, 0.01);                // turned back over row 2
+    if (c % 89 == 40) return Vec3(c - 1.1, 2.0, -0.3);          // a sharp crease
+    return Vec3(c, 3, 0.05 * std::sin(c));
+  };
+  const auto add_faces = [&](Mesh& m, std::atomic<std::size_t>* count) {
+    const int first = 3 * kColumns;
+    for (int c = 0; c < kColumns; ++c) m.add_vertex(next_row(c), 0, 0, 0, 0, 0, 3);
+    for (int c = 0; c + 1 < kColumns; ++c) {
+      m.add_quad(2 * kColumns + c, 2 * kColumns + c + 1, first + c + 1, first + c);
+      if (count && c % 7 == 0) count->store(m.face_count(), std::memory_order_release);
+    }
+    if (count) count->store(m.face_count(), std::memory_order_release);
+  };
+
+  Mesh in_line = sheet();
+  FoldGuard serial;
+  serial.rebuild(in_line);
+  const std::size_t first_face = in_line.face_count(), first_vertex = in_line.vertex_count();
+  add_faces(in_line, nullptr);
+  const std::vector<std::int32_t> expected =
+      serial.folded_vertices(in_line, first_face, first_vertex);
+  REQUIRE(expected.size() > 10);
+
+  Mesh beside = sheet();
+  FoldGuard concurrent;
+  concurrent.rebuild(beside);
+  const std::vector<std::int32_t> found = concurrent.folded_vertices_while(
+      beside, first_vertex, kColumns, [&](std::atomic<std::size_t>& count) {
+        add_faces(beside, &count);
+      });
+  CHECK(found == expected);
+  CHECK(beside.face_count() == in_line.face_count());
+  // Its faces are accepted as the in-line check's are: the same boundary, edge for edge.
+  serial.accept(in_line, first_face);
+  concurrent.accept(beside, first_face);
+  const auto key = [](const BoundaryEdge& e) { return std::tuple(e.from, e.to, e.face); };
+  const auto a = serial.boundary(), b = concurrent.boundary();
+  REQUIRE(a.size() == b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) CHECK(key(a[i]) == key(b[i]));
 }

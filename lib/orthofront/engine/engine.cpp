@@ -436,9 +436,18 @@ class Engine {
       std::vector<std::int32_t> folded;
       for (auto& piece : pieces) {
         const std::size_t first_face = mesh_.face_count();
-        stitcher_.emit_moved(piece, old, step);
-        stitcher_.stitch(old, piece);
-        const auto found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
+        const std::size_t most = stitcher_.most_faces(old, piece);
+        // A large strip is checked while it is stitched, on the next core (which the check
+        // takes up before the vertices are emitted: it is awake by the first face).
+        const auto found =
+            piece.v.size() >= opt_.parallel_threshold
+                ? fold_guard_.folded_vertices_while(mesh_, first_inserted, most,
+                                                    [&](std::atomic<std::size_t>& count) {
+                                                      stitcher_.emit_moved(piece, old, step);
+                                                      stitcher_.stitch(old, piece, count);
+                                                    })
+                : (stitcher_.emit_moved(piece, old, step), stitcher_.stitch(old, piece),
+                   fold_guard_.folded_vertices(mesh_, first_face, first_inserted));
         folded.insert(folded.end(), found.begin(), found.end());
       }
       if (folded.empty() || round + 1 == kRounds) {

@@ -6,6 +6,13 @@ namespace orthofront {
 
 namespace {
 
+/// A face's area vector (area_vector() of mesh.h, from the positions' array).
+Vec3 area_of(const Vec3* p, const Face& face) {
+  const auto at = [&](std::size_t k) -> const Vec3& { return p[static_cast<std::size_t>(face.v[k])]; };
+  if (face.is_quad()) return 0.5 * (at(2) - at(0)).cross(at(3) - at(1));
+  return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
+}
+
 /// Calls visit(a, b) for each edge of a face that joins two different vertices.
 template <class Visit>
 void for_each_edge(const Face& face, Visit&& visit) {
@@ -111,16 +118,83 @@ void FoldGuard::add_to_boundary(const Mesh& mesh, std::size_t first_face) {
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
                                                      std::size_t first_new_vertex) {
-  pending_.wait();
   std::vector<std::int32_t> out;
-  const std::size_t end = mesh.faces.size();
+  start_check(first_face);
+  check_faces(mesh.positions.data(), mesh.faces.data(), first_face, mesh.faces.size(),
+              first_new_vertex, out);
+  finish_check(out);
+  return out;
+}
+
+std::vector<std::int32_t> FoldGuard::folded_vertices_while(
+    Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
+    const std::function<void(std::atomic<std::size_t>& faces)>& stitch) {
+  const std::size_t first_face = mesh.faces.size();
+  start_check(first_face);
+  const std::size_t room = first_face + max_faces;
+  if (mesh.faces.capacity() < room)
+    mesh.faces.reserve(std::max(room, 2 * mesh.faces.capacity()));
+  const Face* const faces = mesh.faces.data();
+  // Each on a cache line of its own: the task reads them over and over.
+  struct alignas(64) Count {
+    std::atomic<std::size_t> value;
+  };
+  struct alignas(64) Flag {
+    std::atomic<bool> value{false};
+  };
+  Count stitched_count{first_face};
+  Flag finished_flag;
+  std::atomic<std::size_t>& stitched = stitched_count.value;
+  std::atomic<bool>& finished = finished_flag.value;
+  std::vector<std::int32_t> out;
+  tbb::task_group checker;
+  checker.run([&] {
+    std::size_t checked = first_face;
+    for (;;) {
+      // `finished` first: once it is set, the count read after it is the last one.
+      const bool last = finished.load(std::memory_order_acquire);
+      const std::size_t ready = stitched.load(std::memory_order_acquire);
+      if (ready > checked) {
+        // The positions, made before the first face, are read through their own pointer: the
+        // mesh's array headers share a cache line with the faces' end, which moves per face.
+        check_faces(mesh.positions.data(), faces, checked, ready, first_new_vertex, out);
+        checked = ready;
+      } else if (last) {
+        return;
+      }
+    }
+  });
+  try {
+    stitch(stitched);
+  } catch (...) {
+    finished.store(true, std::memory_order_release);
+    checker.wait();
+    throw;
+  }
+  finished.store(true, std::memory_order_release);
+  checker.wait();
+  finish_check(out);
+  return out;
+}
+
+void FoldGuard::start_check(std::size_t first_face) {
+  pending_.wait();
   // Parts of one step are checked one after another: keep their normals for accept().
   if (first_face != checked_first_ + checked_normals_.size()) {
     checked_first_ = first_face;
     checked_normals_.clear();
   }
-  if (first_face >= end) return out;
   strip_.clear();
+}
+
+void FoldGuard::finish_check(std::vector<std::int32_t>& out) {
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_t begin,
+                            std::size_t end, std::size_t first_new_vertex,
+                            std::vector<std::int32_t>& out) {
   const auto is_new = [&](std::int32_t v) {
     return v >= 0 && static_cast<std::size_t>(v) >= first_new_vertex;
   };
@@ -130,16 +204,16 @@ std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size
     for (const std::int32_t v : {a, b})
       if (is_new(v)) out.push_back(v);
     if (out.size() == before) {
-      const Face& face = mesh.faces[f];
+      const Face& face = faces[f];
       for (std::size_t c = 0; c < face.size; ++c)
         if (is_new(face.v[c])) out.push_back(face.v[c]);
     }
   };
-  for (std::size_t f = first_face; f < end; ++f) {
-    const Face& face = mesh.faces[f];
+  for (std::size_t f = begin; f < end; ++f) {
+    const Face& face = faces[f];
     // The area vector, not the unit normal: a fold is a negative dot product, whose sign does not
     // depend on the lengths (and a face's area vector is zero exactly where its normal is).
-    const Vec3 n0 = area_vector(mesh, face);
+    const Vec3 n0 = area_of(positions, face);
     checked_normals_.push_back(n0);
     const auto face_id = static_cast<std::uint32_t>(f);
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
@@ -166,9 +240,6 @@ std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size
       strip_.add(a, b, face_id, a < b, n0);
     });
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
 }
 
 }  // namespace orthofront

@@ -4,8 +4,10 @@
 /// neighbour being another face of that strip or a face of the surface so far.
 #include <tbb/task_group.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "orthofront/mesh/close_gaps.h"
@@ -13,7 +15,9 @@
 
 namespace orthofront {
 
-class FoldGuard {
+// On cache lines of its own: its check runs beside the stitcher, whose scratch comes before it
+// in the engine (sharing a line made every chain the stitcher built a miss for the check).
+class alignas(64) FoldGuard {
  public:
   FoldGuard() = default;
   FoldGuard(const FoldGuard&) = delete;
@@ -36,6 +40,16 @@ class FoldGuard {
   std::vector<std::int32_t> folded_vertices(const Mesh& mesh, std::size_t first_face,
                                             std::size_t first_new_vertex);
 
+  /// folded_vertices() of the faces `stitch` adds to `mesh` (at most `max_faces` of them),
+  /// checked in a task beside it as they come: `stitch` runs on the calling thread and stores
+  /// the mesh's face count in its argument (release) as it goes and at its end. Room for
+  /// max_faces is reserved first, so the faces do not move while they are read; `stitch` must
+  /// neither add more nor wait for TBB work (the task might be waiting for its faces on that
+  /// thread). It may add vertices before its first face.
+  std::vector<std::int32_t> folded_vertices_while(
+      Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
+      const std::function<void(std::atomic<std::size_t>& faces)>& stitch);
+
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
 
@@ -54,6 +68,14 @@ class FoldGuard {
  private:
   /// accept()'s work, without waiting for accept_aside's task (it is that task's body).
   void add_to_boundary(const Mesh& mesh, std::size_t first_face);
+
+  /// folded_vertices() in parts: start (waits for accept_aside's task, starts a part at
+  /// first_face), check faces [begin, end) of `faces` (the mesh's faces and positions, read
+  /// through pointers that stay valid while faces are added), then the sorted vertices.
+  void start_check(std::size_t first_face);
+  void check_faces(const Vec3* positions, const Face* faces, std::size_t begin, std::size_t end,
+                   std::size_t first_new_vertex, std::vector<std::int32_t>& out);
+  static void finish_check(std::vector<std::int32_t>& out);
 
   /// Faces on undirected edges, listed with the edge's lower vertex: a list head per mesh vertex
   /// and pooled entries, so a step allocates nothing once the pool has grown (a hash map's node

@@ -1,5 +1,7 @@
 #include "orthofront/engine/stitch.h"
 
+#include <stdexcept>
+
 namespace orthofront {
 
 template <int N>
@@ -136,10 +138,16 @@ void StripStitcher<N>::add_face(std::array<std::int32_t, 4> ids, int count) {
       seen = seen || u[static_cast<std::size_t>(l)] == ids[static_cast<std::size_t>(k)];
     if (!seen) u[static_cast<std::size_t>(m++)] = ids[static_cast<std::size_t>(k)];
   }
+  if (m < 3) return;
+  if (published_ && mesh_.faces.size() == mesh_.faces.capacity())
+    throw std::logic_error("StripStitcher: more faces than most_faces() allows");
   if (m == 4)
     mesh_.add_quad(u[0], u[1], u[2], u[3]);
-  else if (m == 3)
+  else
     mesh_.add_triangle(u[0], u[1], u[2]);
+  // Every 32 faces: a store per face kept the reader's line bouncing between the cores.
+  if (published_ && mesh_.faces.size() % 32 == 0)
+    published_->store(mesh_.faces.size(), std::memory_order_release);
 }
 
 template <int N>
@@ -227,32 +235,69 @@ void StripStitcher<N>::zipper(const std::vector<std::int32_t>& a,
 }
 
 template <int N>
-void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
+template <class Visit>
+void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit) {
   const std::size_t n = f.v.size();
   const std::size_t n_old = old.v.size();
-  std::vector<std::size_t> anchors;
+  std::vector<std::size_t>& anchors = anchors_;
+  anchors.clear();
   for (std::size_t i = 0; i < n; ++i)
     if (f.v[i].origin >= 0) anchors.push_back(i);
   if (anchors.size() < 2 && !(f.closed && anchors.size() == 1)) return;
-  std::vector<std::int32_t> chain_a, chain_b;
   const std::size_t pairs = f.closed ? anchors.size() : anchors.size() - 1;
   for (std::size_t k = 0; k < pairs; ++k) {
     const std::size_t ja = anchors[k];
     const std::size_t jb = anchors[(k + 1) % anchors.size()];
     const auto oa = static_cast<std::size_t>(f.v[ja].origin);
     const auto ob = static_cast<std::size_t>(f.v[jb].origin);
-    chain_a.clear();
-    chain_b.clear();
     // Old chain: forward from oa to ob (wrapping on closed old fronts).
     std::size_t steps_old = ob >= oa ? ob - oa : ob + n_old - oa;
     if (ob < oa && !old.closed) continue;   // no old segment joins them
     if (steps_old == 0) steps_old = n_old;  // a closed front with a single anchor
-    for (std::size_t s = 0; s <= steps_old; ++s) chain_a.push_back(old.v[(oa + s) % n_old].mesh);
     std::size_t steps_new = jb >= ja ? jb - ja : jb + n - ja;
     if (steps_new == 0) steps_new = n;
+    visit(oa, steps_old, ja, steps_new);
+  }
+}
+
+template <int N>
+std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) {
+  std::size_t most = 0;
+  // zipper adds a face per step along A, B or both.
+  for_each_chain(old, f, [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
+    most += steps_old + steps_new;
+  });
+  return most;
+}
+
+template <int N>
+void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
+  const std::size_t n = f.v.size();
+  const std::size_t n_old = old.v.size();
+  std::vector<std::int32_t>& chain_a = chain_a_;
+  std::vector<std::int32_t>& chain_b = chain_b_;
+  for_each_chain(old, f, [&](std::size_t oa, std::size_t steps_old, std::size_t ja,
+                             std::size_t steps_new) {
+    chain_a.clear();
+    chain_b.clear();
+    for (std::size_t s = 0; s <= steps_old; ++s) chain_a.push_back(old.v[(oa + s) % n_old].mesh);
     for (std::size_t s = 0; s <= steps_new; ++s) chain_b.push_back(f.v[(ja + s) % n].mesh);
     zipper(chain_a, chain_b);
+  });
+}
+
+template <int N>
+void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f,
+                              std::atomic<std::size_t>& faces) {
+  published_ = &faces;
+  try {
+    stitch(old, f);
+  } catch (...) {
+    published_ = nullptr;
+    throw;
   }
+  published_ = nullptr;
+  faces.store(mesh_.faces.size(), std::memory_order_release);
 }
 
 template class StripStitcher<3>;

@@ -4,6 +4,7 @@
 /// vertices and the new ones: quads while both rows advance together, triangles where one has
 /// more segments.
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -33,6 +34,14 @@ class StripStitcher {
   /// of f that came from `old` (origin >= 0), zipper joins the chain of old mesh vertices from
   /// one's origin to the other's with the chain of f's mesh vertices between them.
   void stitch(const Front<N>& old, const Front<N>& f);
+
+  /// stitch(), storing the mesh's face count in `faces` (release) every 32 faces and at the end,
+  /// for a reader on another thread; throws std::logic_error rather than let the faces move
+  /// (the mesh must have room for most_faces() more).
+  void stitch(const Front<N>& old, const Front<N>& f, std::atomic<std::size_t>& faces);
+
+  /// The most faces stitch() adds between `old` and `f`: its chains' segments on both sides.
+  std::size_t most_faces(const Front<N>& old, const Front<N>& f);
 
   /// Faces between an old chain A and a new chain B with common ends in correspondence:
   /// quads while both advance together, triangles where one side has more segments, placed
@@ -69,6 +78,11 @@ class StripStitcher {
   void renew_across_merges(const Front<N>& f, const Front<N>& old,
                            std::vector<char>& fresh) const;
 
+  /// Calls visit(oa, steps_old, ja, steps_new) for each chain stitch() joins: the old front's
+  /// vertices from oa on (steps_old segments, wrapping on a closed front) and f's from ja on.
+  template <class Visit>
+  void for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit);
+
   /// Adds a face of `count` corners, dropping repeated ones (a vertex that kept its mesh vertex
   /// collapses a quad to a triangle; fewer than three corners add nothing).
   void add_face(std::array<std::int32_t, 4> ids, int count);
@@ -96,10 +110,15 @@ class StripStitcher {
   bool closed_seed_;
   Mesh& mesh_;
   SurfaceReport& report_;
+  std::atomic<std::size_t>* published_ = nullptr;  ///< where stitch() reports its face count
   // emit_moved's scratch, kept between steps: which vertices get a new mesh vertex, and how far
   // each went from its old one (one square root per vertex for all of row skipping's rules).
   std::vector<char> fresh_;
   std::vector<double> moved_;
+  // stitch()'s scratch: the front's vertices that came from the old front, and a chain's two
+  // sides.
+  std::vector<std::size_t> anchors_;
+  std::vector<std::int32_t> chain_a_, chain_b_;
 };
 
 extern template class StripStitcher<3>;
