@@ -427,7 +427,6 @@ class Engine {
   void link_guarded(Front<N>&& part, const Front<N>& old, int step, std::size_t first_inserted,
                     std::vector<Front<N>>& out) {
     constexpr int kRounds = 3;
-    fold_guard_.wait();  // the faces stitched last are accepted before any is added
     std::vector<Front<N>> pieces;
     pieces.push_back(std::move(part));
     for (int round = 0;; ++round) {
@@ -452,12 +451,9 @@ class Engine {
       }
       if (folded.empty() || round + 1 == kRounds) {
         if (!folded.empty()) report_.folds_left += folded.size();
-        // The next front step (α, rips, advance, adapt) adds no face: it runs meanwhile, where
-        // the strip is large enough to pay for waking a thread (the per-vertex stages' rule).
-        if (mesh_.face_count() - faces >= opt_.parallel_threshold)
-          fold_guard_.accept_aside(mesh_, faces);
-        else
-          fold_guard_.accept(mesh_, faces);
+        // Accepted beside the next strip's emit, where that strip is checked beside its
+        // stitching (the next core is free for the α, advance and insertion loops meanwhile).
+        fold_guard_.accept_later(mesh_, faces);
         for (auto& piece : pieces) out.push_back(std::move(piece));
         return;
       }

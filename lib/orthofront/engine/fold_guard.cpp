@@ -75,8 +75,8 @@ bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
   return false;
 }
 
-std::vector<BoundaryEdge> FoldGuard::boundary() const {
-  pending_.wait();
+std::vector<BoundaryEdge> FoldGuard::boundary() {
+  accept_left(nullptr);
   std::vector<BoundaryEdge> out;
   open_.for_each([&](std::int32_t lo, const EdgeLists::Entry& e) {
     const auto face = static_cast<std::int32_t>(e.face);
@@ -86,29 +86,44 @@ std::vector<BoundaryEdge> FoldGuard::boundary() const {
 }
 
 void FoldGuard::rebuild(const Mesh& mesh) {
-  pending_.wait();
+  left_ = Left{};
   open_.clear();
-  add_to_boundary(mesh, 0);
+  add_to_boundary(mesh, mesh.faces.data(), 0, mesh.faces.size());
 }
 
-void FoldGuard::accept_aside(const Mesh& mesh, std::size_t first_face) {
-  pending_.wait();
-  pending_.run([this, &mesh, first_face] { add_to_boundary(mesh, first_face); });
+void FoldGuard::accept_later(const Mesh& mesh, std::size_t first_face) {
+  accept_left(nullptr);
+  const std::size_t end = mesh.faces.size();
+  // The faces are read later, maybe while vertices are added: their area vectors are taken now
+  // (those checked last are known already).
+  if (!(first_face == checked_first_ && end - first_face == checked_normals_.size())) {
+    checked_first_ = first_face;
+    checked_normals_.clear();
+    for (std::size_t f = first_face; f < end; ++f)
+      checked_normals_.push_back(area_vector(mesh, mesh.faces[f]));
+  }
+  left_ = Left{&mesh, first_face, end};
 }
 
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
-  pending_.wait();
-  add_to_boundary(mesh, first_face);
+  accept_left(nullptr);
+  add_to_boundary(mesh, mesh.faces.data(), first_face, mesh.faces.size());
 }
 
-void FoldGuard::add_to_boundary(const Mesh& mesh, std::size_t first_face) {
-  const std::size_t end = mesh.faces.size();
+void FoldGuard::accept_left(const Face* faces) {
+  if (!left_.mesh) return;
+  const Left left = left_;
+  left_ = Left{};
+  add_to_boundary(*left.mesh, faces ? faces : left.mesh->faces.data(), left.first, left.end);
+}
+
+void FoldGuard::add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t first,
+                                std::size_t end) {
   // The faces just checked are the ones accepted, their normals already known.
-  const bool checked = first_face == checked_first_ && end - first_face == checked_normals_.size();
-  for (std::size_t f = first_face; f < end; ++f) {
-    const Vec3 normal =
-        checked ? checked_normals_[f - first_face] : area_vector(mesh, mesh.faces[f]);
-    for_each_edge(mesh.faces[f], [&](std::int32_t a, std::int32_t b) {
+  const bool checked = first == checked_first_ && end - first == checked_normals_.size();
+  for (std::size_t f = first; f < end; ++f) {
+    const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
+    for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
       // An edge's second face puts it inside the surface.
       if (!open_.remove(a, b)) open_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
     });
@@ -118,6 +133,7 @@ void FoldGuard::add_to_boundary(const Mesh& mesh, std::size_t first_face) {
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
                                                      std::size_t first_new_vertex) {
+  accept_left(nullptr);
   std::vector<std::int32_t> out;
   start_check(first_face);
   check_faces(mesh.positions.data(), mesh.faces.data(), first_face, mesh.faces.size(),
@@ -130,7 +146,6 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
     Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
     const std::function<void(std::atomic<std::size_t>& faces)>& stitch) {
   const std::size_t first_face = mesh.faces.size();
-  start_check(first_face);
   const std::size_t room = first_face + max_faces;
   if (mesh.faces.capacity() < room)
     mesh.faces.reserve(std::max(room, 2 * mesh.faces.capacity()));
@@ -149,6 +164,9 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
   std::vector<std::int32_t> out;
   tbb::task_group checker;
   checker.run([&] {
+    // The last strip's faces first (they lie before first_face: the caller adds none there).
+    accept_left(faces);
+    start_check(first_face);
     std::size_t checked = first_face;
     for (;;) {
       // `finished` first: once it is set, the count read after it is the last one.
@@ -178,7 +196,6 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
 }
 
 void FoldGuard::start_check(std::size_t first_face) {
-  pending_.wait();
   // Parts of one step are checked one after another: keep their normals for accept().
   if (first_face != checked_first_ + checked_normals_.size()) {
     checked_first_ = first_face;

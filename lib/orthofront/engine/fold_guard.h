@@ -22,14 +22,6 @@ class alignas(64) FoldGuard {
   FoldGuard() = default;
   FoldGuard(const FoldGuard&) = delete;
   FoldGuard& operator=(const FoldGuard&) = delete;
-  /// Waits for accept_aside's task; what it threw is dropped here (the surface is being
-  /// abandoned: an engine that goes on calls wait() first).
-  ~FoldGuard() {
-    try {
-      pending_.wait();
-    } catch (...) {
-    }
-  }
 
   /// Starts from a surface made elsewhere (a restored engine): every face of `mesh` is accepted.
   void rebuild(const Mesh& mesh);
@@ -45,7 +37,8 @@ class alignas(64) FoldGuard {
   /// the mesh's face count in its argument (release) as it goes and at its end. Room for
   /// max_faces is reserved first, so the faces do not move while they are read; `stitch` must
   /// neither add more nor wait for TBB work (the task might be waiting for its faces on that
-  /// thread). It may add vertices before its first face.
+  /// thread). It may add vertices before its first face, while the task accepts what
+  /// accept_later() left.
   std::vector<std::int32_t> folded_vertices_while(
       Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
       const std::function<void(std::atomic<std::size_t>& faces)>& stitch);
@@ -53,25 +46,29 @@ class alignas(64) FoldGuard {
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
 
-  /// accept() as a task beside the caller, which goes on with the next front step: it reads
-  /// only `mesh.faces` from first_face on, so the caller may change any other part of the mesh
-  /// (add vertices, set attributes) but must call wait() before it adds, removes or moves faces.
-  /// The other members wait for it themselves.
-  void accept_aside(const Mesh& mesh, std::size_t first_face);
-  /// Waits for accept_aside's task (rethrows what it threw).
-  void wait() { pending_.wait(); }
+  /// accept(), left for later: for the task of the next folded_vertices_while(), which takes it
+  /// up beside the caller's first work there (emitting the strip's vertices), or else for
+  /// whichever member needs the guard first (wait() included). `mesh` must outlive that, and
+  /// its faces up to the current end must stay until then (faces may be added after them).
+  void accept_later(const Mesh& mesh, std::size_t first_face);
+  /// Accepts what accept_later() left now.
+  void wait() { accept_left(nullptr); }
 
   /// The accepted surface's boundary edges, as their faces walk them: those with one face (and,
   /// on a non-manifold mesh, those with an odd number: boundary_edges() leaves those out).
-  std::vector<BoundaryEdge> boundary() const;
+  std::vector<BoundaryEdge> boundary();
 
  private:
-  /// accept()'s work, without waiting for accept_aside's task (it is that task's body).
-  void add_to_boundary(const Mesh& mesh, std::size_t first_face);
+  /// accept()'s work on faces [first, end) of `faces` (`mesh`'s; its positions give the area
+  /// vectors of faces not checked last).
+  void add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t first, std::size_t end);
 
-  /// folded_vertices() in parts: start (waits for accept_aside's task, starts a part at
-  /// first_face), check faces [begin, end) of `faces` (the mesh's faces and positions, read
-  /// through pointers that stay valid while faces are added), then the sorted vertices.
+  /// Accepts what accept_later() left, reading the faces through `faces` (null: the mesh's own).
+  void accept_left(const Face* faces);
+
+  /// folded_vertices() in parts: start (a part at first_face), check faces [begin, end) of
+  /// `faces` (the mesh's faces and positions, read through pointers that stay valid while faces
+  /// are added), then the sorted vertices.
   void start_check(std::size_t first_face);
   void check_faces(const Vec3* positions, const Face* faces, std::size_t begin, std::size_t end,
                    std::size_t first_new_vertex, std::vector<std::int32_t>& out);
@@ -148,7 +145,11 @@ class alignas(64) FoldGuard {
   /// Area vectors of the faces checked since the last accept(), from face checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
-  mutable tbb::task_group pending_;  ///< accept_aside's task (boundary() const waits too)
+  /// What accept_later() left: faces [first, end) of *mesh.
+  struct Left {
+    const Mesh* mesh = nullptr;
+    std::size_t first = 0, end = 0;
+  } left_;
 };
 
 }  // namespace orthofront
