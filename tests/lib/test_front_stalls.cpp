@@ -105,3 +105,50 @@ TEST_CASE("vertices that stop advancing leave the front; the surface stays valid
     CHECK(widest <= window + 1);
   }
 }
+
+namespace {
+
+/// WallStagnation with NaN velocities (inside the domain) beyond x = 1.2: a defective field.
+class NanBeyond final : public Field3 {
+ public:
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override {
+    wall_.velocity(x, v);
+    if (x.x() > 1.2) v = Vec3::Constant(std::nan(""));
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& j) const override {
+    wall_.velocity_jacobian(x, v, j);
+    if (x.x() > 1.2) v = Vec3::Constant(std::nan(""));
+    return FieldStatus::inside;
+  }
+  Box<3> domain() const override { return wall_.domain(); }
+  std::string describe() const override { return "wall stagnation, NaN beyond x = 1.2"; }
+
+ private:
+  WallStagnation wall_;
+};
+
+}  // namespace
+
+TEST_CASE("vertices without flow (zero or NaN velocity) leave the front", "[engine][stall]") {
+  StreamSurfaceOptions o;
+  o.edge = 0.05;
+  o.max_steps = 40;
+  // Seed vertices on and inside the wall (y <= 0) have exactly zero velocity: the first step
+  // cuts them (and only them) from the front.
+  const Seed<3> across = make_seed(SeedCurve::line(Vec3(-1, 1, 0), Vec3(-1, -0.45, 0)), 30);
+  std::size_t in_wall = 0;
+  for (const double s : across.parameters) in_wall += across.point(s).y() <= 0 ? 1 : 0;
+  REQUIRE(in_wall > 3);
+  const SurfaceResult wall = build_stream_surface<3>(WallStagnation(), across, o);
+  CHECK(wall.report.zero_velocity_cuts >= in_wall);
+  require_valid(wall);
+  // NaN velocities count as no flow too (the median test's answer), not as fast flow.
+  const Seed<3> along = make_seed(SeedCurve::line(Vec3(0.5, 1, 0), Vec3(1.45, 1, 0)), 20);
+  std::size_t in_nan = 0;
+  for (const double s : along.parameters) in_nan += along.point(s).x() > 1.2 ? 1 : 0;
+  REQUIRE(in_nan > 2);
+  const SurfaceResult nan = build_stream_surface<3>(NanBeyond(), along, o);
+  CHECK(nan.report.zero_velocity_cuts >= in_nan);
+  require_valid(nan);
+}

@@ -290,10 +290,22 @@ class Engine {
       }
     });
     report_.field_evaluations += n;
-    const double median = median_of(speed_);
+    // No speed is below the zero-speed share of the median where none is below that share of
+    // the largest (the median is no larger): the median, a copy and a selection, only then.
+    double slowest = std::numeric_limits<double>::infinity(), fastest = 0;
+    bool comparable = true;  // no NaN (which the median's test marks as no flow)
+    for (std::size_t i = 0; i < n; ++i) {
+      comparable = comparable && !std::isnan(speed_[i]);
+      fastest = std::max(fastest, speed_[i]);
+      if (state_[i] == VertexState::ok) slowest = std::min(slowest, speed_[i]);
+    }
+    const bool all_fast = comparable && std::isfinite(fastest) &&
+                          slowest > opt_.zero_speed_fraction * fastest;
+    const double median = all_fast ? 0.0 : median_of(speed_);
     bool usable = true;
     for (std::size_t i = 0; i < n; ++i) {
-      if (state_[i] == VertexState::ok && !(speed_[i] > opt_.zero_speed_fraction * median)) {
+      if (state_[i] == VertexState::ok && !all_fast &&
+          !(speed_[i] > opt_.zero_speed_fraction * median)) {
         state_[i] = VertexState::zero_speed;
         ++report_.zero_velocity_cuts;
       }

@@ -10,7 +10,8 @@ std::size_t find_rips(std::span<const double> alpha, std::span<const double> spe
                       const RipThresholds& thresholds, std::vector<char>& keep) {
   const std::size_t n = alpha.size();
   if (n < 3) return 0;
-  const double median = median_of(std::vector<double>(speed.begin(), speed.end()));
+  // The median speed only where a sharp peak asks for it: most fronts have none.
+  double median = -1;
   std::size_t count = 0;
   const std::size_t first = closed ? 0 : 1;
   const std::size_t last = closed ? n : n - 1;
@@ -20,7 +21,9 @@ std::size_t find_rips(std::span<const double> alpha, std::span<const double> spe
     const double ap = alpha[(i + 1) % n];
     if (!(a > 0 && a > am && a > ap)) continue;
     const double sharpness = 1.0 - (am + ap) / (2.0 * a);
-    if (sharpness > thresholds.sharpness && speed[i] < thresholds.speed_fraction * median) {
+    if (!(sharpness > thresholds.sharpness)) continue;
+    if (median < 0) median = median_of(std::vector<double>(speed.begin(), speed.end()));
+    if (speed[i] < thresholds.speed_fraction * median) {
       keep[i] = 0;
       ++count;
     }
