@@ -1,5 +1,7 @@
 #include "orthofront/engine/fold_guard.h"
 
+#include <tbb/task_group.h>
+
 #include <algorithm>
 
 namespace orthofront {
@@ -8,7 +10,9 @@ namespace {
 
 /// A face's area vector (area_vector() of mesh.h, from the positions' array).
 Vec3 area_of(const Vec3* p, const Face& face) {
-  const auto at = [&](std::size_t k) -> const Vec3& { return p[static_cast<std::size_t>(face.v[k])]; };
+  const auto at = [&](std::size_t k) -> const Vec3& {
+    return p[static_cast<std::size_t>(face.v[k])];
+  };
   if (face.is_quad()) return 0.5 * (at(2) - at(0)).cross(at(3) - at(1));
   return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
 }

@@ -2,8 +2,6 @@
 /// Folds caught at stitch time: a face of the strip just stitched whose normal turns by more than
 /// 90° from a neighbour's across a shared edge (the quality measure's definition of a fold), the
 /// neighbour being another face of that strip or a face of the surface so far.
-#include <tbb/task_group.h>
-
 #include <atomic>
 #include <cstddef>
 #include <cstdint>

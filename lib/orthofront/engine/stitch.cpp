@@ -264,9 +264,10 @@ template <int N>
 std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) {
   std::size_t most = 0;
   // zipper adds a face per step along A, B or both.
-  for_each_chain(old, f, [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
-    most += steps_old + steps_new;
-  });
+  for_each_chain(old, f,
+                 [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
+                   most += steps_old + steps_new;
+                 });
   return most;
 }
 
