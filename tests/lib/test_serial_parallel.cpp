@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -96,5 +97,39 @@ TEST_CASE("serial and parallel runs build the same mesh, bit for bit", "[engine]
     check_identical(serial, parallel);
     // And two parallel runs agree with each other (no order that depends on scheduling).
     check_identical(parallel, build_in_arena(2, *field, c.seed, c.count, o));
+  }
+}
+
+TEST_CASE("strips checked beside their stitching give the in-line result, folds included",
+          "[engine][threads][fold]") {
+  // Surfaces that fold: the guard rips vertices out and stitches strips again. With threshold 0
+  // every strip is checked by a task beside its stitching (in an arena of one thread the task
+  // runs after it); with a threshold above every front, in line.
+  struct Case {
+    const char* field;
+    SeedCurve seed;
+    double edge;
+    int steps;
+  };
+  const Case cases[] = {
+      {"abc", SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 0.1, 120},
+      {"abc", SeedCurve::line(Vec3(1, 1, 0), Vec3(1, 1, 6)), 0.2, 120},
+      {"lorenz", SeedCurve::line(Vec3(-10, -10, 20), Vec3(10, 10, 20)), 1.0, 120},
+  };
+  for (const Case& c : cases) {
+    INFO(c.field);
+    const auto field = make_analytic_field(c.field);
+    StreamSurfaceOptions o;
+    o.edge = c.edge;
+    o.max_steps = c.steps;
+    o.parallel_threshold = std::numeric_limits<std::size_t>::max();
+    const SurfaceResult in_line = build_in_arena(2, *field, c.seed, 20, o);
+    CHECK(in_line.report.fold_rips > 0);
+    o.parallel_threshold = 0;
+    const SurfaceResult beside = build_in_arena(2, *field, c.seed, 20, o);
+    INFO("fold rips " << in_line.report.fold_rips << " in line, " << beside.report.fold_rips
+                      << " beside");
+    check_identical(in_line, beside);
+    check_identical(in_line, build_in_arena(1, *field, c.seed, 20, o));
   }
 }

@@ -291,7 +291,8 @@ class Engine {
     });
     report_.field_evaluations += n;
     // No speed is below the zero-speed share of the median where none is below that share of
-    // the largest (the median is no larger): the median, a copy and a selection, only then.
+    // the largest (the median is no larger; a share >= 0 keeps the order): the median, a copy
+    // and a selection, only then.
     double slowest = std::numeric_limits<double>::infinity(), fastest = 0;
     bool comparable = true;  // no NaN (which the median's test marks as no flow)
     for (std::size_t i = 0; i < n; ++i) {
@@ -300,6 +301,7 @@ class Engine {
       if (state_[i] == VertexState::ok) slowest = std::min(slowest, speed_[i]);
     }
     const bool all_fast = comparable && std::isfinite(fastest) &&
+                          opt_.zero_speed_fraction >= 0 &&
                           slowest > opt_.zero_speed_fraction * fastest;
     const double median = all_fast ? 0.0 : median_of(speed_);
     bool usable = true;
@@ -447,12 +449,12 @@ class Engine {
       std::vector<std::int32_t> folded;
       for (auto& piece : pieces) {
         const std::size_t first_face = mesh_.face_count();
-        const std::size_t most = stitcher_.most_faces(old, piece);
-        // A large strip is checked while it is stitched, on the next core (which the check
-        // takes up before the vertices are emitted: it is awake by the first face).
+        // A large strip is checked while it is stitched, by a task that starts while the
+        // vertices are emitted (accepting the previous strip's faces meanwhile).
         const auto found =
             piece.v.size() >= opt_.parallel_threshold
-                ? fold_guard_.folded_vertices_while(mesh_, first_inserted, most,
+                ? fold_guard_.folded_vertices_while(mesh_, first_inserted,
+                                                    stitcher_.most_faces(old, piece),
                                                     [&](std::atomic<std::size_t>& count) {
                                                       stitcher_.emit_moved(piece, old, step);
                                                       stitcher_.stitch(old, piece, count);
@@ -463,8 +465,8 @@ class Engine {
       }
       if (folded.empty() || round + 1 == kRounds) {
         if (!folded.empty()) report_.folds_left += folded.size();
-        // Accepted beside the next strip's emit, where that strip is checked beside its
-        // stitching (the next core is free for the α, advance and insertion loops meanwhile).
+        // Accepted when the next strip is checked (beside its emit where that strip is large),
+        // or at the end: the next core is free for the α, advance and insertion loops meanwhile.
         fold_guard_.accept_later(mesh_, faces);
         for (auto& piece : pieces) out.push_back(std::move(piece));
         return;

@@ -3,6 +3,7 @@
 #include <tbb/task_group.h>
 
 #include <algorithm>
+#include <thread>
 
 namespace orthofront {
 
@@ -91,6 +92,8 @@ std::vector<BoundaryEdge> FoldGuard::boundary() {
 
 void FoldGuard::rebuild(const Mesh& mesh) {
   left_ = Left{};
+  checked_first_ = 0;
+  checked_normals_.clear();
   open_.clear();
   add_to_boundary(mesh, mesh.faces.data(), 0, mesh.faces.size());
 }
@@ -150,6 +153,8 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
     Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
     const std::function<void(std::atomic<std::size_t>& faces)>& stitch) {
   const std::size_t first_face = mesh.faces.size();
+  // What accept_later() left of another mesh is not this call's to read.
+  if (left_.mesh && left_.mesh != &mesh) accept_left(nullptr);
   const std::size_t room = first_face + max_faces;
   if (mesh.faces.capacity() < room)
     mesh.faces.reserve(std::max(room, 2 * mesh.faces.capacity()));
@@ -166,12 +171,15 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
   std::atomic<std::size_t>& stitched = stitched_count.value;
   std::atomic<bool>& finished = finished_flag.value;
   std::vector<std::int32_t> out;
-  tbb::task_group checker;
+  // Isolated: a cancelled outer task group must not skip the check (it would find no folds).
+  tbb::task_group_context isolated(tbb::task_group_context::isolated);
+  tbb::task_group checker(isolated);
   checker.run([&] {
     // The last strip's faces first (they lie before first_face: the caller adds none there).
     accept_left(faces);
     start_check(first_face);
     std::size_t checked = first_face;
+    int idle = 0;
     for (;;) {
       // `finished` first: once it is set, the count read after it is the last one.
       const bool last = finished.load(std::memory_order_acquire);
@@ -181,8 +189,11 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
         // mesh's array headers share a cache line with the faces' end, which moves per face.
         check_faces(mesh.positions.data(), faces, checked, ready, first_new_vertex, out);
         checked = ready;
+        idle = 0;
       } else if (last) {
         return;
+      } else if (++idle > 64) {
+        std::this_thread::yield();  // the stitcher is still emitting: let a sibling run
       }
     }
   });

@@ -35,8 +35,8 @@ class alignas(64) FoldGuard {
   /// the mesh's face count in its argument (release) as it goes and at its end. Room for
   /// max_faces is reserved first, so the faces do not move while they are read; `stitch` must
   /// neither add more nor wait for TBB work (the task might be waiting for its faces on that
-  /// thread). It may add vertices before its first face, while the task accepts what
-  /// accept_later() left.
+  /// thread). It may add vertices before its first face (while the task accepts what
+  /// accept_later() left), but must not move or change any once it has published a face.
   std::vector<std::int32_t> folded_vertices_while(
       Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
       const std::function<void(std::atomic<std::size_t>& faces)>& stitch);
@@ -140,7 +140,8 @@ class alignas(64) FoldGuard {
   /// every edge a new strip can share with it (the front's rows among them).
   EdgeLists open_;
   EdgeLists strip_;  ///< scratch: the faces of the part being checked
-  /// Area vectors of the faces checked since the last accept(), from face checked_first_ on.
+  /// Area vectors of the faces checked (or left for later) since the last acceptance, from face
+  /// checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
   /// What accept_later() left: faces [first, end) of *mesh.
