@@ -93,7 +93,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
     return seed_.point(seed_.closed ? s - std::floor(s) : s);
   };
   for (std::size_t i = 0; i < segments; ++i) {
-    const std::size_t j = (i + 1) % n;
+    const std::size_t j = next_index(i, n);
     const double length = (f.v[j].x - f.v[i].x).norm();
     if (!(length > limit)) continue;
     const int pieces = static_cast<int>(std::ceil(length / opt_.edge));
@@ -140,7 +140,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
   for (std::size_t i = 0; i < n; ++i) {
     out.push_back(f.v[i]);
     if (any_cut) cut.push_back(unresolved[i]);
-    const std::size_t j = (i + 1) % n;
+    const std::size_t j = next_index(i, n);
     // The segment's seed shots update its ends' count of misses in a row, and the vertices
     // inserted on it start with that count: a hit clears it, a miss adds one.
     bool hit = false, missed = false;

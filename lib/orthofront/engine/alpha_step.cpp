@@ -45,7 +45,7 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
     Vec<N> vm;
     Mat<N> jm;
     for (std::size_t i = b; i < e; ++i) {
-      const std::size_t j = (i + 1) % n;
+      const std::size_t j = next_index(i, n);
       const Vec<N> d = f.v[j].x - f.v[i].x;
       const Vec<N> mid = 0.5 * (f.v[i].x + f.v[j].x);
       if (field_.velocity_jacobian(mid, vm, jm) != FieldStatus::inside) {
@@ -75,7 +75,7 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
   for (std::size_t i = 0; i < n; ++i)
     if (f.v[i].x == f.v[i].anchor && f.v[i].mesh >= 0) {
       // Vertex error: mean |cos| of the adjacent segments.
-      const std::size_t a = f.closed ? (i + n - 1) % n : (i == 0 ? 0 : i - 1);
+      const std::size_t a = f.closed ? previous_index(i, n) : (i == 0 ? 0 : i - 1);
       const std::size_t b = f.closed ? i : std::min(i, segments - 1);
       mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (seg_err_[a] + seg_err_[b]);
     }
@@ -140,7 +140,7 @@ void AlphaStep<N>::measure_orthogonality(const Front<N>& f, const std::vector<Ve
   const std::size_t n = f.v.size();
   const std::size_t segments = f.closed ? n : n - 1;
   for (std::size_t i = 0; i < segments; ++i) {
-    const std::size_t j = (i + 1) % n;
+    const std::size_t j = next_index(i, n);
     const Vec<N> d = f.v[j].x - f.v[i].x;
     const Vec<N> vm = 0.5 * (vel[i] + vel[j]);
     const double denom = d.norm() * vm.norm();

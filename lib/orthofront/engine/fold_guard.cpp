@@ -22,7 +22,7 @@ Vec3 area_of(const Vec3* p, const Face& face) {
 template <class Visit>
 void for_each_edge(const Face& face, Visit&& visit) {
   for (std::size_t k = 0; k < face.size; ++k) {
-    const std::int32_t a = face.v[k], b = face.v[(k + 1) % face.size];
+    const std::int32_t a = face.v[k], b = face.v[k + 1 == face.size ? 0 : k + 1];
     if (a != b) visit(a, b);
   }
 }

@@ -141,6 +141,11 @@ std::int32_t emit_vertex(Mesh& mesh, const FrontVertex<N>& fv, bool closed_seed,
   return mesh.add_vertex(p, fv.t, alpha, s, 0.0, front, step);
 }
 
+/// The index after i (before i) on a cyclic list of n: (i + 1) % n without a division, which
+/// per vertex of a front cost more than the work around it.
+inline std::size_t next_index(std::size_t i, std::size_t n) { return i + 1 == n ? 0 : i + 1; }
+inline std::size_t previous_index(std::size_t i, std::size_t n) { return i == 0 ? n - 1 : i - 1; }
+
 /// Median of a list of values (0 for none).
 inline double median_of(std::vector<double> values) {
   if (values.empty()) return 0;

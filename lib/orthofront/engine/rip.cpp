@@ -17,8 +17,8 @@ std::size_t find_rips(std::span<const double> alpha, std::span<const double> spe
   const std::size_t last = closed ? n : n - 1;
   for (std::size_t i = first; i < last; ++i) {
     const double a = alpha[i];
-    const double am = alpha[(i + n - 1) % n];
-    const double ap = alpha[(i + 1) % n];
+    const double am = alpha[previous_index(i, n)];
+    const double ap = alpha[next_index(i, n)];
     if (!(a > 0 && a > am && a > ap)) continue;
     const double sharpness = 1.0 - (am + ap) / (2.0 * a);
     if (!(sharpness > thresholds.sharpness)) continue;

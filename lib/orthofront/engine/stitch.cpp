@@ -94,15 +94,15 @@ bool StripStitcher<N>::lands_on_mesh_vertex(const Front<N>& f, const Front<N>& o
   const std::size_t n = f.v.size(), n_old = old.v.size();
   for (const bool next : {false, true}) {
     if (!f.closed && (next ? i + 1 >= n : i == 0)) continue;
-    const std::size_t k = next ? (i + 1) % n : (i + n - 1) % n;
+    const std::size_t k = next ? next_index(i, n) : previous_index(i, n);
     // A neighbour that gets a new mesh vertex gets it at its position; the others keep theirs.
     if (k != i && (fresh[k] ? near(f.v[k].x.template head<3>()) : near_mesh(f.v[k].mesh)))
       return true;
   }
   const auto o = static_cast<std::size_t>(f.v[i].origin);
   if (near_mesh(old.v[o].mesh)) return true;
-  if ((old.closed || o > 0) && near_mesh(old.v[(o + n_old - 1) % n_old].mesh)) return true;
-  if ((old.closed || o + 1 < n_old) && near_mesh(old.v[(o + 1) % n_old].mesh)) return true;
+  if ((old.closed || o > 0) && near_mesh(old.v[previous_index(o, n_old)].mesh)) return true;
+  if ((old.closed || o + 1 < n_old) && near_mesh(old.v[next_index(o, n_old)].mesh)) return true;
   return false;
 }
 
@@ -112,7 +112,7 @@ void StripStitcher<N>::renew_across_merges(const Front<N>& f, const Front<N>& ol
   const std::size_t n = f.v.size(), n_old = old.v.size();
   const std::size_t segments = f.closed ? n : (n > 0 ? n - 1 : 0);
   for (std::size_t i = 0; i < segments; ++i) {
-    const std::size_t j = (i + 1) % n;
+    const std::size_t j = next_index(i, n);
     const FrontVertex<N>& a = f.v[i];
     const FrontVertex<N>& b = f.v[j];
     if (a.origin < 0 || b.origin < 0 || fresh[i] || fresh[j]) continue;
@@ -281,8 +281,10 @@ void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
                              std::size_t steps_new) {
     chain_a.clear();
     chain_b.clear();
-    for (std::size_t s = 0; s <= steps_old; ++s) chain_a.push_back(old.v[(oa + s) % n_old].mesh);
-    for (std::size_t s = 0; s <= steps_new; ++s) chain_b.push_back(f.v[(ja + s) % n].mesh);
+    for (std::size_t s = 0, o = oa; s <= steps_old; ++s, o = next_index(o, n_old))
+      chain_a.push_back(old.v[o].mesh);
+    for (std::size_t s = 0, j = ja; s <= steps_new; ++s, j = next_index(j, n))
+      chain_b.push_back(f.v[j].mesh);
     zipper(chain_a, chain_b);
   });
 }
