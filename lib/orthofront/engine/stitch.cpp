@@ -279,6 +279,13 @@ void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
   std::vector<std::int32_t>& chain_b = chain_b_;
   for_each_chain(old, f, [&](std::size_t oa, std::size_t steps_old, std::size_t ja,
                              std::size_t steps_new) {
+    if (steps_old == 1 && steps_new == 1) {
+      // One segment on each side (almost every chain): zipper's single quad, without the chains.
+      add_face({old.v[oa].mesh, old.v[next_index(oa, n_old)].mesh, f.v[next_index(ja, n)].mesh,
+                f.v[ja].mesh},
+               4);
+      return;
+    }
     chain_a.clear();
     chain_b.clear();
     for (std::size_t s = 0, o = oa; s <= steps_old; ++s, o = next_index(o, n_old))
