@@ -26,6 +26,14 @@ SurfaceResult build_in_arena(int threads, const Field3& field, const SeedCurve& 
   return result;
 }
 
+StreamSurfaceOptions surface_options(double edge, int steps, std::size_t parallel_threshold) {
+  StreamSurfaceOptions o;
+  o.edge = edge;
+  o.max_steps = steps;
+  o.parallel_threshold = parallel_threshold;
+  return o;
+}
+
 template <typename T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() &&
@@ -81,10 +89,7 @@ TEST_CASE("serial and parallel runs build the same mesh, bit for bit", "[engine]
   for (const Case& c : cases) {
     INFO(c.name);
     const auto field = make_analytic_field(c.field);
-    StreamSurfaceOptions o;
-    o.edge = c.edge;
-    o.max_steps = c.steps;
-    o.parallel_threshold = c.parallel_threshold;
+    const StreamSurfaceOptions o = surface_options(c.edge, c.steps, c.parallel_threshold);
     const SurfaceResult serial = build_in_arena(1, *field, c.seed, c.count, o);
     const SurfaceResult parallel = build_in_arena(2, *field, c.seed, c.count, o);
     REQUIRE(serial.mesh.face_count() > 500);
@@ -119,10 +124,8 @@ TEST_CASE("strips checked beside their stitching give the in-line result, folds 
   for (const Case& c : cases) {
     INFO(c.field);
     const auto field = make_analytic_field(c.field);
-    StreamSurfaceOptions o;
-    o.edge = c.edge;
-    o.max_steps = c.steps;
-    o.parallel_threshold = std::numeric_limits<std::size_t>::max();
+    StreamSurfaceOptions o =
+        surface_options(c.edge, c.steps, std::numeric_limits<std::size_t>::max());
     const SurfaceResult in_line = build_in_arena(2, *field, c.seed, 20, o);
     CHECK(in_line.report.fold_rips > 0);
     o.parallel_threshold = 0;

@@ -451,16 +451,19 @@ class Engine {
         const std::size_t first_face = mesh_.face_count();
         // A large strip is checked while it is stitched, by a task that starts while the
         // vertices are emitted (accepting the previous strip's faces meanwhile).
-        const auto found =
-            piece.v.size() >= opt_.parallel_threshold
-                ? fold_guard_.folded_vertices_while(mesh_, first_inserted,
-                                                    stitcher_.most_faces(old, piece),
-                                                    [&](std::atomic<std::size_t>& count) {
-                                                      stitcher_.emit_moved(piece, old, step);
-                                                      stitcher_.stitch(old, piece, count);
-                                                    })
-                : (stitcher_.emit_moved(piece, old, step), stitcher_.stitch(old, piece),
-                   fold_guard_.folded_vertices(mesh_, first_face, first_inserted));
+        std::vector<std::int32_t> found;
+        if (piece.v.size() >= opt_.parallel_threshold) {
+          found = fold_guard_.folded_vertices_while(
+              mesh_, first_inserted, stitcher_.most_faces(old, piece),
+              [&](std::atomic<std::size_t>& count) {
+                stitcher_.emit_moved(piece, old, step);
+                stitcher_.stitch(old, piece, count);
+              });
+        } else {
+          stitcher_.emit_moved(piece, old, step);
+          stitcher_.stitch(old, piece);
+          found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
+        }
         folded.insert(folded.end(), found.begin(), found.end());
       }
       if (folded.empty() || round + 1 == kRounds) {

@@ -9,15 +9,6 @@ namespace orthofront {
 
 namespace {
 
-/// A face's area vector (area_vector() of mesh.h, from the positions' array).
-Vec3 area_of(const Vec3* p, const Face& face) {
-  const auto at = [&](std::size_t k) -> const Vec3& {
-    return p[static_cast<std::size_t>(face.v[k])];
-  };
-  if (face.is_quad()) return 0.5 * (at(2) - at(0)).cross(at(3) - at(1));
-  return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
-}
-
 /// Calls visit(a, b) for each edge of a face that joins two different vertices.
 template <class Visit>
 void for_each_edge(const Face& face, Visit&& visit) {
@@ -245,7 +236,7 @@ void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_
     const Face& face = faces[f];
     // The area vector, not the unit normal: a fold is a negative dot product, whose sign does not
     // depend on the lengths (and a face's area vector is zero exactly where its normal is).
-    const Vec3 n0 = area_of(positions, face);
+    const Vec3 n0 = area_vector(positions, face);
     checked_normals_.push_back(n0);
     const auto face_id = static_cast<std::uint32_t>(f);
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {

@@ -94,11 +94,16 @@ struct Mesh {
 
 /// Area vector of a face (normal times area): half the cross product of the diagonals for a
 /// quad, of two edges for a triangle.
-inline Vec3 area_vector(const Mesh& mesh, const Face& face) {
-  const auto& p = mesh.positions;
-  const auto at = [&](std::size_t k) { return p[static_cast<std::size_t>(face.v[k])]; };
+/// (From the positions array itself: for a reader beside a thread that appends to the mesh.)
+inline Vec3 area_vector(const Vec3* positions, const Face& face) {
+  const auto at = [&](std::size_t k) -> const Vec3& {
+    return positions[static_cast<std::size_t>(face.v[k])];
+  };
   if (face.is_quad()) return 0.5 * (at(2) - at(0)).cross(at(3) - at(1));
   return 0.5 * (at(1) - at(0)).cross(at(2) - at(0));
+}
+inline Vec3 area_vector(const Mesh& mesh, const Face& face) {
+  return area_vector(mesh.positions.data(), face);
 }
 
 /// Unit normal of a face; zero for a face without area (no orientation to compare).
