@@ -68,6 +68,10 @@ class AlphaStep {
   // Scratch, reused between fronts and steps.
   std::vector<double> p_, q_, r_, aln_, kernel_, seg_err_;
   std::vector<char> seg_ok_;
+  // Room for rotating a closed front and its per-vertex arrays.
+  std::vector<FrontVertex<N>> front_scratch_;
+  std::vector<Vec<N>> vel_scratch_;
+  std::vector<double> value_scratch_;
 };
 
 extern template class AlphaStep<3>;
