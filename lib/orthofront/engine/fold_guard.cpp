@@ -20,7 +20,8 @@ void for_each_edge(const Face& face, Visit&& visit) {
 
 }  // namespace
 
-void FoldGuard::EdgeLists::clear() {
+template <class Payload>
+void FoldGuard::EdgeLists<Payload>::clear() {
   if (++generation_ == 0) {  // wrapped: no old head may read as current
     for (Head& h : heads_) h.generation = 0;
     generation_ = 1;
@@ -30,7 +31,8 @@ void FoldGuard::EdgeLists::clear() {
   vertex_end_ = 0;
 }
 
-std::uint32_t& FoldGuard::EdgeLists::head_slot(std::int32_t v) {
+template <class Payload>
+std::uint32_t& FoldGuard::EdgeLists<Payload>::head_slot(std::int32_t v) {
   const auto i = static_cast<std::size_t>(v);
   if (i >= heads_.size()) heads_.resize(std::max(i + 1, 2 * heads_.size()));
   Head& h = heads_[i];
@@ -41,23 +43,24 @@ std::uint32_t& FoldGuard::EdgeLists::head_slot(std::int32_t v) {
   return h.first;
 }
 
-void FoldGuard::EdgeLists::add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward,
-                               const Vec3& normal) {
+template <class Payload>
+void FoldGuard::EdgeLists<Payload>::add(std::int32_t a, std::int32_t b, const Payload& face) {
   const auto [lo, hi] = ordered(a, b);
   vertex_end_ = std::max(vertex_end_, hi + 1);
   std::uint32_t& first = head_slot(lo);
   std::uint32_t e = free_;
   if (e != kNone) {
     free_ = entries_[e].next;
+    entries_[e] = Entry{face, hi, first};
   } else {
     e = static_cast<std::uint32_t>(entries_.size());
-    entries_.emplace_back();
+    entries_.push_back(Entry{face, hi, first});
   }
-  entries_[e] = Entry{normal, hi, face, forward, first};
   first = e;
 }
 
-bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
+template <class Payload>
+bool FoldGuard::EdgeLists<Payload>::remove(std::int32_t a, std::int32_t b) {
   const auto [lo, hi] = ordered(a, b);
   if (hi >= vertex_end_ || head(lo) == kNone) return false;
   for (std::uint32_t* link = &head_slot(lo); *link != kNone; link = &entries_[*link].next) {
@@ -74,9 +77,10 @@ bool FoldGuard::EdgeLists::remove(std::int32_t a, std::int32_t b) {
 std::vector<BoundaryEdge> FoldGuard::boundary() {
   accept_left(nullptr);
   std::vector<BoundaryEdge> out;
-  open_.for_each([&](std::int32_t lo, const EdgeLists::Entry& e) {
-    const auto face = static_cast<std::int32_t>(e.face);
-    out.push_back(e.forward ? BoundaryEdge{lo, e.other, face} : BoundaryEdge{e.other, lo, face});
+  open_.for_each([&](std::int32_t lo, const EdgeLists<OpenEdge>::Entry& e) {
+    const auto face = static_cast<std::int32_t>(e.face.face);
+    out.push_back(e.face.forward ? BoundaryEdge{lo, e.other, face}
+                                 : BoundaryEdge{e.other, lo, face});
   });
   return out;
 }
@@ -123,7 +127,7 @@ void FoldGuard::add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t
     const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
     for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
       // An edge's second face puts it inside the surface.
-      if (!open_.remove(a, b)) open_.add(a, b, static_cast<std::uint32_t>(f), a < b, normal);
+      if (!open_.remove(a, b)) open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
     });
   }
   checked_normals_.clear();
@@ -240,29 +244,35 @@ void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_
     checked_normals_.push_back(n0);
     const auto face_id = static_cast<std::uint32_t>(f);
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
-      const auto folds_over = [&](const EdgeLists::Entry& other) {
-        if (other.face == face_id) return false;
-        const Vec3& n1 = other.normal;
+      const auto folds_over = [&](std::uint32_t other, bool forward, const Vec3& n1) {
+        if (other == face_id) return false;
         // Consistent neighbours walk the edge in opposite directions; undo a flip so that only
         // geometry decides, as the quality measure does.
-        const double dot = other.forward == (a < b) ? -n0.dot(n1) : n0.dot(n1);
+        const double dot = forward == (a < b) ? -n0.dot(n1) : n0.dot(n1);
         return n1.squaredNorm() > 0 && dot < 0;
       };
       if (n0.squaredNorm() > 0) {
         // Each pair of strip faces on an edge is compared once, when the second one comes.
         bool folded = false;
-        strip_.any_of(a, b, [&](const EdgeLists::Entry& other) {
-          if (folds_over(other)) {
+        strip_.any_of(a, b, [&](const StripEdge& other) {
+          if (folds_over(other.face, other.forward,
+                         checked_normals_[other.face - checked_first_])) {
             folded = true;
             take(other.face, a, b);
           }
           return false;
         });
-        if (folded || open_.any_of(a, b, folds_over)) take(f, a, b);
+        if (folded || open_.any_of(a, b, [&](const OpenEdge& other) {
+              return folds_over(other.face, other.forward, other.normal);
+            }))
+          take(f, a, b);
       }
-      strip_.add(a, b, face_id, a < b, n0);
+      strip_.add(a, b, StripEdge{face_id, a < b});
     });
   }
 }
+
+template class FoldGuard::EdgeLists<FoldGuard::StripEdge>;
+template class FoldGuard::EdgeLists<FoldGuard::OpenEdge>;
 
 }  // namespace orthofront

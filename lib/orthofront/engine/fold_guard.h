@@ -72,23 +72,35 @@ class alignas(64) FoldGuard {
                    std::size_t first_new_vertex, std::vector<std::int32_t>& out);
   static void finish_check(std::vector<std::int32_t>& out);
 
+  /// What an edge list keeps of a face on an edge: the face, whether it walks the edge from its
+  /// lower to its higher vertex, and (for accepted faces, whose area vectors are not kept
+  /// elsewhere) its area vector (zero for a face without area).
+  struct StripEdge {
+    std::uint32_t face;
+    bool forward;
+  };
+  struct OpenEdge {
+    Vec3 normal;
+    std::uint32_t face;
+    bool forward;
+  };
+
   /// Faces on undirected edges, listed with the edge's lower vertex: a list head per mesh vertex
   /// and pooled entries, so a step allocates nothing once the pool has grown (a hash map's node
   /// per edge made the guard cost more than the rest of stitching).
+  template <class Payload>
   class EdgeLists {
    public:
     struct Entry {
-      Vec3 normal;           ///< the face's area vector (zero for a face without area)
+      Payload face;
       std::int32_t other;    ///< the edge's higher vertex
-      std::uint32_t face;
-      bool forward;          ///< the face walks the edge from its lower to its higher vertex
       std::uint32_t next;    ///< next entry of the same lower vertex (kNone: last)
     };
     static constexpr std::uint32_t kNone = 0xffffffffu;
 
     /// Forgets every edge (O(1): list heads of an older generation read as empty).
     void clear();
-    void add(std::int32_t a, std::int32_t b, std::uint32_t face, bool forward, const Vec3& normal);
+    void add(std::int32_t a, std::int32_t b, const Payload& face);
     /// Removes one entry of edge (a, b); false when there is none.
     bool remove(std::int32_t a, std::int32_t b);
     /// Calls visit(lower vertex, entry) for every entry.
@@ -98,14 +110,14 @@ class alignas(64) FoldGuard {
         for (std::uint32_t e = head(static_cast<std::int32_t>(v)); e != kNone; e = entries_[e].next)
           visit(static_cast<std::int32_t>(v), entries_[e]);
     }
-    /// Calls visit(entry) for each entry of edge (a, b) until it returns true; returns whether
-    /// one did.
+    /// Calls visit(face) for each face on edge (a, b) until it returns true; returns whether one
+    /// did.
     template <class Visit>
     bool any_of(std::int32_t a, std::int32_t b, Visit&& visit) const {
       const auto [lo, hi] = ordered(a, b);
       if (hi >= vertex_end_) return false;
       for (std::uint32_t e = head(lo); e != kNone; e = entries_[e].next)
-        if (entries_[e].other == hi && visit(entries_[e])) return true;
+        if (entries_[e].other == hi && visit(entries_[e].face)) return true;
       return false;
     }
 
@@ -138,8 +150,10 @@ class alignas(64) FoldGuard {
 
   /// Edges of accepted faces that have one face so far: the surface's boundary, which holds
   /// every edge a new strip can share with it (the front's rows among them).
-  EdgeLists open_;
-  EdgeLists strip_;  ///< scratch: the faces of the part being checked
+  EdgeLists<OpenEdge> open_;
+  /// Scratch: the faces of the part being checked. Their area vectors are in checked_normals_:
+  /// entries a third the size are what keeps the check up with the stitcher it runs beside.
+  EdgeLists<StripEdge> strip_;
   /// Area vectors of the faces checked (or left for later) since the last acceptance, from face
   /// checked_first_ on.
   std::vector<Vec3> checked_normals_;
