@@ -100,6 +100,106 @@ double minimax_mu(double t, Envelope e, std::span<const double> a, std::span<con
   return mu;
 }
 
+// The forward pass of AlphaSolver::solve: rotations c, s and y (in alpha_ln), for m equations.
+struct Forward {
+  bool in_range = true;  // false: a square left the range where the squared pass is exact
+  bool full_rank = true;
+  double min_pivot = 0;
+};
+
+// The recurrence d_{j+1} = c_j p_{j+1} with c_j = d_j / sqrt(d_j^2 + q_j^2) waits for a square
+// root and a division per row (about 16 ns a vertex). Here rho_j comes from D = d^2, whose
+// recurrence D_{j+1} = p_{j+1}^2 D_j / (D_j + q_j^2) has one division on its path, and the
+// square root of 1/rho_j^2 and the products c_j = d_j / rho_j, d_{j+1} = c_j p_{j+1} come off
+// it. Gives in_range = false where a square leaves the normal range (D below it without d
+// being zero included), for forward_direct to do the work instead.
+Forward forward_squared(std::span<const double> p, std::span<const double> q,
+                        std::span<const double> r, std::span<double> y, double* c, double* s,
+                        std::size_t m) {
+  constexpr double kLow = 1e-290, kHigh = 1e290;
+  Forward out;
+  double big = 0, small = kInf;  // of 1/rho^2: the smallest and largest pivot
+  bool zero_pivot = false;
+  double d = p[0];
+  double dd = d * d;
+  double super = 0;  // R_{j-1,j}
+  double y_prev = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double qj = q[j];
+    const double next_p = j + 1 < m ? p[j + 1] : 0.0;
+    const double rho2 = dd + qj * qj;
+    if (!(d == 0 || dd >= kLow) || !(rho2 <= kHigh) || (rho2 < kLow && rho2 != 0)) {
+      out.in_range = false;
+      return out;
+    }
+    double cj = 1, sj = 0, yj = 0;
+    if (rho2 > 0) {
+      const double ahead = next_p * next_p * dd;  // beside the division: not on the path
+      const double inv = 1 / rho2;
+      const double inv_rho = std::sqrt(inv);
+      cj = d * inv_rho;
+      sj = qj * inv_rho;
+      yj = (-r[j] - super * y_prev) * inv_rho;
+      dd = ahead * inv;
+      small = std::min(small, inv);
+      big = std::max(big, inv);
+    } else {
+      // Zero column: as in forward_direct.
+      zero_pivot = true;
+      dd = next_p * next_p;
+    }
+    d = cj * next_p;
+    c[j] = cj;
+    s[j] = sj;
+    y[j] = yj;
+    y_prev = yj;
+    super = sj * next_p;
+  }
+  out.full_rank = !zero_pivot;
+  // rho_min / rho_max = sqrt((1/rho_max^2) / (1/rho_min^2)).
+  out.min_pivot = zero_pivot || !(big > 0) ? 0 : std::sqrt(small / big);
+  return out;
+}
+
+// The forward pass with d itself: exact over the whole range of magnitudes.
+Forward forward_direct(std::span<const double> p, std::span<const double> q,
+                       std::span<const double> r, std::span<double> y, double* c, double* s,
+                       std::size_t m) {
+  Forward out;
+  double rho_min = kInf;
+  double rho_max = 0;
+  double d = p[0];
+  double super = 0;  // R_{j-1,j}
+  double y_prev = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double rho = hypot_fast(d, q[j]);
+    double cj = 1;
+    double sj = 0;
+    double yj = 0;
+    if (rho > 0) {
+      cj = d / rho;
+      sj = q[j] / rho;
+      yj = (-r[j] - super * y_prev) / rho;
+    } else {
+      // Zero column: the identity keeps Q orthogonal and M Q e_n = 0; y_j = 0 leaves equation j
+      // unsatisfied and all others exact.
+      out.full_rank = false;
+    }
+    if (rho < rho_min) rho_min = rho;
+    if (rho > rho_max) rho_max = rho;
+    c[j] = cj;
+    s[j] = sj;
+    y[j] = yj;
+    y_prev = yj;
+    if (j + 1 < m) {
+      super = sj * p[j + 1];
+      d = cj * p[j + 1];
+    }
+  }
+  out.min_pivot = rho_max > 0 ? rho_min / rho_max : 0;
+  return out;
+}
+
 }  // namespace
 
 AlphaSolver::Result AlphaSolver::solve(std::span<const double> p, std::span<const double> q,
@@ -130,42 +230,14 @@ AlphaSolver::Result AlphaSolver::solve(std::span<const double> p, std::span<cons
   // rho_j on the diagonal of R, s_j p_{j+1} on its superdiagonal and c_j p_{j+1} as the next d.
   // The forward substitution R^T y = -r needs only these, so it runs in the same pass; y is kept
   // in alpha_ln until the rotations are applied.
-  bool full_rank = true;
-  double rho_min = kInf;
-  double rho_max = 0;
-  double d = p[0];
-  double super = 0;  // R_{j-1,j}
-  double y_prev = 0;
-  for (std::size_t j = 0; j < m; ++j) {
-    const double rho = hypot_fast(d, q[j]);
-    double cj = 1;
-    double sj = 0;
-    double yj = 0;
-    if (rho > 0) {
-      cj = d / rho;
-      sj = q[j] / rho;
-      yj = (-r[j] - super * y_prev) / rho;
-    } else {
-      // Zero column: the identity keeps Q orthogonal and M Q e_n = 0; y_j = 0 leaves equation j
-      // unsatisfied and all others exact.
-      full_rank = false;
-    }
-    if (rho < rho_min) rho_min = rho;
-    if (rho > rho_max) rho_max = rho;
-    c[j] = cj;
-    s[j] = sj;
-    alpha_ln[j] = yj;
-    y_prev = yj;
-    if (j + 1 < m) {
-      super = sj * p[j + 1];
-      d = cj * p[j + 1];
-    }
-  }
+  const Forward forward = forward_squared(p, q, r, alpha_ln, c, s, m);
+  const Forward f = forward.in_range ? forward : forward_direct(p, q, r, alpha_ln, c, s, m);
 
   // Q = G_0^T ... G_{m-1}^T applied to [y; 0] and to e_n; entry j+1 is final once rotation j has
   // been applied, so the orientation counts are taken on the way.
-  alpha_ln[m] = 0;
-  kernel[m] = 1;
+  // Entry j of both vectors is carried to the next rotation in a register (a1, k1): read back
+  // from memory, each rotation waited for the store before it.
+  double a1 = 0, k1 = 1;  // entries m of [y; 0] and of e_n
   std::size_t positive = 0;
   std::size_t negative = 0;
   double sum = 0;
@@ -173,28 +245,28 @@ AlphaSolver::Result AlphaSolver::solve(std::span<const double> p, std::span<cons
     const double cj = c[j];
     const double sj = s[j];
     const double a0 = alpha_ln[j];
-    const double a1 = alpha_ln[j + 1];
-    alpha_ln[j] = cj * a0 - sj * a1;
     alpha_ln[j + 1] = sj * a0 + cj * a1;
-    const double k1 = kernel[j + 1];
-    kernel[j] = -sj * k1;
+    a1 = cj * a0 - sj * a1;
     const double k_final = cj * k1;
     kernel[j + 1] = k_final;
+    k1 = -sj * k1;
     positive += k_final > 0;
     negative += k_final < 0;
     sum += k_final;
   }
-  positive += kernel[0] > 0;
-  negative += kernel[0] < 0;
-  sum += kernel[0];
+  alpha_ln[0] = a1;
+  kernel[0] = k1;
+  positive += k1 > 0;
+  negative += k1 < 0;
+  sum += k1;
   // More positive than negative entries (without zero entries: at least half positive); a tie
   // goes to the orientation with positive sum.
   if (negative > positive || (negative == positive && sum < 0)) {
     for (std::size_t i = 0; i < n; ++i) kernel[i] = -kernel[i];
   }
 
-  result.ok = full_rank;
-  result.min_pivot = rho_max > 0 ? rho_min / rho_max : 0;
+  result.ok = f.full_rank;
+  result.min_pivot = f.min_pivot;
   return result;
 }
 
