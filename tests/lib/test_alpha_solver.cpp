@@ -285,6 +285,23 @@ TEST_CASE("alpha solver is unaffected by row scaling and extreme magnitudes", "[
       CHECK((a1 - a0).norm() <= 1e-13L * a0.norm());
       CHECK((k1 - k0).norm() <= 1e-13L);
 
+      // One row far out of range in the middle of the system: the squared recurrence gives up
+      // part-way and the direct form starts over.
+      if (n > 2) {
+        for (const double factor : {1e-200, 1e200}) {
+          System one_row = base;
+          const std::size_t i = one_row.p.size() / 2;
+          one_row.p[i] *= factor;
+          one_row.q[i] *= factor;
+          one_row.r[i] *= factor;
+          INFO("row " << i << " scaled by " << factor);
+          const Solution e = solve(solver, one_row);
+          REQUIRE(e.result.ok);
+          CHECK((to_long(e.alpha) - a0).norm() <= 1e-13L * a0.norm());
+          CHECK((to_long(e.kernel) - k0).norm() <= 1e-13L);
+        }
+      }
+
       // Whole systems near the ends of the double range: the squares in the rotations would
       // underflow or overflow.
       for (const double factor : {1e-170, 1e170}) {
