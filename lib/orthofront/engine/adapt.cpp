@@ -136,10 +136,20 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
   std::vector<FrontVertex<N>> out;
   out.reserve(n + jobs_.size());
   if (any_cut) cut.reserve(n + jobs_.size());
-  std::size_t next_job = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    out.push_back(f.v[i]);
-    if (any_cut) cut.push_back(unresolved[i]);
+  // The vertices between segments with insertions go over in blocks (one copy each, not a
+  // push per vertex: most segments have none).
+  std::size_t copied = 0;  // f.v[0, copied) are in out
+  const auto copy_through = [&](std::size_t end) {
+    out.insert(out.end(), f.v.begin() + static_cast<std::ptrdiff_t>(copied),
+               f.v.begin() + static_cast<std::ptrdiff_t>(end));
+    if (any_cut)
+      cut.insert(cut.end(), unresolved.begin() + static_cast<std::ptrdiff_t>(copied),
+                 unresolved.begin() + static_cast<std::ptrdiff_t>(end));
+    copied = end;
+  };
+  for (std::size_t next_job = 0; next_job < jobs_.size();) {
+    const std::size_t i = jobs_[next_job].segment;
+    copy_through(i + 1);
     const std::size_t j = next_index(i, n);
     // The segment's seed shots update its ends' count of misses in a row, and the vertices
     // inserted on it start with that count: a hit clears it, a miss adds one.
@@ -182,6 +192,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
       ++report_.splits;
     }
   }
+  copy_through(n);
   f.v = std::move(out);
   return any_cut;
 }
