@@ -255,6 +255,7 @@ class Engine {
         next.push_back(std::move(piece));
       }
     }
+    spare_vertices_ = std::move(f.v);
   }
 
   /// Marks (keep[i] = 0) the vertices that stopped advancing: their mesh vertex is more than
@@ -343,6 +344,8 @@ class Engine {
     Front<N> nf;
     nf.closed = f.closed;
     nf.id = f.id;
+    // Every vertex is written below: room kept from an old front saves a pass of zeros over it.
+    nf.v = std::move(spare_vertices_);
     nf.v.resize(n);
     std::vector<int> evaluations(n, 0);
     const auto apply = [&](std::size_t i, FrontVertex<N>& fv, const IntegrationResult<N>& r) {
@@ -641,6 +644,7 @@ class Engine {
                              seed_.closed, mesh_, report_};
   FoldGuard fold_guard_;
   // Per-front scratch, reused between fronts and steps.
+  std::vector<FrontVertex<N>> spare_vertices_;  ///< a front's vertices once it has advanced
   std::vector<Vec<N>> vel_;
   std::vector<double> speed_, alpha_;
   std::vector<VertexState> state_;
