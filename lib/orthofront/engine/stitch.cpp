@@ -234,11 +234,32 @@ void StripStitcher<N>::zipper(const std::vector<std::int32_t>& a,
   }
 }
 
+namespace {
+
+/// The chain between anchors ja and jb of f (consecutive vertices that came from `old`): the
+/// old front's segments from one's origin to the other's (wrapping on a closed old front) and
+/// f's from ja to jb. False where no old segment joins them (an open old front, origins
+/// backwards).
+template <int N>
+bool chain_between(const Front<N>& old, const Front<N>& f, std::size_t ja, std::size_t jb,
+                   std::size_t& steps_old, std::size_t& steps_new) {
+  const std::size_t n = f.v.size(), n_old = old.v.size();
+  const auto oa = static_cast<std::size_t>(f.v[ja].origin);
+  const auto ob = static_cast<std::size_t>(f.v[jb].origin);
+  if (ob < oa && !old.closed) return false;
+  steps_old = ob >= oa ? ob - oa : ob + n_old - oa;
+  if (steps_old == 0) steps_old = n_old;  // a closed front with a single anchor
+  steps_new = jb >= ja ? jb - ja : jb + n - ja;
+  if (steps_new == 0) steps_new = n;
+  return true;
+}
+
+}  // namespace
+
 template <int N>
 template <class Visit>
 void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit) {
   const std::size_t n = f.v.size();
-  const std::size_t n_old = old.v.size();
   std::vector<std::size_t>& anchors = anchors_;
   anchors.clear();
   for (std::size_t i = 0; i < n; ++i)
@@ -247,27 +268,29 @@ void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f, Vi
   const std::size_t pairs = f.closed ? anchors.size() : anchors.size() - 1;
   for (std::size_t k = 0; k < pairs; ++k) {
     const std::size_t ja = anchors[k];
-    const std::size_t jb = anchors[(k + 1) % anchors.size()];
-    const auto oa = static_cast<std::size_t>(f.v[ja].origin);
-    const auto ob = static_cast<std::size_t>(f.v[jb].origin);
-    // Old chain: forward from oa to ob (wrapping on closed old fronts).
-    std::size_t steps_old = ob >= oa ? ob - oa : ob + n_old - oa;
-    if (ob < oa && !old.closed) continue;   // no old segment joins them
-    if (steps_old == 0) steps_old = n_old;  // a closed front with a single anchor
-    std::size_t steps_new = jb >= ja ? jb - ja : jb + n - ja;
-    if (steps_new == 0) steps_new = n;
-    visit(oa, steps_old, ja, steps_new);
+    const std::size_t jb = anchors[next_index(k, anchors.size())];
+    std::size_t steps_old = 0, steps_new = 0;
+    if (chain_between(old, f, ja, jb, steps_old, steps_new))
+      visit(static_cast<std::size_t>(f.v[ja].origin), steps_old, ja, steps_new);
   }
 }
 
 template <int N>
 std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) {
-  std::size_t most = 0;
-  // zipper adds a face per step along A, B or both.
-  for_each_chain(old, f,
-                 [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
-                   most += steps_old + steps_new;
-                 });
+  // zipper adds a face per step along A, B or both: the chains of for_each_chain, found in one
+  // pass without listing the anchors (this runs before every large strip is stitched).
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t most = 0, first = kNone, previous = kNone, steps_old = 0, steps_new = 0;
+  for (std::size_t i = 0; i < f.v.size(); ++i) {
+    if (f.v[i].origin < 0) continue;
+    if (previous == kNone)
+      first = i;
+    else if (chain_between(old, f, previous, i, steps_old, steps_new))
+      most += steps_old + steps_new;
+    previous = i;
+  }
+  if (f.closed && first != kNone && chain_between(old, f, previous, first, steps_old, steps_new))
+    most += steps_old + steps_new;
   return most;
 }
 
