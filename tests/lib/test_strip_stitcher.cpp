@@ -214,3 +214,36 @@ TEST_CASE("stitch beside a reader: counts published, faces bounded, never moved"
   for (std::size_t i = 0; i < mesh.face_count(); ++i)
     for (std::size_t c = 0; c < 4; ++c) CHECK(mesh.faces[i].v[c] == plain.faces[i].v[c]);
 }
+
+TEST_CASE("most_faces counts every chain's segments on both sides", "[stitch]") {
+  // Only origins and closedness matter: most_faces = sum over the chains between consecutive
+  // anchors (vertices with an origin, the last to the first on a closed front) of the old and
+  // the new segments, counted here by hand.
+  const auto front = [](std::vector<std::int32_t> origins, bool closed) {
+    Front<3> f;
+    f.closed = closed;
+    for (const std::int32_t o : origins) {
+      FrontVertex<3> fv;
+      fv.x = fv.anchor = Vec3::Zero();
+      fv.origin = o;
+      f.v.push_back(fv);
+    }
+    return f;
+  };
+  StreamSurfaceOptions o;
+  Mesh mesh;
+  SurfaceReport report;
+  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
+  const Front<3> old_open = front({0, 1, 2, 3, 4}, false);
+  const Front<3> old_closed = front({0, 1, 2, 3}, true);
+  // Anchors 0, 2, 3, 5: (1 + 2) + (1 + 1) + (2 + 2).
+  CHECK(stitcher.most_faces(old_open, front({0, -1, 1, 2, -1, 4}, false)) == 9);
+  // One anchor on an open front: no chain.
+  CHECK(stitcher.most_faces(old_open, front({-1, 2, -1}, false)) == 0);
+  // Origins wrapping on a closed old front, and the closing chain: (1 + 1) + (1 + 2) + (2 + 1).
+  CHECK(stitcher.most_faces(old_closed, front({2, 3, -1, 0}, true)) == 8);
+  // A closed front with a single anchor goes all the way round both fronts.
+  CHECK(stitcher.most_faces(old_closed, front({-1, 1, -1}, true)) == 4 + 3);
+  // Origins going backwards on an open old front: no old segment joins them.
+  CHECK(stitcher.most_faces(old_open, front({3, 1}, false)) == 0);
+}
