@@ -108,17 +108,18 @@ struct Forward {
 };
 
 // The recurrence d_{j+1} = c_j p_{j+1} with c_j = d_j / sqrt(d_j^2 + q_j^2) waits for a square
-// root and a division per row (about 16 ns a vertex). Here rho_j comes from D = d^2, whose
-// recurrence D_{j+1} = p_{j+1}^2 D_j / (D_j + q_j^2) has one division on its path, and the
-// square root of 1/rho_j^2 and the products c_j = d_j / rho_j, d_{j+1} = c_j p_{j+1} come off
-// it. Gives in_range = false where a square leaves the normal range (D below it without d
-// being zero included), for forward_direct to do the work instead.
+// root and a division per row. Here rho_j comes from D = d^2, whose recurrence
+// D_{j+1} = p_{j+1}^2 D_j / (D_j + q_j^2) has one division on its path, and the square root of
+// 1/rho_j^2 and the products c_j = d_j / rho_j, d_{j+1} = c_j p_{j+1} come off it. The two
+// recurrences drift apart by rounding (like sqrt(n) ulps), so D restarts from d every 64 rows.
+// Gives in_range = false where a square or a product of squares leaves the normal range while
+// what it stands for is not zero, for forward_direct to do the work instead.
 Forward forward_squared(std::span<const double> p, std::span<const double> q,
                         std::span<const double> r, std::span<double> y, double* c, double* s,
                         std::size_t m) {
   constexpr double kLow = 1e-290, kHigh = 1e290;
   Forward out;
-  double big = 0, small = kInf;  // of 1/rho^2: the smallest and largest pivot
+  double inv_max = 0, inv_min = kInf;  // of 1/rho^2: at the smallest and the largest pivot
   bool zero_pivot = false;
   double d = p[0];
   double dd = d * d;
@@ -128,27 +129,33 @@ Forward forward_squared(std::span<const double> p, std::span<const double> q,
     const double qj = q[j];
     const double next_p = j + 1 < m ? p[j + 1] : 0.0;
     const double rho2 = dd + qj * qj;
-    if (!(d == 0 || dd >= kLow) || !(rho2 <= kHigh) || (rho2 < kLow && rho2 != 0)) {
+    // rho2 = 0 is a zero column only where d and q_j are zero (not a square underflowing).
+    if (!(d == 0 || dd >= kLow) || !(rho2 <= kHigh) || (rho2 < kLow && (d != 0 || qj != 0))) {
       out.in_range = false;
       return out;
     }
     double cj = 1, sj = 0, yj = 0;
     if (rho2 > 0) {
       const double ahead = next_p * next_p * dd;  // beside the division: not on the path
+      if (ahead < kLow && ahead != 0) {  // digits lost that the division would not give back
+        out.in_range = false;
+        return out;
+      }
       const double inv = 1 / rho2;
       const double inv_rho = std::sqrt(inv);
       cj = d * inv_rho;
       sj = qj * inv_rho;
       yj = (-r[j] - super * y_prev) * inv_rho;
       dd = ahead * inv;
-      small = std::min(small, inv);
-      big = std::max(big, inv);
+      inv_min = std::min(inv_min, inv);
+      inv_max = std::max(inv_max, inv);
     } else {
       // Zero column: as in forward_direct.
       zero_pivot = true;
       dd = next_p * next_p;
     }
     d = cj * next_p;
+    if ((j & 63) == 63) dd = d * d;
     c[j] = cj;
     s[j] = sj;
     y[j] = yj;
@@ -156,8 +163,9 @@ Forward forward_squared(std::span<const double> p, std::span<const double> q,
     super = sj * next_p;
   }
   out.full_rank = !zero_pivot;
-  // rho_min / rho_max = sqrt((1/rho_max^2) / (1/rho_min^2)).
-  out.min_pivot = zero_pivot || !(big > 0) ? 0 : std::sqrt(small / big);
+  // rho_min / rho_max = sqrt(1/rho_max^2) / sqrt(1/rho_min^2) (the quotient of the squares
+  // could underflow).
+  out.min_pivot = zero_pivot || !(inv_max > 0) ? 0 : std::sqrt(inv_min) / std::sqrt(inv_max);
   return out;
 }
 
@@ -230,8 +238,8 @@ AlphaSolver::Result AlphaSolver::solve(std::span<const double> p, std::span<cons
   // rho_j on the diagonal of R, s_j p_{j+1} on its superdiagonal and c_j p_{j+1} as the next d.
   // The forward substitution R^T y = -r needs only these, so it runs in the same pass; y is kept
   // in alpha_ln until the rotations are applied.
-  const Forward forward = forward_squared(p, q, r, alpha_ln, c, s, m);
-  const Forward f = forward.in_range ? forward : forward_direct(p, q, r, alpha_ln, c, s, m);
+  const Forward squared = forward_squared(p, q, r, alpha_ln, c, s, m);
+  const Forward used = squared.in_range ? squared : forward_direct(p, q, r, alpha_ln, c, s, m);
 
   // Q = G_0^T ... G_{m-1}^T applied to [y; 0] and to e_n; entry j+1 is final once rotation j has
   // been applied, so the orientation counts are taken on the way.
@@ -265,8 +273,8 @@ AlphaSolver::Result AlphaSolver::solve(std::span<const double> p, std::span<cons
     for (std::size_t i = 0; i < n; ++i) kernel[i] = -kernel[i];
   }
 
-  result.ok = f.full_rank;
-  result.min_pivot = f.min_pivot;
+  result.ok = used.full_rank;
+  result.min_pivot = used.min_pivot;
   return result;
 }
 
