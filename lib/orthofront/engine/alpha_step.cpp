@@ -113,7 +113,7 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
     for (std::size_t i = 1; i < n; ++i)
       if (std::abs(r_[i]) < std::abs(r_[drop])) drop = i;
     // Rotate so the dropped equation joins the last and the first vertex.
-    const auto shift = static_cast<long>((drop + 1) % n);
+    const std::size_t shift = (drop + 1) % n;
     rotate_by_copy(f.v, shift, front_scratch_);
     rotate_by_copy(vel, shift, vel_scratch_);
     rotate_by_copy(speed, shift, value_scratch_);

@@ -36,7 +36,8 @@ class AlphaStep {
   /// `speed`) and solves them into `alpha`. A segment whose midpoint has no flow marks cut[i] and
   /// returns `cut`. A closed front drops its equation of smallest |r| and is rotated (with `vel`
   /// and `speed`) so that it becomes the closing segment; where no closed orthogonal front exists
-  /// it is opened there.
+  /// it is opened there. The rotation trades the storage of f.v, `vel` and `speed` with this
+  /// object's scratch: pointers into them do not survive the call.
   Outcome solve(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>& speed,
                 std::vector<double>& alpha, std::vector<char>& cut);
 

@@ -78,9 +78,9 @@ std::vector<BoundaryEdge> FoldGuard::boundary() {
   accept_left(nullptr);
   std::vector<BoundaryEdge> out;
   open_.for_each([&](std::int32_t lo, const EdgeLists<OpenEdge>::Entry& e) {
-    const auto face = static_cast<std::int32_t>(e.face.face);
-    out.push_back(e.face.forward ? BoundaryEdge{lo, e.other, face}
-                                 : BoundaryEdge{e.other, lo, face});
+    const auto face = static_cast<std::int32_t>(e.payload.face);
+    out.push_back(e.payload.forward ? BoundaryEdge{lo, e.other, face}
+                                    : BoundaryEdge{e.other, lo, face});
   });
   return out;
 }
@@ -127,7 +127,8 @@ void FoldGuard::add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t
     const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
     for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
       // An edge's second face puts it inside the surface.
-      if (!open_.remove(a, b)) open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
+      if (!open_.remove(a, b))
+        open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
     });
   }
   checked_normals_.clear();

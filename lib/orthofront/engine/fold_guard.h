@@ -72,13 +72,14 @@ class alignas(64) FoldGuard {
                    std::size_t first_new_vertex, std::vector<std::int32_t>& out);
   static void finish_check(std::vector<std::int32_t>& out);
 
-  /// What an edge list keeps of a face on an edge: the face, whether it walks the edge from its
-  /// lower to its higher vertex, and (for accepted faces, whose area vectors are not kept
-  /// elsewhere) its area vector (zero for a face without area).
+  /// A face of the strip being checked on an edge: the face, and whether it walks the edge from
+  /// its lower to its higher vertex (its area vector is in checked_normals_).
   struct StripEdge {
     std::uint32_t face;
     bool forward;
   };
+  /// An accepted face on a boundary edge, with its area vector (zero for a face without area):
+  /// nothing else keeps the area vectors of accepted faces.
   struct OpenEdge {
     Vec3 normal;
     std::uint32_t face;
@@ -92,7 +93,7 @@ class alignas(64) FoldGuard {
   class EdgeLists {
    public:
     struct Entry {
-      Payload face;
+      Payload payload;
       std::int32_t other;    ///< the edge's higher vertex
       std::uint32_t next;    ///< next entry of the same lower vertex (kNone: last)
     };
@@ -110,14 +111,14 @@ class alignas(64) FoldGuard {
         for (std::uint32_t e = head(static_cast<std::int32_t>(v)); e != kNone; e = entries_[e].next)
           visit(static_cast<std::int32_t>(v), entries_[e]);
     }
-    /// Calls visit(face) for each face on edge (a, b) until it returns true; returns whether one
-    /// did.
+    /// Calls visit(payload) for each face on edge (a, b) until it returns true; returns whether
+    /// one did.
     template <class Visit>
     bool any_of(std::int32_t a, std::int32_t b, Visit&& visit) const {
       const auto [lo, hi] = ordered(a, b);
       if (hi >= vertex_end_) return false;
       for (std::uint32_t e = head(lo); e != kNone; e = entries_[e].next)
-        if (entries_[e].other == hi && visit(entries_[e].face)) return true;
+        if (entries_[e].other == hi && visit(entries_[e].payload)) return true;
       return false;
     }
 
@@ -152,7 +153,7 @@ class alignas(64) FoldGuard {
   /// every edge a new strip can share with it (the front's rows among them).
   EdgeLists<OpenEdge> open_;
   /// Scratch: the faces of the part being checked. Their area vectors are in checked_normals_:
-  /// entries a third the size are what keeps the check up with the stitcher it runs beside.
+  /// entries of 16 bytes instead of 40 are what keeps the check up with the stitcher beside it.
   EdgeLists<StripEdge> strip_;
   /// Area vectors of the faces checked (or left for later) since the last acceptance, from face
   /// checked_first_ on.
