@@ -117,3 +117,32 @@ TEST_CASE("insertion: in previous-row mode nothing counts as a skipped seed shot
   CHECK(s.report.previous_row_insertions == 3);
   CHECK(s.report.seed_shots_skipped == 0);
 }
+
+TEST_CASE("insertion: the front's own vertices keep their order around the inserted ones",
+          "[engine][adapt]") {
+  // Segments 0.8, 0.4 and 0.8 long (ℓ 0.5: split above 0.75): one vertex goes into the first
+  // and the last, none into the middle one. The vertices between go over in blocks.
+  Setup s(0.0);
+  s.old.v.clear();
+  s.front.v.clear();
+  const std::vector<double> ys = {0, 0.8, 1.2, 2.0};
+  for (std::size_t i = 0; i < ys.size(); ++i) {
+    const auto id = static_cast<std::int32_t>(i);
+    s.old.v.push_back(vertex(Vec3(0.9, ys[i], 0), ys[i] / 2, 0.9, id));
+    s.front.v.push_back(vertex(Vec3(1, ys[i], 0), ys[i] / 2, 1, 10 + id));
+  }
+  FrontAdapter<3> adapter(s.field, s.seed, s.options, s.tolerance, s.stop, s.mesh, s.report);
+  std::vector<char> cut;
+  REQUIRE_FALSE(adapter.split_long(s.front, &s.old, 1, cut));
+  const std::vector<double> y = {0, 0.4, 0.8, 1.2, 1.6, 2.0};
+  const std::vector<std::int32_t> origin = {10, -1, 11, 12, -1, 13};
+  REQUIRE(s.front.v.size() == y.size());
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    INFO("vertex " << i);
+    CHECK(s.front.v[i].origin == origin[i]);
+    CHECK(s.front.v[i].x.isApprox(Vec3(1, y[i], 0), 1e-9));
+  }
+  // The inserted vertices are mesh vertices, in front order.
+  CHECK(s.front.v[1].mesh == 0);
+  CHECK(s.front.v[4].mesh == 1);
+}
