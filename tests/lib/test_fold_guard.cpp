@@ -186,3 +186,35 @@ TEST_CASE("a strip checked while it is stitched gives the in-line answer", "[eng
   REQUIRE(a.size() == b.size());
   for (std::size_t i = 0; i < a.size(); ++i) CHECK(key(a[i]) == key(b[i]));
 }
+
+TEST_CASE("the fold guard checks the second part of a step against its own faces",
+          "[engine][fold]") {
+  // Rows 0 and 1 over five columns (the last turned up by 100 degrees about x = 3), then row 2
+  // in two parts checked one after the other, as the parts of one front step are: part A over
+  // columns 0-1, part B over columns 2-4 with the same 100-degree crease at x = 3 between its two
+  // faces. Part B's faces are compared with each other through the area vectors kept since part
+  // A: the new end of the creased column edge (8, 13), vertex 13, stands on the fold.
+  const auto point = [](int column, double y) {
+    return column < 4 ? Vec3(column, y, 0)
+                      : Vec3(3 + std::cos(100 * kDegree), y, std::sin(100 * kDegree));
+  };
+  Mesh m;
+  for (const double y : {0.0, 1.0})
+    for (int c = 0; c < 5; ++c) m.add_vertex(point(c, y), 0, 0, 0, 0, 0, 0);
+  for (std::int32_t c = 0; c < 4; ++c) m.add_quad(c, c + 1, c + 6, c + 5);
+  FoldGuard guard;
+  guard.rebuild(m);
+  const std::size_t first_vertex = m.vertex_count();
+  const std::size_t part_a = m.face_count();
+  m.add_vertex(point(0, 2), 1, 0, 0, 0, 0, 2);  // 10
+  // Part A rises steeply in x: its area vector does not oppose part B's creased face, so a
+  // check that took part A's for part B's first face would find nothing.
+  m.add_vertex(Vec3(1, 2, 3), 1, 0, 0, 0, 0, 2);  // 11
+  m.add_quad(5, 6, 11, 10);
+  CHECK(guard.folded_vertices(m, part_a, first_vertex).empty());
+  const std::size_t part_b = m.face_count();
+  for (int c = 2; c < 5; ++c) m.add_vertex(point(c, 2), 1, 0, 0, 0, 0, 2);  // 12 13 14
+  m.add_quad(7, 8, 13, 12);
+  m.add_quad(8, 9, 14, 13);
+  CHECK(guard.folded_vertices(m, part_b, first_vertex) == std::vector<std::int32_t>{13});
+}
