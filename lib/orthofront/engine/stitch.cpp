@@ -258,39 +258,35 @@ bool chain_between(const Front<N>& old, const Front<N>& f, std::size_t ja, std::
 
 template <int N>
 template <class Visit>
-void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit) {
-  const std::size_t n = f.v.size();
-  std::vector<std::size_t>& anchors = anchors_;
-  anchors.clear();
-  for (std::size_t i = 0; i < n; ++i)
-    if (f.v[i].origin >= 0) anchors.push_back(i);
-  if (anchors.size() < 2 && !(f.closed && anchors.size() == 1)) return;
-  const std::size_t pairs = f.closed ? anchors.size() : anchors.size() - 1;
-  for (std::size_t k = 0; k < pairs; ++k) {
-    const std::size_t ja = anchors[k];
-    const std::size_t jb = anchors[next_index(k, anchors.size())];
-    std::size_t steps_old = 0, steps_new = 0;
+void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f,
+                                      Visit&& visit) const {
+  // Consecutive anchors in one pass (the last to the first on a closed front; a closed front
+  // with a single anchor joins it to itself), without listing them first.
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t first = kNone, previous = kNone, steps_old = 0, steps_new = 0;
+  const auto chain = [&](std::size_t ja, std::size_t jb) {
     if (chain_between(old, f, ja, jb, steps_old, steps_new))
       visit(static_cast<std::size_t>(f.v[ja].origin), steps_old, ja, steps_new);
-  }
-}
-
-template <int N>
-std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) {
-  // zipper adds a face per step along A, B or both: the chains of for_each_chain, found in one
-  // pass without listing the anchors (this runs before every large strip is stitched).
-  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  std::size_t most = 0, first = kNone, previous = kNone, steps_old = 0, steps_new = 0;
+  };
   for (std::size_t i = 0; i < f.v.size(); ++i) {
     if (f.v[i].origin < 0) continue;
     if (previous == kNone)
       first = i;
-    else if (chain_between(old, f, previous, i, steps_old, steps_new))
-      most += steps_old + steps_new;
+    else
+      chain(previous, i);
     previous = i;
   }
-  if (f.closed && first != kNone && chain_between(old, f, previous, first, steps_old, steps_new))
-    most += steps_old + steps_new;
+  if (f.closed && first != kNone) chain(previous, first);
+}
+
+template <int N>
+std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) const {
+  std::size_t most = 0;
+  // zipper adds a face per step along A, B or both.
+  for_each_chain(old, f,
+                 [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
+                   most += steps_old + steps_new;
+                 });
   return most;
 }
 

@@ -41,7 +41,7 @@ class StripStitcher {
   void stitch(const Front<N>& old, const Front<N>& f, std::atomic<std::size_t>& faces);
 
   /// The most faces stitch() adds between `old` and `f`: its chains' segments on both sides.
-  std::size_t most_faces(const Front<N>& old, const Front<N>& f);
+  std::size_t most_faces(const Front<N>& old, const Front<N>& f) const;
 
   /// Faces between an old chain A and a new chain B with common ends in correspondence:
   /// quads while both advance together, triangles where one side has more segments, placed
@@ -81,7 +81,7 @@ class StripStitcher {
   /// Calls visit(oa, steps_old, ja, steps_new) for each chain stitch() joins: the old front's
   /// vertices from oa on (steps_old segments, wrapping on a closed front) and f's from ja on.
   template <class Visit>
-  void for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit);
+  void for_each_chain(const Front<N>& old, const Front<N>& f, Visit&& visit) const;
 
   /// Adds a face of `count` corners, dropping repeated ones (a vertex that kept its mesh vertex
   /// collapses a quad to a triangle; fewer than three corners add nothing).
@@ -115,9 +115,7 @@ class StripStitcher {
   // each went from its old one (one square root per vertex for all of row skipping's rules).
   std::vector<char> fresh_;
   std::vector<double> moved_;
-  // stitch()'s scratch: the front's vertices that came from the old front, and a chain's two
-  // sides.
-  std::vector<std::size_t> anchors_;
+  // stitch()'s scratch: a chain's two sides.
   std::vector<std::int32_t> chain_a_, chain_b_;
 };
 
