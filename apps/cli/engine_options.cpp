@@ -66,6 +66,9 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
                "A front vertex that kept its mesh vertex more than this many steps (it stopped "
                "advancing) leaves the front; 0: never")
       ->check(CLI::NonNegativeNumber);
+  c.add_flag("!--no-shots-ahead", o.shots_ahead,
+             "Integrate seed shots only when an insertion needs them, not a step ahead on an "
+             "idle thread (the same surface, for timing)");
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},
                                            {"rk4", IntegratorKind::rk4}}));

@@ -15,7 +15,7 @@ FrontAdapter<N>::FrontAdapter(const Field<N>& field, const Seed<N>& seed,
                               const StreamSurfaceOptions& options, const Tolerance& tolerance,
                               const StopRequest& stop, Mesh& mesh, SurfaceReport& report)
     : field_(field), seed_(seed), opt_(options), tol_(tolerance), stop_(stop), mesh_(mesh),
-      report_(report) {}
+      report_(report), legs_(field, seed, tolerance, stop) {}
 
 template <int N>
 void FrontAdapter<N>::merge_short(Front<N>& f) {
@@ -198,6 +198,48 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
 }
 
 template <int N>
+void FrontAdapter<N>::start_likely_shots(const Front<N>& f, const Front<N>& old) {
+  // A front at the parallel threshold keeps TBB's worker busy with its own loops and the fold
+  // guard's check (a leg holding the worker there made Lorenz's stitch stage 7 ms slower).
+  if (!opt_.shots_ahead || opt_.insertion != Insertion::streamline ||
+      f.v.size() >= opt_.parallel_threshold || !legs_.can_run_ahead())
+    return;
+  const std::size_t n = f.v.size(), n_old = old.v.size();
+  const std::size_t segments = f.closed ? n : n - 1;
+  const double limit = opt_.split_factor * opt_.edge;
+  likely_legs_.clear();
+  for (std::size_t i = 0; i < segments; ++i) {
+    const std::size_t j = next_index(i, n);
+    const FrontVertex<N>& a = f.v[i];
+    const FrontVertex<N>& b = f.v[j];
+    // The next step's insertions here start from the seed in two legs only where these ends
+    // stay neighbours, and from the previous row where shots beside them kept missing.
+    if (a.origin < 0 || b.origin < 0 ||
+        std::max(a.seed_misses, b.seed_misses) >= kSeedMissesBeforeRowFirst)
+      continue;
+    const auto oa = static_cast<std::size_t>(a.origin);
+    const auto ob = static_cast<std::size_t>(b.origin);
+    if (ob != oa + 1 && !(old.closed && ob == (oa + 1) % n_old)) continue;
+    const double before = (old.v[ob].x - old.v[oa].x).norm();
+    const double now = (b.x - a.x).norm();
+    const double next = now * (now / before);  // grown once more at this step's rate
+    // (A segment that would grow eightfold in a step is no guess worth a thread.)
+    if (!(before > 0) || !(next > limit) || !(next < 8 * limit)) continue;
+    // The same expressions as split_long and insertion_point use, for the same bits.
+    const int pieces = static_cast<int>(std::ceil(next / opt_.edge));
+    double s_next = b.s;
+    if (f.closed && j == 0) s_next += 1.0;
+    for (int k = 1; k < pieces; ++k) {
+      const double lambda = static_cast<double>(k) / pieces;
+      const double s = a.s + lambda * (s_next - a.s);
+      const double t1 = a.t + lambda * (b.t - a.t);
+      if (t1 > 0) likely_legs_.emplace_back(s, t1);
+    }
+  }
+  legs_.start_ahead(likely_legs_);
+}
+
+template <int N>
 double FrontAdapter<N>::alpha_or_zero(const FrontVertex<N>& fv) const {
   return fv.mesh >= 0 ? mesh_.alpha[static_cast<std::size_t>(fv.mesh)] : 0.0;
 }
@@ -246,16 +288,22 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
   }
   const Vec<N> guess = cubic_point(f, i, job.lambda);
   if (opt_.insertion == Insertion::streamline || opt_.insertion == Insertion::previous_row) {
-    // The previous front's point between the ends' origins (on their stream lines to within
-    // the interpolation) and the time left to this front, where the ends came from neighbours.
-    std::optional<std::pair<Vec<N>, double>> row_start;
+    // Where the ends came from neighbours: the previous front's point between the ends' origins
+    // (on their stream lines to within the interpolation), that front's time there, and the
+    // time left to this front.
+    struct RowStart {
+      Vec<N> x;
+      double t1 = 0, left = 0;
+    };
+    std::optional<RowStart> row_start;
     if (old && f.v[i].origin >= 0 && f.v[j].origin >= 0) {
       const auto oi = static_cast<std::size_t>(f.v[i].origin);
       const auto oj = static_cast<std::size_t>(f.v[j].origin);
       const std::size_t n_old = old->v.size();
-      if (oj == oi + 1 || (old->closed && oj == (oi + 1) % n_old))
-        row_start.emplace(cubic_point(*old, oi, job.lambda),
-                          job.t - (old->v[oi].t + job.lambda * (old->v[oj].t - old->v[oi].t)));
+      if (oj == oi + 1 || (old->closed && oj == (oi + 1) % n_old)) {
+        const double t1 = old->v[oi].t + job.lambda * (old->v[oj].t - old->v[oi].t);
+        row_start = RowStart{cubic_point(*old, oi, job.lambda), t1, job.t - t1};
+      }
     }
     FieldStatus status = FieldStatus::inside;
     // streamline: from the seed (exact), then from the previous row where that fails;
@@ -271,8 +319,22 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     for (int attempt = 0; attempt < 2; ++attempt) {
       const bool from_row = (attempt == 0) == row_first;
       if (from_row && !row_start) break;
-      const Vec<N> start = from_row ? row_start->first : seed_.point(s - std::floor(s));
-      if (shoot(f, i, j, guess, start, from_row ? row_start->second : job.t, job, status)) {
+      bool hit = false;
+      if (from_row) {
+        hit = shoot(f, i, j, guess, row_start->x, row_start->left, job, status);
+      } else if (row_start && row_start->t1 > 0) {
+        // From the seed in two legs, the first to the previous front's time: that one the
+        // last step may have integrated ahead (start_likely_shots).
+        const IntegrationResult<N> first = legs_.leg(s, row_start->t1);
+        job.evaluations += first.evaluations;
+        job.interrupted = job.interrupted || first.interrupted;
+        status = first.status;
+        hit = first.status == FieldStatus::inside &&
+              shoot(f, i, j, guess, first.x, row_start->left, job, status);
+      } else {
+        hit = shoot(f, i, j, guess, seed_.point(s - std::floor(s)), job.t, job, status);
+      }
+      if (hit) {
         job.outcome = from_row ? Outcome::previous_row : Outcome::streamline;
         job.seed_shot_hit = !from_row;
         return;

@@ -8,6 +8,7 @@
 #include "orthofront/engine/front.h"
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
+#include "orthofront/engine/seed_shot_legs.h"
 #include "orthofront/field/field.h"
 #include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/mesh/mesh.h"
@@ -50,6 +51,21 @@ class FrontAdapter {
   /// vertex every few 1e-6 along the stream line (T-junctions). No surface lies between such
   /// ends: the surface tears there, as at a rip.
   bool split_long(Front<N>& f, const Front<N>* old, int step, std::vector<char>& cut);
+
+  /// Starts the first legs of the seed shots that the next step's split_long will likely make
+  /// on `f` (linked this step; `old` is the front it advanced from): on segments whose ends
+  /// came from neighbours and that grow past split_factor·ℓ at this step's rate. See
+  /// seed_shot_legs.h; a guess that does not come true costs an idle thread only.
+  void start_likely_shots(const Front<N>& f, const Front<N>& old);
+
+  /// A new front step (for the legs started ahead), and the surface's end (legs not begun are
+  /// dropped).
+  void begin_step() { legs_.begin_step(); }
+  void finish() { legs_.drop_pending(); }
+
+  /// Seed-shot legs started ahead, and those split_long used.
+  std::size_t legs_started_ahead() const { return legs_.started(); }
+  std::size_t legs_found_ahead() const { return legs_.found(); }
 
  private:
   /// A vertex to insert at fraction λ of segment i, and where it went.
@@ -98,7 +114,9 @@ class FrontAdapter {
   const StopRequest& stop_;
   Mesh& mesh_;
   SurfaceReport& report_;
+  SeedShotLegs<N> legs_;
   std::vector<InsertionJob> jobs_;  ///< scratch, reused between fronts and steps
+  std::vector<std::pair<double, double>> likely_legs_;  ///< scratch of start_likely_shots
 };
 
 extern template class FrontAdapter<3>;

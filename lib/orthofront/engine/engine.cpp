@@ -159,6 +159,7 @@ class Engine {
     step_record_.step = step_;
     step_record_.h_min = std::numeric_limits<double>::infinity();
     discretization_->begin_step();
+    adapter_.begin_step();
     exits_this_step_ = 0;
     std::vector<Front<N>> next;
     std::vector<Front<N>> queue = std::move(fronts_);
@@ -183,6 +184,7 @@ class Engine {
   }
 
   SurfaceResult finish() {
+    adapter_.finish();
     fold_guard_.wait();  // gap closing and the unused-vertex sweep change faces
     // Only a surface that tore (its front was cut into parts) has gaps to close.
     if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
@@ -201,6 +203,8 @@ class Engine {
     if (report_.fold_rips > 0) mesh_.remove_unused_vertices();
     report_.stop_reason = reason_;
     report_.steps = step_;
+    report_.legs_started_ahead = adapter_.legs_started_ahead();
+    report_.legs_used_ahead = adapter_.legs_found_ahead();
     report_.vertices = mesh_.vertex_count();
     report_.faces = mesh_.face_count();
     report_.quads = static_cast<std::size_t>(std::count_if(
@@ -252,6 +256,7 @@ class Engine {
           ++report_.fronts_dropped_short;
           continue;
         }
+        adapter_.start_likely_shots(piece, f);
         next.push_back(std::move(piece));
       }
     }

@@ -1,5 +1,6 @@
 #include "orthofront/engine/fold_guard.h"
 
+#include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -167,41 +168,44 @@ std::vector<std::int32_t> FoldGuard::folded_vertices_while(
   std::atomic<std::size_t>& stitched = stitched_count.value;
   std::atomic<bool>& finished = finished_flag.value;
   std::vector<std::int32_t> out;
-  // Isolated: a cancelled outer task group must not skip the check (it would find no folds).
-  tbb::task_group_context isolated(tbb::task_group_context::isolated);
-  tbb::task_group checker(isolated);
-  checker.run([&] {
-    // The last strip's faces first (they lie before first_face: the caller adds none there).
-    accept_left(faces);
-    start_check(first_face);
-    std::size_t checked = first_face;
-    int idle = 0;
-    for (;;) {
-      // `finished` first: once it is set, the count read after it is the last one.
-      const bool last = finished.load(std::memory_order_acquire);
-      const std::size_t ready = stitched.load(std::memory_order_acquire);
-      if (ready > checked) {
-        // The positions, made before the first face, are read through their own pointer: the
-        // mesh's array headers share a cache line with the faces' end, which moves per face.
-        check_faces(mesh.positions.data(), faces, checked, ready, first_new_vertex, out);
-        checked = ready;
-        idle = 0;
-      } else if (last) {
-        return;
-      } else if (++idle > 64) {
-        std::this_thread::yield();  // the stitcher is still emitting: let a sibling run
+  // Isolated twice: a cancelled outer task group must not skip the check (it would find no
+  // folds), and the waits below take no other task of the arena (seed_shot_legs.h).
+  tbb::this_task_arena::isolate([&] {
+    tbb::task_group_context isolated(tbb::task_group_context::isolated);
+    tbb::task_group checker(isolated);
+    checker.run([&] {
+      // The last strip's faces first (they lie before first_face: the caller adds none there).
+      accept_left(faces);
+      start_check(first_face);
+      std::size_t checked = first_face;
+      int idle = 0;
+      for (;;) {
+        // `finished` first: once it is set, the count read after it is the last one.
+        const bool last = finished.load(std::memory_order_acquire);
+        const std::size_t ready = stitched.load(std::memory_order_acquire);
+        if (ready > checked) {
+          // The positions, made before the first face, are read through their own pointer: the
+          // mesh's array headers share a cache line with the faces' end, which moves per face.
+          check_faces(mesh.positions.data(), faces, checked, ready, first_new_vertex, out);
+          checked = ready;
+          idle = 0;
+        } else if (last) {
+          return;
+        } else if (++idle > 64) {
+          std::this_thread::yield();  // the stitcher is still emitting: let a sibling run
+        }
       }
+    });
+    try {
+      stitch(stitched);
+    } catch (...) {
+      finished.store(true, std::memory_order_release);
+      checker.wait();
+      throw;
     }
-  });
-  try {
-    stitch(stitched);
-  } catch (...) {
     finished.store(true, std::memory_order_release);
     checker.wait();
-    throw;
-  }
-  finished.store(true, std::memory_order_release);
-  checker.wait();
+  });
   finish_check(out);
   return out;
 }

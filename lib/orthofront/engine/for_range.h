@@ -2,6 +2,7 @@
 /// One loop body for the serial and the parallel path of the engine's per-vertex stages.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <cstddef>
 
@@ -15,8 +16,12 @@ void for_range(std::size_t n, std::size_t threshold, const Body& body, std::size
     body(std::size_t{0}, n);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  // Isolated: while it waits for the last items, the calling thread takes none of the other
+  // tasks in the arena (seed-shot legs started ahead, seed_shot_legs.h).
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  });
 }
 
 }  // namespace orthofront

@@ -66,6 +66,9 @@ struct SurfaceReport {
   /// Insertions that started from the previous row because the stream lines from the seed
   /// beside them had missed the front several times in a row (FrontVertex::seed_misses).
   std::size_t seed_shots_skipped = 0;
+  /// First legs of seed shots integrated ahead on an idle thread (seed_shot_legs.h), and those
+  /// an insertion then used. This process's run only: a saved state does not keep them.
+  std::size_t legs_started_ahead = 0, legs_used_ahead = 0;
   /// Why a stream-line insertion fell back to the cubic point (the two add up to
   /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
   /// quarter of the segment or more away from the front.
