@@ -4,6 +4,7 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -231,28 +232,32 @@ class CpuAdvector final : public BatchAdvector {
         std::tie(slab.step0, slab.step1) = hold(k);
         const double slab_t_end = slab_end(slab.t0, slab.t1, plan.forward, t_end);
         const auto compute = std::chrono::steady_clock::now();
-        dispatch_grid(slab.grid, [&]<int Axes, int Components, bool Rectilinear>() {
-          tbb::parallel_for(
-              tbb::blocked_range<std::size_t>(0, particles.size(), 256),
-              [&](const tbb::blocked_range<std::size_t>& r) {
-                std::size_t local_steps = 0, local_evaluations = 0;
-                for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                  const double end = own_ends ? particles.stop[i] : t_end;
-                  if (particles.status[i] != ParticleStatus::moving ||
-                      !in_slab(slab.t0, slab.t1, plan.forward, particles.t[i], end))
-                    continue;
-                  ParticleState p = particles.state(i);
-                  const std::uint32_t e0 = p.evaluations;
-                  advance_particle<Axes, Components, Rectilinear>(
-                      slab, p, own_ends ? slab_end(slab.t0, slab.t1, plan.forward, end) : slab_t_end,
-                      options);
-                  local_steps += p.steps;
-                  local_evaluations += p.evaluations - e0;
-                  particles.store(i, p);
-                }
-                steps.local() += local_steps;
-                evaluations.local() += local_evaluations;
-              });
+        // Isolated: the caller may be an engine whose seed-shot legs wait as tasks; its wait
+        // here takes none of them.
+        tbb::this_task_arena::isolate([&] {
+          dispatch_grid(slab.grid, [&]<int Axes, int Components, bool Rectilinear>() {
+            tbb::parallel_for(
+                tbb::blocked_range<std::size_t>(0, particles.size(), 256),
+                [&](const tbb::blocked_range<std::size_t>& r) {
+                  std::size_t local_steps = 0, local_evaluations = 0;
+                  for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                    const double end = own_ends ? particles.stop[i] : t_end;
+                    if (particles.status[i] != ParticleStatus::moving ||
+                        !in_slab(slab.t0, slab.t1, plan.forward, particles.t[i], end))
+                      continue;
+                    ParticleState p = particles.state(i);
+                    const std::uint32_t e0 = p.evaluations;
+                    advance_particle<Axes, Components, Rectilinear>(
+                        slab, p, own_ends ? slab_end(slab.t0, slab.t1, plan.forward, end) : slab_t_end,
+                        options);
+                    local_steps += p.steps;
+                    local_evaluations += p.evaluations - e0;
+                    particles.store(i, p);
+                  }
+                  steps.local() += local_steps;
+                  evaluations.local() += local_evaluations;
+                });
+          });
         });
         stats.compute_seconds += seconds_since(compute);
         ++stats.slabs;

@@ -256,7 +256,7 @@ class Engine {
           ++report_.fronts_dropped_short;
           continue;
         }
-        adapter_.start_likely_shots(piece, f);
+        if (step < opt_.max_steps) adapter_.start_likely_shots(piece, f);
         next.push_back(std::move(piece));
       }
     }

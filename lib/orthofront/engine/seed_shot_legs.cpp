@@ -9,8 +9,8 @@ namespace orthofront {
 
 namespace {
 
-/// Tasks queued at most: beyond it no thread is free for them anyway.
-constexpr int kMostQueued = 16;
+/// Legs queued at most (not begun): beyond it no thread is free for them anyway.
+constexpr int kMostQueued = 256;
 
 enum LegState : int { pending, running, done, dropped };
 
@@ -27,7 +27,7 @@ template <int N>
 struct SeedShotLegs<N>::Batch {
   std::deque<Leg> legs;  // a deque: legs keep their addresses while more are added
   std::unordered_map<double, Leg*> by_s;
-  std::atomic<bool> retired{false};  ///< its legs not begun are not needed any more
+  std::atomic<bool> retired{false};  ///< nothing looks here any more: legs in flight stop
 
   void drop_pending() {
     retired = true;
@@ -47,34 +47,48 @@ SeedShotLegs<N>::SeedShotLegs(const Field<N>& field, const Seed<N>& seed,
 template <int N>
 SeedShotLegs<N>::~SeedShotLegs() {
   drop_pending();
-  group_.wait();  // legs in flight finish; queued tasks find nothing to do
+  try {
+    group_.wait();  // legs in flight stop; queued tasks find nothing to do
+  } catch (...) {
+    // (Tasks keep their exceptions to themselves: nothing to rethrow here.)
+  }
 }
 
 template <int N>
-IntegrationResult<N> SeedShotLegs<N>::integrate(double s, double t1) const {
+IntegrationResult<N> SeedShotLegs<N>::integrate(double s, double t1,
+                                                const StopRequest& stop) const {
   const Vec<N> start = seed_.point(seed_.closed ? s - std::floor(s) : s);
-  return integrate_dopri5(field_, start, t1, tol_, 0, &stop_);
+  return integrate_dopri5(field_, start, t1, tol_, 0, &stop);
 }
 
 template <int N>
 IntegrationResult<N> SeedShotLegs<N>::leg(double s, double t1) const {
   const auto it = current_->by_s.find(s);
-  if (it == current_->by_s.end() || it->second->t1 != t1) return integrate(s, t1);
+  if (it == current_->by_s.end() || it->second->t1 != t1) return integrate(s, t1, stop_);
   Leg& l = *it->second;
-  int state = pending;
-  if (l.state.compare_exchange_strong(state, running)) {
-    l.result = integrate(s, t1);
+  for (;;) {
+    int state = l.state.load();
+    if (state == done) {
+      found_.fetch_add(1, std::memory_order_relaxed);
+      return l.result;
+    }
+    if (state == dropped) return integrate(s, t1, stop_);
+    if (state == running) {
+      l.state.wait(running);  // a task integrates it (and may hand it back as pending)
+      continue;
+    }
+    if (!l.state.compare_exchange_strong(state, running)) continue;
+    try {
+      l.result = integrate(s, t1, stop_);
+    } catch (...) {
+      l.state = pending;
+      l.state.notify_all();
+      throw;
+    }
     l.state = done;
     l.state.notify_all();
-  } else {
-    while (state == running) {
-      l.state.wait(running);
-      state = l.state.load();
-    }
-    if (state == dropped) return integrate(s, t1);  // (after drop_pending)
+    return l.result;  // integrated here: not counted as found ahead
   }
-  found_.fetch_add(1, std::memory_order_relaxed);
-  return l.result;
 }
 
 template <int N>
@@ -85,33 +99,33 @@ bool SeedShotLegs<N>::can_run_ahead() const {
 
 template <int N>
 void SeedShotLegs<N>::start_ahead(const std::vector<std::pair<double, double>>& legs) {
-  if (legs.empty() || queued_.load() >= kMostQueued) return;
-  std::vector<Leg*> mine;
-  mine.reserve(legs.size());
-  for (const auto& [s, t1] : legs) {
+  // One task a leg, spawned last first: an idle thread steals the oldest task, so it works from
+  // the last leg while split_long, in front order, claims from the first (leg()).
+  for (auto key = legs.rbegin(); key != legs.rend(); ++key) {
+    const auto [s, t1] = *key;
+    if (queued_.load() >= kMostQueued) return;
     if (next_->by_s.contains(s)) continue;
     Leg& l = next_->legs.emplace_back();
     l.s = s;
     l.t1 = t1;
     next_->by_s.emplace(s, &l);
-    mine.push_back(&l);
-  }
-  started_ += mine.size();
-  queued_.fetch_add(1);
-  group_.run([this, batch = next_, mine = std::move(mine)] {
-    queued_.fetch_sub(1);
-    // From the last: split_long takes its insertions in front order, so where it gets here
-    // first it claims legs from the other end (leg()), and the two meet.
-    for (auto it = mine.rbegin(); it != mine.rend(); ++it) {
-      Leg* l = *it;
-      if (batch->retired) break;
+    ++started_;
+    queued_.fetch_add(1);
+    group_.run([this, batch = next_, leg = &l] {
+      queued_.fetch_sub(1);
       int expected = pending;
-      if (!l->state.compare_exchange_strong(expected, running)) continue;
-      l->result = integrate(l->s, l->t1);
-      l->state = done;
-      l->state.notify_all();
-    }
-  });
+      if (batch->retired || !leg->state.compare_exchange_strong(expected, running)) return;
+      // A leg nobody will look at any more (the step ended, or the surface) stops early.
+      const StopRequest stop = [this, &batch] { return batch->retired.load() || stop_(); };
+      try {
+        leg->result = integrate(leg->s, leg->t1, stop);
+        leg->state = batch->retired ? dropped : done;
+      } catch (...) {
+        leg->state = pending;  // leg() integrates it in place, where the error surfaces
+      }
+      leg->state.notify_all();
+    });
+  }
 }
 
 template <int N>

@@ -51,7 +51,8 @@ class SeedShotLegs {
   /// Drops every leg not begun (the surface is finished).
   void drop_pending();
 
-  /// Legs started ahead so far, and those leg() found among them.
+  /// Legs started ahead so far, and those leg() found integrated (or being integrated) by a
+  /// task. Both depend on thread timing, unlike the mesh.
   std::size_t started() const { return started_; }
   std::size_t found() const { return found_.load(std::memory_order_relaxed); }
 
@@ -59,7 +60,7 @@ class SeedShotLegs {
   struct Leg;
   struct Batch;
 
-  IntegrationResult<N> integrate(double s, double t1) const;
+  IntegrationResult<N> integrate(double s, double t1, const StopRequest& stop) const;
 
   const Field<N>& field_;
   const Seed<N>& seed_;
@@ -70,7 +71,10 @@ class SeedShotLegs {
   std::size_t started_ = 0;
   mutable std::atomic<std::size_t> found_{0};
   std::atomic<int> queued_{0};  ///< tasks not begun
-  tbb::task_group group_;
+  /// Its own context: the engine may step inside a parallel loop (batch jobs) whose context
+  /// ends with the loop, and a task group binds to the context it is first used in.
+  tbb::task_group_context context_{tbb::task_group_context::isolated};
+  tbb::task_group group_{context_};
 };
 
 extern template class SeedShotLegs<3>;
