@@ -17,12 +17,17 @@ target_sources(orthofront_io PRIVATE
 )
 target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB BZip2::BZip2)
 
-# OpenVDB: sparse vector grids (reader, writer, time series) and the field that samples them.
-target_sources(orthofront_io PRIVATE
+# OpenVDB: sparse vector grids (reader, writer, time series) and the field that samples them,
+# in a module that orthofront_io loads on first use (vdb_module.h): linking libopenvdb cost
+# every process about 35 ms at start.
+add_library(orthofront_vdb SHARED
   orthofront/io/vdb_grid.cpp
   orthofront/io/vdb_field.cpp
 )
-target_link_libraries(orthofront_io PRIVATE OpenVDB::openvdb)
+target_link_libraries(orthofront_vdb PUBLIC orthofront_io OpenVDB::openvdb
+  PRIVATE orthofront_warnings)
+target_sources(orthofront_io PRIVATE orthofront/io/vdb_module.cpp)
+target_link_libraries(orthofront_io PRIVATE ${CMAKE_DL_LIBS})
 
 # OpenEXR: per-front quantities of a surface over (s, step) as a multi-channel float image.
 target_sources(orthofront_io PRIVATE orthofront/io/exr_front_image.cpp)

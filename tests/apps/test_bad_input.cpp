@@ -380,7 +380,10 @@ TEST_CASE("bad input: corrupt HDF5 and OpenVDB files that crash or hang or flood
       // H5Aexists overflowed reading a damaged attribute message.
       // (In a sanitizer build the child stops at the overflow: "the reader failed".)
       {"hdf5/crash-288fca76bd7d53fddabc8556c1614b507ab3c313", ".h5", "", ""},
-      {"vdb_file/crash-ff1de5cd7d629500057d850528d7abdb5ae2e9f3", ".vdb", "crashed", "crashed"},
+      // Whether OpenVDB crashes on this one or throws first depends on its heap's layout (the
+      // file's path length, the libraries loaded): contained either way.
+      {"vdb_file/crash-ff1de5cd7d629500057d850528d7abdb5ae2e9f3", ".vdb",
+       "crashed|not a readable openvdb file", "crashed|not a readable openvdb file"},
       {"vdb_file/crash-e3a67af30de8a21fd049cd0801885394e5008e4d", ".vdb", "did not finish",
        "did not finish"},
       // Two voxels 10^4 apart: a dense copy (info) would need 124 GB; sampled sparsely (stream),
@@ -415,9 +418,16 @@ TEST_CASE("bad input: corrupt HDF5 and OpenVDB files that crash or hang or flood
 #ifdef __SANITIZE_ADDRESS__
       // In a sanitizer build the child's sanitizer stops it at the first bad access, before any
       // crash, loop or flood: it exits 1 and the message says the reader failed.
-      if (expected == "crashed" || expected == "did not finish") expected = "reader";
+      if (expected.starts_with("crashed") || expected == "did not finish") expected = "reader";
 #endif
-      CHECK_THAT(lower(r.output), Contains(expected));
+      // (Alternatives are separated by '|'.)
+      bool said = false;
+      for (std::size_t from = 0; !said && from <= expected.size();) {
+        const std::size_t bar = std::min(expected.find('|', from), expected.size());
+        said = lower(r.output).find(expected.substr(from, bar - from)) != std::string::npos;
+        from = bar + 1;
+      }
+      CHECK(said);
       CHECK(out.entries().empty());
     }
   }

@@ -8,10 +8,32 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/vdb_detail.h"
 #include "orthofront/io/vdb_grid.h"
+#include "orthofront/io/vdb_module.h"
 
-namespace orthofront::io {
+namespace orthofront::io::module {
 
-struct VdbField::Impl {
+/// VdbField over the sparse grid itself (vdb_field.h says how it samples).
+class SparseVdbField final : public VdbField {
+ public:
+  struct Impl;
+  explicit SparseVdbField(std::unique_ptr<Impl> impl);
+  ~SparseVdbField() override;
+  SparseVdbField(const SparseVdbField&) = delete;
+  SparseVdbField& operator=(const SparseVdbField&) = delete;
+
+  FieldStatus velocity(const Vec3& x, Vec3& v) const override;
+  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override;
+  Box<3> domain() const override;
+  std::string describe() const override;
+  bool staggered() const override;
+  const std::string& grid_name() const override;
+  std::uint64_t active_voxels() const override;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+struct SparseVdbField::Impl {
   detail::LoadedVdbGrid grid;
   std::string source;                  // file (and selector) for describe()
   openvdb::math::Transform::Ptr xform;
@@ -57,7 +79,7 @@ bool fetch(const Accessor& acc, const openvdb::Coord& ijk, bool planar,
 }  // namespace
 
 template <typename GridT>
-FieldStatus VdbField::Impl::evaluate(const GridT& g, const Vec3& x, Vec3& v, Mat3* J) const {
+FieldStatus SparseVdbField::Impl::evaluate(const GridT& g, const Vec3& x, Vec3& v, Mat3* J) const {
   const openvdb::Vec3d q = xform->worldToIndex(openvdb::Vec3d(x[0], x[1], x[2]));
   for (int a = 0; a < (planar ? 2 : 3); ++a) {
     if (!(q[a] >= lo[static_cast<std::size_t>(a)]) || !(q[a] <= hi[static_cast<std::size_t>(a)]))
@@ -111,13 +133,13 @@ FieldStatus VdbField::Impl::evaluate(const GridT& g, const Vec3& x, Vec3& v, Mat
   return FieldStatus::inside;
 }
 
-VdbField::VdbField(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-VdbField::~VdbField() = default;
+SparseVdbField::SparseVdbField(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SparseVdbField::~SparseVdbField() = default;
 
 namespace {
 
-std::unique_ptr<VdbField::Impl> make_impl(detail::LoadedVdbGrid grid, std::string source) {
-  auto impl = std::make_unique<VdbField::Impl>();
+std::unique_ptr<SparseVdbField::Impl> make_impl(detail::LoadedVdbGrid grid, std::string source) {
+  auto impl = std::make_unique<SparseVdbField::Impl>();
   impl->grid = std::move(grid);
   impl->source = std::move(source);
   const openvdb::GridBase& base = impl->grid.base();
@@ -165,33 +187,34 @@ std::unique_ptr<VdbField::Impl> make_impl(detail::LoadedVdbGrid grid, std::strin
 
 }  // namespace
 
-std::unique_ptr<VdbField> VdbField::open(const std::filesystem::path& path, const std::string& selector) {
+std::unique_ptr<VdbField> open_vdb_field(const std::filesystem::path& path,
+                                         const std::string& selector) {
   detail::LoadedVdbGrid grid = detail::load_vdb_grid(path, selector, path.string());
   std::string source = path.string() + (selector.empty() ? "" : ":" + selector);
-  return std::unique_ptr<VdbField>(new VdbField(make_impl(std::move(grid), std::move(source))));
+  return std::make_unique<SparseVdbField>(make_impl(std::move(grid), std::move(source)));
 }
 
-std::unique_ptr<VdbField> VdbField::from_grid(const VectorGrid& grid, const std::string& name) {
+std::unique_ptr<VdbField> vdb_field_from_grid(const VectorGrid& grid, const std::string& name) {
   detail::LoadedVdbGrid loaded;
   loaded.grid_f = detail::to_vdb(grid, name);
   loaded.name = name;
   loaded.components = grid.components;
-  return std::unique_ptr<VdbField>(new VdbField(make_impl(std::move(loaded), "memory")));
+  return std::make_unique<SparseVdbField>(make_impl(std::move(loaded), "memory"));
 }
 
-FieldStatus VdbField::velocity(const Vec3& x, Vec3& v) const {
+FieldStatus SparseVdbField::velocity(const Vec3& x, Vec3& v) const {
   return impl_->grid.grid_f ? impl_->evaluate(*impl_->grid.grid_f, x, v, nullptr)
                             : impl_->evaluate(*impl_->grid.grid_d, x, v, nullptr);
 }
 
-FieldStatus VdbField::velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const {
+FieldStatus SparseVdbField::velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const {
   return impl_->grid.grid_f ? impl_->evaluate(*impl_->grid.grid_f, x, v, &J)
                             : impl_->evaluate(*impl_->grid.grid_d, x, v, &J);
 }
 
-Box<3> VdbField::domain() const { return impl_->domain; }
+Box<3> SparseVdbField::domain() const { return impl_->domain; }
 
-std::string VdbField::describe() const {
+std::string SparseVdbField::describe() const {
   std::ostringstream out;
   const openvdb::Vec3d voxel = impl_->xform->voxelSize();
   out << "OpenVDB grid '" << impl_->grid.name << "' of " << impl_->source << " ("
@@ -201,8 +224,8 @@ std::string VdbField::describe() const {
   return out.str();
 }
 
-bool VdbField::staggered() const { return impl_->grid.staggered; }
-const std::string& VdbField::grid_name() const { return impl_->grid.name; }
-std::uint64_t VdbField::active_voxels() const { return impl_->active; }
+bool SparseVdbField::staggered() const { return impl_->grid.staggered; }
+const std::string& SparseVdbField::grid_name() const { return impl_->grid.name; }
+std::uint64_t SparseVdbField::active_voxels() const { return impl_->active; }
 
-}  // namespace orthofront::io
+}  // namespace orthofront::io::module

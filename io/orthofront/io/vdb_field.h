@@ -1,5 +1,6 @@
 #pragma once
 /// A steady field sampled straight from a sparse OpenVDB vector grid (no dense copy).
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -26,8 +27,9 @@ namespace orthofront::io {
 ///   with a domain of ± half the larger x/y extent around the layer.
 /// - 2-component grids (written from a 2-component VectorGrid): v_z = 0.
 ///
-/// Immutable and thread-safe (an unregistered accessor per evaluation).
-class VdbField final : public Field3 {
+/// Immutable and thread-safe (an unregistered accessor per evaluation). The OpenVDB module
+/// (vdb_module.h) makes it: this is its interface.
+class VdbField : public Field3 {
  public:
   /// Reads the grid `selector` of `path` ("NAME", "X,Y,Z" scalar grids, or empty: the first vector
   /// grid). Throws IoError / FormatError naming the file and the grid.
@@ -37,24 +39,9 @@ class VdbField final : public Field3 {
   /// rectilinear grids.
   static std::unique_ptr<VdbField> from_grid(const VectorGrid& grid, const std::string& name = "velocity");
 
-  ~VdbField() override;
-  VdbField(const VdbField&) = delete;
-  VdbField& operator=(const VdbField&) = delete;
-
-  FieldStatus velocity(const Vec3& x, Vec3& v) const override;
-  FieldStatus velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const override;
-  Box<3> domain() const override;
-  std::string describe() const override;
-
-  bool staggered() const;
-  const std::string& grid_name() const;
-  std::uint64_t active_voxels() const;
-
-  struct Impl;
-
- private:
-  explicit VdbField(std::unique_ptr<Impl> impl);
-  std::unique_ptr<Impl> impl_;
+  virtual bool staggered() const = 0;
+  virtual const std::string& grid_name() const = 0;
+  virtual std::uint64_t active_voxels() const = 0;
 };
 
 }  // namespace orthofront::io

@@ -22,13 +22,20 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/vdb_detail.h"
+#include "orthofront/io/vdb_module.h"
 
 namespace orthofront::io {
+
+// This file and vdb_field.cpp make the OpenVDB module (vdb_module.h): the functions of
+// vdb_grid.h are defined here in namespace `module`, and orthofront_io forwards to them.
+namespace module {
 
 void initialize_openvdb() {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
 }
+
+}  // namespace module
 
 namespace detail {
 namespace {
@@ -300,7 +307,7 @@ LoadedVdbGrid select_vdb_grid(const openvdb::GridPtrVec& grids, const std::strin
 }
 
 openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
-  initialize_openvdb();
+  module::initialize_openvdb();
   {
     std::ifstream probe(path, std::ios::binary);
     if (!probe || std::filesystem::is_directory(path))
@@ -319,7 +326,7 @@ openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
 }
 
 openvdb::GridPtrVecPtr read_vdb_stream(std::istream& in, const std::string& file) {
-  initialize_openvdb();
+  module::initialize_openvdb();
   // As for files (vet_vdb_file): the stream is read in a child first.
   const std::streampos start = in.tellg();
   if (!files_trusted()) {
@@ -346,7 +353,7 @@ openvdb::GridPtrVecPtr read_vdb_stream(std::istream& in, const std::string& file
 
 LoadedVdbGrid load_vdb_grid(const std::filesystem::path& path, const std::string& selector,
                             const std::string& where) {
-  initialize_openvdb();
+  module::initialize_openvdb();
   {
     std::ifstream probe(path, std::ios::binary);
     if (!probe || std::filesystem::is_directory(path))
@@ -476,7 +483,7 @@ VectorGrid densify(const LoadedVdbGrid& grid, const openvdb::CoordBBox& box, con
 }
 
 openvdb::Vec3SGrid::Ptr to_vdb(const VectorGrid& grid, const std::string& name) {
-  initialize_openvdb();
+  module::initialize_openvdb();
   const GridGeometry& g = grid.geometry;
   if (g.rectilinear()) {
     throw InvalidArgument("grid '" + name +
@@ -517,6 +524,8 @@ openvdb::Vec3SGrid::Ptr to_vdb(const VectorGrid& grid, const std::string& name) 
 }
 
 }  // namespace detail
+
+namespace module {
 
 std::vector<VdbGridInfo> list_vdb_grids(const std::filesystem::path& path) {
   initialize_openvdb();
@@ -571,37 +580,39 @@ VectorGrid parse_vdb_grid(std::string_view content, const std::string& file,
   return detail::densify(grid, detail::dense_index_box(grid), file);
 }
 
-struct VdbFileWriter::Impl {
-  std::filesystem::path path;
-  openvdb::GridPtrVec grids;
-  std::set<std::string> names;
+/// VdbFileWriter's work: grids converted as they come, written on commit().
+class Writer final : public VdbFileWriter::Impl {
+ public:
+  explicit Writer(std::filesystem::path path) : path_(std::move(path)) {
+    initialize_openvdb();
+    check_writable(path_);
+  }
+
+  void add(const std::string& name, const VectorGrid& grid, std::optional<double> time) override {
+    if (name.empty()) throw InvalidArgument("write_vdb: a grid needs a name");
+    if (!names_.insert(name).second)
+      throw InvalidArgument("write_vdb: two grids are named '" + name + "'");
+    auto vdb = detail::to_vdb(grid, name);
+    if (time) vdb->insertMeta("time", openvdb::DoubleMetadata(*time));
+    grids_.push_back(vdb);
+  }
+
+  std::size_t grids() const override { return grids_.size(); }
+
+  void commit() override;
+
+ private:
+  std::filesystem::path path_;
+  openvdb::GridPtrVec grids_;
+  std::set<std::string> names_;
 };
 
-VdbFileWriter::VdbFileWriter(std::filesystem::path path) : impl_(std::make_unique<Impl>()) {
-  initialize_openvdb();
-  check_writable(path);
-  impl_->path = std::move(path);
-}
-
-VdbFileWriter::~VdbFileWriter() = default;
-
-void VdbFileWriter::add(const std::string& name, const VectorGrid& grid, std::optional<double> time) {
-  if (name.empty()) throw InvalidArgument("write_vdb: a grid needs a name");
-  if (!impl_->names.insert(name).second)
-    throw InvalidArgument("write_vdb: two grids are named '" + name + "'");
-  auto vdb = detail::to_vdb(grid, name);
-  if (time) vdb->insertMeta("time", openvdb::DoubleMetadata(*time));
-  impl_->grids.push_back(vdb);
-}
-
-std::size_t VdbFileWriter::grids() const { return impl_->grids.size(); }
-
-void VdbFileWriter::commit() {
-  const std::filesystem::path& path = impl_->path;
+void Writer::commit() {
+  const std::filesystem::path& path = path_;
   const std::filesystem::path temp = temporary_path(path);
   try {
     openvdb::io::File file(temp.string());
-    file.write(impl_->grids);
+    file.write(grids_);
     file.close();
     // OpenVDB does not check its stream after writing: a full disk leaves a truncated file
     // without an error. Reading every voxel back (no delayed loading) is the check.
@@ -611,7 +622,7 @@ void VdbFileWriter::commit() {
       check.open(false);
       const openvdb::GridPtrVecPtr back = check.getGrids();
       check.close();
-      complete = back && back->size() == impl_->grids.size();
+      complete = back && back->size() == grids_.size();
     } catch (const std::exception&) {
       complete = false;
     }
@@ -630,19 +641,6 @@ void VdbFileWriter::commit() {
     std::filesystem::remove(temp, ignored);
     throw IoError("cannot write " + path.string() + ": " + e.what());
   }
-}
-
-void write_vdb(const std::filesystem::path& path, const std::vector<VdbOutputGrid>& grids) {
-  VdbFileWriter writer(path);
-  for (const VdbOutputGrid& entry : grids) {
-    if (entry.grid == nullptr) throw InvalidArgument("write_vdb: grid '" + entry.name + "' is null");
-    writer.add(entry.name, *entry.grid, entry.time);
-  }
-  writer.commit();
-}
-
-void write_vdb(const VectorGrid& grid, const std::filesystem::path& path, const std::string& name) {
-  write_vdb(path, {VdbOutputGrid{name, &grid, std::nullopt}});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -808,7 +806,7 @@ std::unique_ptr<TimeSeries> open_vdb_series(std::vector<VdbStep> steps, std::vec
 
 std::unique_ptr<TimeSeries> open_vdb_file_series(const std::filesystem::path& path) {
   std::vector<std::pair<std::optional<double>, std::string>> entries;
-  for (const VdbGridInfo& info : list_vdb_grids(path)) {
+  for (const VdbGridInfo& info : module::list_vdb_grids(path)) {
     if (info.value_type == "vec3s" || info.value_type == "vec3d") entries.emplace_back(info.time, info.name);
   }
   if (entries.empty()) throw FormatError(path.string() + ": no Vec3f/Vec3d grids for a time series");
@@ -824,7 +822,26 @@ std::unique_ptr<TimeSeries> open_vdb_file_series(const std::filesystem::path& pa
     steps.push_back(VdbStep{path, entries[i].second});
     times.push_back(timed != 0 ? *entries[i].first : static_cast<double>(i));
   }
-  return open_vdb_series(std::move(steps), std::move(times));
+  return module::open_vdb_series(std::move(steps), std::move(times));
 }
 
+std::unique_ptr<VdbFileWriter::Impl> open_vdb_writer(const std::filesystem::path& path) {
+  return std::make_unique<Writer>(path);
+}
+
+std::unique_ptr<VdbField> open_vdb_field(const std::filesystem::path& path,
+                                         const std::string& selector);  // vdb_field.cpp
+std::unique_ptr<VdbField> vdb_field_from_grid(const VectorGrid& grid, const std::string& name);
+
+}  // namespace module
+
 }  // namespace orthofront::io
+
+extern "C" const orthofront::io::VdbModule* orthofront_vdb_module() {
+  namespace m = orthofront::io::module;
+  static const orthofront::io::VdbModule table{
+      m::initialize_openvdb, m::list_vdb_grids,   m::read_vdb_grid,
+      m::parse_vdb_grid,     m::open_vdb_writer,  m::open_vdb_series,
+      m::open_vdb_file_series, m::open_vdb_field, m::vdb_field_from_grid};
+  return &table;
+}

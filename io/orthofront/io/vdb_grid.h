@@ -71,8 +71,9 @@ class VdbFileWriter {
   std::size_t grids() const;
   void commit();
 
+  struct Impl;  ///< the OpenVDB module's writer (vdb_module.h)
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
