@@ -1,8 +1,13 @@
 #pragma once
-/// Checks every engine test makes of a finished surface: a valid mesh.
+/// Checks engine tests make of finished surfaces: a valid mesh, and two runs that must agree
+/// bit for bit.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cstring>
+#include <vector>
 
 #include "orthofront/engine/stream_surface.h"
+#include "orthofront/seed/seed_curve.h"
 
 namespace orthofront::test_support {
 
@@ -16,6 +21,45 @@ inline void require_valid(const SurfaceResult& r) {
   CHECK(q.folds == 0);
   CHECK(q.inconsistent_edges == 0);
   for (const Vec3& p : r.mesh.positions) REQUIRE(p.allFinite());
+}
+
+/// A surface to build: an analytic field by name, a seed curve, ℓ and the steps.
+struct SurfaceCase {
+  const char* field;
+  SeedCurve seed;
+  double edge;
+  int steps;
+};
+
+template <typename T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+/// Index of the first vertex whose position differs in any bit (the count when none does).
+inline std::size_t first_moved_vertex(const Mesh& a, const Mesh& b) {
+  const std::size_t n = std::min(a.vertex_count(), b.vertex_count());
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::memcmp(a.positions[i].data(), b.positions[i].data(), sizeof(Vec3)) != 0) return i;
+  return n;
+}
+
+/// The same mesh, bit for bit, with every attribute, from runs that stopped alike.
+inline void check_identical(const SurfaceResult& first, const SurfaceResult& second) {
+  const Mesh& a = first.mesh;
+  const Mesh& b = second.mesh;
+  REQUIRE(a.vertex_count() == b.vertex_count());
+  CHECK(first_moved_vertex(a, b) == a.vertex_count());
+  CHECK(a.faces == b.faces);
+  CHECK(same_bits(a.time, b.time));
+  CHECK(same_bits(a.alpha, b.alpha));
+  CHECK(same_bits(a.s, b.s));
+  CHECK(same_bits(a.error, b.error));
+  CHECK(a.front_id == b.front_id);
+  CHECK(a.step == b.step);
+  CHECK(first.report.steps == second.report.steps);
+  CHECK(first.report.stop_reason == second.report.stop_reason);
 }
 
 }  // namespace orthofront::test_support

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "lib/surface_checks.h"
 #include "orthofront/engine/seed_shot_legs.h"
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/analytic.h"
@@ -162,18 +163,12 @@ TEST_CASE("an error in a leg run ahead surfaces where the leg is asked for, and 
 
 TEST_CASE("a surface built with seed-shot legs ahead is the one built without",
           "[engine][adapt][threads]") {
-  struct Case {
-    const char* field;
-    SeedCurve seed;
-    double edge;
-    int steps;
-  };
-  const Case cases[] = {
+  const test_support::SurfaceCase cases[] = {
       {"saddle3d", SeedCurve::line(Vec3(-1, 2, 0.1), Vec3(1, 2, 0.1)), 0.05, 60},
       {"abc", SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 0.1, 120},
   };
   tbb::task_arena arena(2);
-  for (const Case& c : cases) {
+  for (const test_support::SurfaceCase& c : cases) {
     INFO(c.field);
     const auto field = make_analytic_field(c.field);
     StreamSurfaceOptions o;
@@ -191,12 +186,7 @@ TEST_CASE("a surface built with seed-shot legs ahead is the one built without",
                                          << " stream-line insertions");
     CHECK(ahead.report.legs_started_ahead > 20);
     CHECK(in_place.report.legs_started_ahead == 0);
-    const Mesh& a = ahead.mesh;
-    const Mesh& b = in_place.mesh;
-    REQUIRE(a.vertex_count() == b.vertex_count());
-    CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) ==
-          0);
-    CHECK(a.faces == b.faces);
+    test_support::check_identical(ahead, in_place);
     CHECK(ahead.report.field_evaluations == in_place.report.field_evaluations);
     CHECK(ahead.report.streamline_insertions == in_place.report.streamline_insertions);
   }

@@ -5,16 +5,17 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
 
+#include "lib/surface_checks.h"
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/seed/seed.h"
 
 using namespace orthofront;
+using test_support::check_identical;
 
 namespace {
 
@@ -32,36 +33,6 @@ StreamSurfaceOptions surface_options(double edge, int steps, std::size_t paralle
   o.max_steps = steps;
   o.parallel_threshold = parallel_threshold;
   return o;
-}
-
-template <typename T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-/// Index of the first vertex whose position differs in any bit (the count when none does).
-std::size_t first_moved_vertex(const Mesh& a, const Mesh& b) {
-  const std::size_t n = std::min(a.vertex_count(), b.vertex_count());
-  for (std::size_t i = 0; i < n; ++i)
-    if (std::memcmp(a.positions[i].data(), b.positions[i].data(), sizeof(Vec3)) != 0) return i;
-  return n;
-}
-
-void check_identical(const SurfaceResult& serial, const SurfaceResult& parallel) {
-  const Mesh& a = serial.mesh;
-  const Mesh& b = parallel.mesh;
-  REQUIRE(a.vertex_count() == b.vertex_count());
-  CHECK(first_moved_vertex(a, b) == a.vertex_count());
-  CHECK(a.faces == b.faces);
-  CHECK(same_bits(a.time, b.time));
-  CHECK(same_bits(a.alpha, b.alpha));
-  CHECK(same_bits(a.s, b.s));
-  CHECK(same_bits(a.error, b.error));
-  CHECK(a.front_id == b.front_id);
-  CHECK(a.step == b.step);
-  CHECK(serial.report.steps == parallel.report.steps);
-  CHECK(serial.report.stop_reason == parallel.report.stop_reason);
 }
 
 }  // namespace
@@ -110,18 +81,12 @@ TEST_CASE("strips checked beside their stitching give the in-line result, folds 
   // Surfaces that fold: the guard rips vertices out and stitches strips again. With threshold 0
   // every strip is checked by a task beside its stitching (in an arena of one thread the task
   // runs after it); with a threshold above every front, in line.
-  struct Case {
-    const char* field;
-    SeedCurve seed;
-    double edge;
-    int steps;
-  };
-  const Case cases[] = {
+  const test_support::SurfaceCase cases[] = {
       {"abc", SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 0.1, 120},
       {"abc", SeedCurve::line(Vec3(1, 1, 0), Vec3(1, 1, 6)), 0.2, 120},
       {"lorenz", SeedCurve::line(Vec3(-10, -10, 20), Vec3(10, 10, 20)), 1.0, 120},
   };
-  for (const Case& c : cases) {
+  for (const test_support::SurfaceCase& c : cases) {
     INFO(c.field);
     const auto field = make_analytic_field(c.field);
     StreamSurfaceOptions o =
