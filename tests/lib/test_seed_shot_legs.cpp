@@ -69,14 +69,14 @@ TEST_CASE("a leg started ahead is the leg integrated in place, bit for bit",
       std::this_thread::sleep_for(std::chrono::microseconds(wait_us));
       for (std::size_t k = 0; k < keys.size(); ++k)
         CHECK(same_result(legs.leg(keys[k].first, keys[k].second), reference[k]));
-      // Found: those a task had integrated or was integrating; the rest were claimed here.
-      const std::size_t found = legs.found();
-      CHECK(found <= keys.size());
-      if (wait_us == 200000) CHECK(found > 0);
+      // Used: those a task had integrated or was integrating; the rest were claimed here.
+      const std::size_t used = legs.used();
+      CHECK(used <= keys.size());
+      if (wait_us == 200000) CHECK(used > 0);
       // A leg not started, and a started s with another t1: integrated in place.
       CHECK(same_result(legs.leg(0.5, 3.0), setup.in_place(0.5, 3.0)));
       CHECK(same_result(legs.leg(keys[3].first, 1.25), setup.in_place(keys[3].first, 1.25)));
-      CHECK(legs.found() == found);
+      CHECK(legs.used() == used);
     }
   });
 }
@@ -94,7 +94,7 @@ TEST_CASE("legs ahead: only the last step's are found, and none outlives its own
       legs.begin_step();  // and are dropped: a step later no insertion asks for them
       CHECK(same_result(legs.leg(keys[5].first, keys[5].second),
                         setup.in_place(keys[5].first, keys[5].second)));
-      CHECK(legs.found() == 0);
+      CHECK(legs.used() == 0);
       // Started and left at once: the destructor waits for the leg in flight (ASan would see
       // a task integrating with a field reference that no longer lives).
       legs.start_ahead(keys);

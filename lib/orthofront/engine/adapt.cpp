@@ -10,6 +10,38 @@
 
 namespace orthofront {
 
+namespace {
+
+/// a + λ (b - a): a seed parameter or time between a segment's ends. split_long, insertion_point
+/// and start_likely_shots all take it from here, so a leg started ahead has the bits of the
+/// leg an insertion asks for.
+double between(double a, double b, double lambda) { return a + lambda * (b - a); }
+
+/// The seed parameter of segment (i, j)'s end j: wrapped past 1 on a closed front's closing
+/// segment.
+template <int N>
+double end_parameter(const Front<N>& f, std::size_t j) {
+  return f.closed && j == 0 ? f.v[j].s + 1.0 : f.v[j].s;
+}
+
+/// Whether a segment's ends came from neighbours `oi`, `oj` of the previous front `old`.
+template <int N>
+bool neighbours_in(const Front<N>& old, std::int32_t oi, std::int32_t oj) {
+  if (oi < 0 || oj < 0) return false;
+  const auto a = static_cast<std::size_t>(oi);
+  const auto b = static_cast<std::size_t>(oj);
+  return b == a + 1 || (old.closed && b == (a + 1) % old.v.size());
+}
+
+/// Whether the seed shots beside a segment kept missing: its insertions start from the
+/// previous row first.
+template <int N>
+bool shots_kept_missing(const FrontVertex<N>& a, const FrontVertex<N>& b) {
+  return std::max(a.seed_misses, b.seed_misses) >= kSeedMissesBeforeRowFirst;
+}
+
+}  // namespace
+
 template <int N>
 FrontAdapter<N>::FrontAdapter(const Field<N>& field, const Seed<N>& seed,
                               const StreamSurfaceOptions& options, const Tolerance& tolerance,
@@ -97,8 +129,7 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
     const double length = (f.v[j].x - f.v[i].x).norm();
     if (!(length > limit)) continue;
     const int pieces = static_cast<int>(std::ceil(length / opt_.edge));
-    double s_next = f.v[j].s;
-    if (f.closed && j == 0) s_next += 1.0;  // wrap the seed parameter on the closing segment
+    const double s_next = end_parameter(f, j);
     const std::size_t first = jobs_.size();
     Vec<N> previous = seed_point(f.v[i].s);
     const Vec<N> last = seed_point(s_next);
@@ -107,8 +138,8 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
       InsertionJob job;
       job.segment = i;
       job.lambda = static_cast<double>(k) / pieces;
-      job.s = f.v[i].s + job.lambda * (s_next - f.v[i].s);
-      job.t = f.v[i].t + job.lambda * (f.v[j].t - f.v[i].t);
+      job.s = between(f.v[i].s, s_next, job.lambda);
+      job.t = between(f.v[i].t, f.v[j].t, job.lambda);
       const Vec<N> p = seed_point(job.s);
       resolved = p != previous && p != last;
       previous = p;
@@ -204,7 +235,7 @@ void FrontAdapter<N>::start_likely_shots(const Front<N>& f, const Front<N>& old)
   if (!opt_.shots_ahead || opt_.insertion != Insertion::streamline ||
       f.v.size() >= opt_.parallel_threshold || !legs_.can_run_ahead())
     return;
-  const std::size_t n = f.v.size(), n_old = old.v.size();
+  const std::size_t n = f.v.size();
   const std::size_t segments = f.closed ? n : n - 1;
   const double limit = opt_.split_factor * opt_.edge;
   likely_legs_.clear();
@@ -214,26 +245,21 @@ void FrontAdapter<N>::start_likely_shots(const Front<N>& f, const Front<N>& old)
     const FrontVertex<N>& b = f.v[j];
     // The next step's insertions here start from the seed in two legs only where these ends
     // stay neighbours, and from the previous row where shots beside them kept missing.
-    if (a.origin < 0 || b.origin < 0 ||
-        std::max(a.seed_misses, b.seed_misses) >= kSeedMissesBeforeRowFirst)
-      continue;
-    const auto oa = static_cast<std::size_t>(a.origin);
-    const auto ob = static_cast<std::size_t>(b.origin);
-    if (ob != oa + 1 && !(old.closed && ob == (oa + 1) % n_old)) continue;
-    const double before = (old.v[ob].x - old.v[oa].x).norm();
+    if (!neighbours_in(old, a.origin, b.origin) || shots_kept_missing(a, b)) continue;
+    const double before = (old.v[static_cast<std::size_t>(b.origin)].x -
+                           old.v[static_cast<std::size_t>(a.origin)].x)
+                              .norm();
     const double now = (b.x - a.x).norm();
     const double next = now * (now / before);  // grown once more at this step's rate
     // (A segment that would grow eightfold in a step is no guess worth a thread.)
     if (!(before > 0) || !(next > limit) || !(next < 8 * limit)) continue;
-    // The same expressions as split_long and insertion_point use, for the same bits.
+    // λ, s and t1 as split_long and insertion_point make them, for the same bits.
     const int pieces = static_cast<int>(std::ceil(next / opt_.edge));
-    double s_next = b.s;
-    if (f.closed && j == 0) s_next += 1.0;
+    const double s_next = end_parameter(f, j);
     for (int k = 1; k < pieces; ++k) {
       const double lambda = static_cast<double>(k) / pieces;
-      const double s = a.s + lambda * (s_next - a.s);
-      const double t1 = a.t + lambda * (b.t - a.t);
-      if (t1 > 0) likely_legs_.emplace_back(s, t1);
+      const double t1 = between(a.t, b.t, lambda);
+      if (t1 > 0) likely_legs_.emplace_back(between(a.s, s_next, lambda), t1);
     }
   }
   legs_.start_ahead(likely_legs_);
@@ -296,14 +322,11 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
       double t1 = 0, left = 0;
     };
     std::optional<RowStart> row_start;
-    if (old && f.v[i].origin >= 0 && f.v[j].origin >= 0) {
+    if (old && neighbours_in(*old, f.v[i].origin, f.v[j].origin)) {
       const auto oi = static_cast<std::size_t>(f.v[i].origin);
       const auto oj = static_cast<std::size_t>(f.v[j].origin);
-      const std::size_t n_old = old->v.size();
-      if (oj == oi + 1 || (old->closed && oj == (oi + 1) % n_old)) {
-        const double t1 = old->v[oi].t + job.lambda * (old->v[oj].t - old->v[oi].t);
-        row_start = RowStart{cubic_point(*old, oi, job.lambda), t1, job.t - t1};
-      }
+      const double t1 = between(old->v[oi].t, old->v[oj].t, job.lambda);
+      row_start = RowStart{cubic_point(*old, oi, job.lambda), t1, job.t - t1};
     }
     FieldStatus status = FieldStatus::inside;
     // streamline: from the seed (exact), then from the previous row where that fails;
@@ -311,8 +334,7 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     // Where seed shots kept missing the front beside the segment, streamline starts from the
     // previous row too: there the seed's stream lines (chaotic flow, or a front that drifted
     // from its exact place) would cost the surface's whole age in integration to miss again.
-    const bool missed_before =
-        std::max(f.v[i].seed_misses, f.v[j].seed_misses) >= kSeedMissesBeforeRowFirst;
+    const bool missed_before = shots_kept_missing(f.v[i], f.v[j]);
     const bool row_first =
         row_start && (opt_.insertion == Insertion::previous_row || missed_before);
     job.seed_shot_skipped = row_first && opt_.insertion == Insertion::streamline;

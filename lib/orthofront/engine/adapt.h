@@ -65,7 +65,7 @@ class FrontAdapter {
 
   /// Seed-shot legs started ahead, and those split_long used.
   std::size_t legs_started_ahead() const { return legs_.started(); }
-  std::size_t legs_found_ahead() const { return legs_.found(); }
+  std::size_t legs_used_ahead() const { return legs_.used(); }
 
  private:
   /// A vertex to insert at fraction λ of segment i, and where it went.

@@ -204,7 +204,7 @@ class Engine {
     report_.stop_reason = reason_;
     report_.steps = step_;
     report_.legs_started_ahead = adapter_.legs_started_ahead();
-    report_.legs_used_ahead = adapter_.legs_found_ahead();
+    report_.legs_used_ahead = adapter_.legs_used_ahead();
     report_.vertices = mesh_.vertex_count();
     report_.faces = mesh_.face_count();
     report_.quads = static_cast<std::size_t>(std::count_if(

@@ -69,7 +69,7 @@ IntegrationResult<N> SeedShotLegs<N>::leg(double s, double t1) const {
   for (;;) {
     int state = l.state.load();
     if (state == done) {
-      found_.fetch_add(1, std::memory_order_relaxed);
+      used_.fetch_add(1, std::memory_order_relaxed);
       return l.result;
     }
     if (state == dropped) return integrate(s, t1, stop_);
@@ -87,7 +87,7 @@ IntegrationResult<N> SeedShotLegs<N>::leg(double s, double t1) const {
     }
     l.state = done;
     l.state.notify_all();
-    return l.result;  // integrated here: not counted as found ahead
+    return l.result;  // integrated here: not counted as used ahead
   }
 }
 

@@ -51,10 +51,10 @@ class SeedShotLegs {
   /// Drops every leg not begun (the surface is finished).
   void drop_pending();
 
-  /// Legs started ahead so far, and those leg() found integrated (or being integrated) by a
-  /// task. Both depend on thread timing, unlike the mesh.
+  /// Legs started ahead so far, and those leg() used as a task had integrated them (or was
+  /// integrating them). Both depend on thread timing, unlike the mesh.
   std::size_t started() const { return started_; }
-  std::size_t found() const { return found_.load(std::memory_order_relaxed); }
+  std::size_t used() const { return used_.load(std::memory_order_relaxed); }
 
  private:
   struct Leg;
@@ -69,7 +69,7 @@ class SeedShotLegs {
   std::shared_ptr<Batch> current_;   ///< started during the last step: leg() looks here
   std::shared_ptr<Batch> next_;      ///< started during this step
   std::size_t started_ = 0;
-  mutable std::atomic<std::size_t> found_{0};
+  mutable std::atomic<std::size_t> used_{0};
   std::atomic<int> queued_{0};  ///< tasks not begun
   /// Its own context: the engine may step inside a parallel loop (batch jobs) whose context
   /// ends with the loop, and a task group binds to the context it is first used in.
