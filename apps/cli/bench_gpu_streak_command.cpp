@@ -5,7 +5,10 @@
 // host-to-device copy rate of pinned memory (PCIe). Prints a table and JSON.
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -44,6 +47,7 @@ struct BenchGpuStreakArgs {
   std::string keep;
   std::string out;              // write the frames here (DIR/NAME.pvd), as `streak` does
   bool frames_in_line = false;  // the baseline: finish frames before the particles move on
+  bool per_call = false;        // the baseline: every particle up and down each interval
 };
 
 }  // namespace
@@ -70,6 +74,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
   c->add_flag("--frames-in-line", a->frames_in_line,
               "Finish each frame (quality, writing) before the particles move on: the baseline of "
               "finishing frames aside");
+  c->add_flag("--particles-per-call", a->per_call,
+              "Send every particle's state to the backend and back each interval: the baseline of "
+              "particles kept on the device");
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
     if (flow->dimension() != 3) throw InvalidArgument("bench-gpu-streak: --field must be a 3D flow");
@@ -137,7 +144,29 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     o.device = device;
     o.device_bytes = device_bytes;
     o.finish_frames_aside = !a->frames_in_line;
+    o.resident_particles = !a->per_call;
     const double last = o.frames.back();
+    // Where the time goes along the run: six spans of simulated time (the release, then the
+    // particles moving on), from the progress calls after each interval.
+    constexpr int kSpans = 6;
+    struct Span {
+      std::size_t intervals = 0, particles = 0;
+      double seconds = 0, advect = 0, refine = 0, frames = 0;
+    };
+    std::array<Span, kSpans> spans{};
+    spacetime::StreakProgress previous;
+    o.progress = [&](const spacetime::StreakProgress& p) {
+      const int k = std::clamp(static_cast<int>(std::ceil(p.t / last * kSpans)) - 1, 0, kSpans - 1);
+      Span& sp = spans[static_cast<std::size_t>(k)];
+      ++sp.intervals;
+      sp.particles = std::max(sp.particles, p.particles);
+      sp.seconds += p.elapsed_seconds - previous.elapsed_seconds;
+      sp.advect += p.advect_seconds - previous.advect_seconds;
+      sp.refine += p.refine_seconds - previous.refine_seconds;
+      sp.frames += p.frame_seconds - previous.frame_seconds;
+      previous = p;
+      return true;
+    };
     std::size_t steps_used = 0;
     while (steps_used < sampled.step_count() && sampled.time(steps_used) < last) ++steps_used;
     steps_used = std::min(steps_used + 1, sampled.step_count());
@@ -190,6 +219,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"host_cache_budget_bytes", co.budget_bytes},
         {"device_step_budget_bytes", device_bytes},
         {"backend", r.device},
+        {"particles_resident", !a->per_call},
         {"cpu_threads", tbb::info::default_concurrency()},
         {"complete", r.complete},
         {"message", r.message},
@@ -213,6 +243,16 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"h2d_bytes_per_second", h2d},
         {"pcie_pinned_bytes_per_second", pcie},
         {"total_over_floor", r.total_seconds / floor}};
+    for (int k = 0; k < kSpans; ++k) {
+      const Span& sp = spans[static_cast<std::size_t>(k)];
+      j["spans"].push_back({{"t_end", last * (k + 1) / kSpans},
+                            {"intervals", sp.intervals},
+                            {"max_particles", sp.particles},
+                            {"seconds", sp.seconds},
+                            {"advect", sp.advect},
+                            {"refine", sp.refine},
+                            {"frames", sp.frames}});
+    }
     std::printf("bench-gpu-streak: %s on %d^3, %zu steps over [0, 4] (%.2f GiB, %.0f MiB a step; "
                 "%zu read up to the last frame); host cache %s; the device keeps at most %.2f GiB "
                 "of steps (series / %.3g)\nbackend: %s; %d CPU threads\n",
@@ -221,9 +261,10 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 steps_used, a->host_budget.c_str(), static_cast<double>(device_bytes) / (1u << 30),
                 a->data_over_device, r.device.c_str(), tbb::info::default_concurrency());
     std::printf("streak: seed %s, release 0 -> %g, %d frames up to t = 3, edge %g, interpolated "
-                "insertion: %zu particles at most, %zu in the last frame%s\n\n",
+                "insertion: %zu particles at most, %zu in the last frame%s; particles %s\n\n",
                 a->seed.c_str(), a->release_end, a->frames, a->edge, r.max_particles, last_vertices,
-                r.complete ? "" : (" (incomplete: " + r.message + ")").c_str());
+                r.complete ? "" : (" (incomplete: " + r.message + ")").c_str(),
+                a->per_call ? "up and down every interval" : "kept by the backend");
     std::printf("%-44s %10s\n", "", "seconds");
     std::printf("%-44s %10.3f\n", "end to end (streak surface)", r.total_seconds);
     std::printf("%-44s %10.3f\n", "  advection (bulk calls)", r.advect_seconds);
@@ -242,6 +283,15 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 b.upload_seconds, static_cast<double>(b.bytes_uploaded) / (1u << 30), h2d / 1e9, pcie / 1e9);
     std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
                 r.total_seconds / floor);
+    std::printf("\nalong the run (seconds; frames: built in line, waits)\n%-12s %9s %12s %9s %9s %9s %9s\n",
+                "t", "intervals", "particles", "total", "advect", "refine", "frames");
+    for (int k = 0; k < kSpans; ++k) {
+      const Span& sp = spans[static_cast<std::size_t>(k)];
+      const std::string span = std::to_string(last * k / kSpans).substr(0, 4) + " - " +
+                               std::to_string(last * (k + 1) / kSpans).substr(0, 4);
+      std::printf("%-12s %9zu %12zu %9.3f %9.3f %9.3f %9.3f\n", span.c_str(), sp.intervals,
+                  sp.particles, sp.seconds, sp.advect, sp.refine, sp.frames);
+    }
     std::cout << j.dump(1) << "\n";
   });
 }

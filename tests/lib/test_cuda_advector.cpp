@@ -1,7 +1,8 @@
 // [gpu] The CUDA backend against the CPU backend on the same inputs: random particles in analytic
 // flows sampled on 2D and 3D, uniform and rectilinear grids, crossing cells, leaving the domain
-// and entering cells without data; and uploads that overlap the kernels. Built only with CUDA;
-// on a machine without a CUDA device each test says so and does nothing.
+// and entering cells without data; uploads that overlap the kernels; a resident set on the
+// device. Built only with CUDA; on a machine without a CUDA device each test says so and does
+// nothing.
 #include <catch2/catch.hpp>
 
 #include <array>
@@ -13,6 +14,7 @@
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/advect/merging_advector.h"
 #include "orthofront/field/unsteady.h"
+#include "lib/resident_scenario.h"
 
 using namespace orthofront;
 using namespace orthofront::advect;
@@ -304,5 +306,37 @@ TEST_CASE("cuda advection: calls merged from several threads, one at a time or r
                     << s.backend_seconds << " s summed over calls, kernels " << s.kernel_seconds
                     << " s");
     }
+  }
+}
+
+TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's bits, interval "
+          "after interval, as slots are parked, reused and added",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  const auto cpu = make_cpu_advector();
+  const auto gpu = make_advector(Device::cuda);
+  for (const int dimension : {2, 3}) {
+    INFO("dimension " << dimension);
+    ResidentSteps series = sampled(dimension, false, dimension == 2 ? 129 : 33, 9, true);
+    MethodOptions o;
+    o.method = Method::dopri5;
+    o.absolute = o.relative = 1e-8;
+    const Box<3> box = series.geometry().bounds();
+    std::array<double, 3> lo{}, hi{};
+    for (std::size_t d = 0; d < 3; ++d) {
+      const double w = box.hi[static_cast<int>(d)] - box.lo[static_cast<int>(d)];
+      lo[d] = box.lo[static_cast<int>(d)] - 0.02 * w;  // some start outside
+      hi[d] = box.hi[static_cast<int>(d)] + 0.02 * w;
+    }
+    const auto set = gpu->make_resident();
+    const auto records = test_support::run_resident_scenario(*set, series, o, lo, hi, dimension, 20000,
+                                                             0.05, 0.75, 5, cpu.get());
+    std::size_t moving = 0;
+    for (const ParticleStatus s : records.back().status) moving += s == ParticleStatus::moving;
+    CHECK(moving > 1000);
   }
 }

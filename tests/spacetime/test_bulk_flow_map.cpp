@@ -60,43 +60,61 @@ TEST_CASE("bulk advection: a slab samples StreamedField's values bit for bit",
   CHECK(compared == 4 * 300);  // 5 steps: 4 slabs
 }
 
-TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines, and a "
-          "small budget gives the frames of a large one bit for bit",
+TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines; a small "
+          "budget, and particles sent up and down each interval instead of kept by the backend, "
+          "give the same frames bit for bit",
           "[spacetime][advect][streak]") {
   const auto flow = make_unsteady_field("double-gyre");
   const GridGeometry grid = uniform_grid(flow->domain(), 2, 201);
   const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  struct Run {
+    std::size_t budget;
+    bool resident;
+  };
+  for (const auto insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
+  INFO(to_string(insertion) << " insertion");
   StreakOptions o;
   o.release_begin = 0;
   o.release_end = 3;
   o.frames = {1.5, 3, 4.5};
   o.edge = 0.03;
   o.release_step = 0.5;
+  o.insertion = insertion;
+  o.merge = 0.75;  // particles and rows removed where the flow compresses the surface
   o.device = advect::Device::cpu;
   std::vector<std::vector<StreakFrame>> runs;
-  for (const std::size_t budget : {std::size_t{1} << 30, std::size_t{8} << 20}) {
+  for (const Run run : {Run{std::size_t{1} << 30, true}, Run{std::size_t{8} << 20, true},
+                        Run{std::size_t{1} << 30, false}}) {
     CacheOptions co;
-    co.budget_bytes = budget;
+    co.budget_bytes = run.budget;
     co.whole_steps = true;
     BrickCache cache(series, co);
     std::vector<StreakFrame> frames;
+    o.resident_particles = run.resident;
     const StreakReport r =
         build_streak_surface(cache, seed, o, [&](const StreakFrame& f) { frames.push_back(f); });
     REQUIRE(r.complete);
     CHECK(r.device == "cpu");
     CHECK(r.bulk.slabs > 0);
     CHECK(r.bulk.particle_steps > 0);
+    CHECK(r.s_insertions + r.rows_inserted > 0);
+    INFO("removals " << r.s_removals << " rows " << r.rows_removed << " left " << r.left_domain);
+    CHECK(r.s_removals + r.rows_removed > 0);  // slots were given back
     REQUIRE(frames.size() == 3);
     runs.push_back(std::move(frames));
   }
-  for (std::size_t f = 0; f < 3; ++f) {
-    const Mesh& a = runs[0][f].mesh;
-    const Mesh& b = runs[1][f].mesh;
-    REQUIRE(a.vertex_count() == b.vertex_count());
-    CHECK(a.faces == b.faces);
-    CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) == 0);
-  }
+  for (std::size_t run = 1; run < runs.size(); ++run)
+    for (std::size_t f = 0; f < 3; ++f) {
+      INFO("run " << run << ", frame " << f);
+      const Mesh& a = runs[0][f].mesh;
+      const Mesh& b = runs[run][f].mesh;
+      REQUIRE(a.vertex_count() == b.vertex_count());
+      CHECK(a.faces == b.faces);
+      CHECK(a.particle_id == b.particle_id);
+      CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) == 0);
+    }
+  if (insertion == ParticleInsertion::interpolate) continue;
   // Against the analytic flow: the sampled grid (201 x 101) differs from it by its interpolation
   // error, about 1e-4 over these times; the integration adds far less.
   double worst = 0;
@@ -107,4 +125,5 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
     }
   INFO("largest distance from the analytic path lines: " << worst);
   CHECK(worst < 2e-3);
+  }
 }

@@ -1,9 +1,11 @@
 #pragma once
 /// What every BatchAdvector::advect begins with (for the backends' sources only).
 #include <chrono>
+#include <string>
 #include <vector>
 
 #include "orthofront/advect/batch_advector.h"
+#include "orthofront/error.h"
 
 namespace orthofront::advect {
 
@@ -18,6 +20,20 @@ inline SlabPlan begin_call(const std::vector<double>& times, ParticleBatch& part
   check_method(options);
   stats.particles = particles.size();
   return plan_slabs(times, particles, t_end);
+}
+
+/// The slabs that move a resident set's particles from t_begin to t_end (all start together);
+/// throws InvalidArgument when either time lies outside the series.
+inline SlabPlan plan_resident(const std::vector<double>& times, double t_begin, double t_end) {
+  ParticleBatch probe;
+  probe.resize(1);
+  probe.t[0] = t_begin;
+  SlabPlan plan = plan_slabs(times, probe, t_end);
+  if (probe.status[0] != ParticleStatus::moving)
+    throw InvalidArgument("resident particles: times " + std::to_string(t_begin) + " -> " +
+                          std::to_string(t_end) + " leave the series' [" +
+                          std::to_string(times.front()) + ", " + std::to_string(times.back()) + "]");
+  return plan;
 }
 
 }  // namespace orthofront::advect

@@ -139,6 +139,8 @@ void check_method(const MethodOptions& options);
 /// particle time to t_end. Throws InvalidArgument for fewer than two steps.
 SlabPlan plan_slabs(const std::vector<double>& times, ParticleBatch& particles, double t_end);
 
+class ResidentParticles;
+
 class BatchAdvector {
  public:
   virtual ~BatchAdvector() = default;
@@ -152,6 +154,9 @@ class BatchAdvector {
   /// How many advect() calls may run at once from different threads (each with its own
   /// particles; sources are then read under the backend's own lock). 1: one at a time.
   virtual std::size_t max_concurrent_calls() const { return 1; }
+  /// A set of particles kept between calls (resident_particles.h): in device memory for CUDA,
+  /// host memory moved by advect() otherwise. The set must not outlive the backend.
+  virtual std::unique_ptr<ResidentParticles> make_resident();
 };
 
 enum class Device : unsigned char { cpu, cuda, auto_select };

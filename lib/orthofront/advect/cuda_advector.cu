@@ -17,6 +17,7 @@
 
 #include "orthofront/advect/advect_call.h"
 #include "orthofront/advect/dispatch.h"
+#include "orthofront/advect/resident_particles.h"
 #include "orthofront/error.h"
 
 namespace orthofront::advect {
@@ -191,6 +192,34 @@ __global__ void advance_kernel(SlabView slab, DeviceParticles p, std::size_t n, 
     atomicAdd(counters + 1, static_cast<unsigned long long>(evaluations));
 }
 
+/// A change to a resident set: a particle placed in a slot, or the slot parked.
+struct SlotChange {
+  double x[3];
+  std::uint32_t slot;
+  std::uint32_t place;  ///< 1: placed at x; 0: parked
+};
+
+__global__ void apply_changes_kernel(const SlotChange* changes, std::size_t m, DeviceParticles p) {
+  const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= m) return;
+  const SlotChange c = changes[i];
+  if (c.place) {
+    for (int d = 0; d < 3; ++d) p.x[d][c.slot] = c.x[d];
+    p.status[c.slot] = ParticleStatus::moving;
+  } else {
+    p.status[c.slot] = ParticleStatus::time_bounds;
+  }
+}
+
+/// Every moving particle starts afresh at t (as a call's particles do: no step size yet).
+__global__ void restart_kernel(DeviceParticles p, std::size_t n, double t) {
+  const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= n || p.status[i] != ParticleStatus::moving) return;
+  p.t[i] = t;
+  p.h[i] = 0;
+  p.evaluations[i] = 0;
+}
+
 /// Launches the kernel for a grid kind (dispatch_grid's callee), one method per kernel.
 struct Launch {
   SlabView slab;
@@ -244,6 +273,8 @@ struct Lane {
   std::vector<std::unique_ptr<Event>> marks;       // a call's timing events
 };
 
+class CudaResident;
+
 class CudaAdvector final : public BatchAdvector {
  public:
   explicit CudaAdvector(std::size_t device_bytes) : device_budget_(device_bytes) {
@@ -291,7 +322,11 @@ class CudaAdvector final : public BatchAdvector {
     return stats;
   }
 
+  std::unique_ptr<ResidentParticles> make_resident() override;
+
  private:
+  friend class CudaResident;
+
   /// A device buffer for one step, with what it holds, an event for when its upload ends, and
   /// how many calls in flight read it (a slot read by another call is never overwritten).
   struct Slot {
@@ -307,12 +342,23 @@ class CudaAdvector final : public BatchAdvector {
 
   void run(Lane& lane, StepSource& source, ParticleBatch& particles, const SlabPlan& plan,
            double t_end, const MethodOptions& options, AdvectionStatistics& stats) {
+    const DeviceParticles view = upload_particles(lane, particles);
+    run_slabs(lane, source, view, particles.size(), plan, t_end, options, stats,
+              [&] { enqueue_download(lane, particles.size()); });
+    copy_downloaded(lane, particles);
+  }
+
+  /// The slabs of `plan` over the n particles of `view` (device arrays) on the lane's stream;
+  /// `download` enqueues the particles' way back behind the kernels, and the call returns once it
+  /// has ended, with the counters and timings in `stats`.
+  template <class Download>
+  void run_slabs(Lane& lane, StepSource& source, const DeviceParticles& view, std::size_t n,
+                 const SlabPlan& plan, double t_end, const MethodOptions& options,
+                 AdvectionStatistics& stats, const Download& download) {
     const std::vector<double>& times = source.times();
-    const std::size_t n = particles.size();
     const cudaStream_t stream = lane.compute.get();
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
     const GridView grid = device_grid(lane, tables);
-    const DeviceParticles view = upload_particles(lane, particles);
     check(cudaMemsetAsync(lane.counters.get(), 0, 2 * sizeof(unsigned long long), stream),
           "cudaMemset");
 
@@ -477,7 +523,8 @@ class CudaAdvector final : public BatchAdvector {
       }
     }
     // The particles and the counters come down behind the kernels; one wait for all of it.
-    download_particles(lane, particles);
+    download();
+    finish_call(lane);
     // This call's uploads have ended: its kernels waited for them.
     const auto* counts = lane.counts.as<unsigned long long>();
     stats.particle_steps = static_cast<std::size_t>(counts[0]);
@@ -642,9 +689,8 @@ class CudaAdvector final : public BatchAdvector {
             lane.pe.get(), lane.ps.get(), own_ends ? lane.pstop.get() : nullptr};
   }
 
-  // After the kernels (same stream): back through the pinned staging, with the counters.
-  static void download_particles(Lane& lane, ParticleBatch& particles) {
-    const std::size_t n = particles.size();
+  // After the kernels (same stream): the particles back into the pinned staging.
+  static void enqueue_download(Lane& lane, std::size_t n) {
     const Staged h = staged(lane);
     const cudaStream_t s = lane.compute.get();
     const auto down = [&](auto* host, const auto* device) {
@@ -656,11 +702,22 @@ class CudaAdvector final : public BatchAdvector {
     down(h.h, lane.ph.get());
     down(h.evaluations, lane.pe.get());
     down(h.status, lane.ps.get());
+  }
+
+  // The counters come down behind everything the lane's stream has; waits for all of it.
+  static void finish_call(Lane& lane) {
+    const cudaStream_t s = lane.compute.get();
     check(cudaMemcpyAsync(lane.counts.get(), lane.counters.get(), 2 * sizeof(unsigned long long),
                           cudaMemcpyDeviceToHost, s),
           "counter download");
     check(cudaEventRecord(lane.done.get(), s), "cudaEventRecord");
     check(cudaEventSynchronize(lane.done.get()), "advection kernels and particle download");
+  }
+
+  // From the pinned staging into the caller's arrays (after finish_call).
+  static void copy_downloaded(Lane& lane, ParticleBatch& particles) {
+    const std::size_t n = particles.size();
+    const Staged h = staged(lane);
     for (std::size_t d = 0; d < 3; ++d) parallel_copy(particles.x[d].data(), h.x[d], n);
     parallel_copy(particles.t.data(), h.t, n);
     parallel_copy(particles.h.data(), h.h, n);
@@ -708,6 +765,182 @@ class CudaAdvector final : public BatchAdvector {
   std::vector<Lane*> free_lanes_;
   std::size_t in_flight_ = 0;
 };
+
+/// A resident set in device memory: changes wait on the host (one per slot, the last) until the
+/// next advance uploads them with one copy and applies them with one kernel; after the kernels
+/// the positions and statuses come down into pinned memory, which view() shows.
+class CudaResident final : public ResidentParticles {
+ public:
+  explicit CudaResident(CudaAdvector& owner) : owner_(owner) {}
+  ~CudaResident() override {
+    // Nothing may still use the arrays freed next (an advance that threw synchronized its lane).
+    cudaDeviceSynchronize();
+  }
+
+  void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
+    if (slots.size() != x.size())
+      throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
+                            std::to_string(slots.size()) + " slots");
+    for (std::size_t i = 0; i < slots.size(); ++i) change(slots[i]) = {{x[i][0], x[i][1], x[i][2]}, slots[i], 1};
+  }
+
+  void park(std::span<const std::uint32_t> slots) override {
+    for (const std::uint32_t s : slots)
+      if (s < size_ || (s < change_of_.size() && change_of_[s] != 0)) change(s) = {{0, 0, 0}, s, 0};
+  }
+
+  AdvectionStatistics advance(StepSource& source, double t_begin, double t_end,
+                              const MethodOptions& options) override {
+    const auto start = std::chrono::steady_clock::now();
+    AdvectionStatistics stats;
+    check_method(options);
+    const SlabPlan plan = plan_resident(source.times(), t_begin, t_end);
+    stats.particles = size_;
+    const std::size_t floats =
+        source.geometry().point_count() * static_cast<std::size_t>(source.components());
+    Lane& lane = owner_.begin_lane(floats);
+    try {
+      const cudaStream_t s = lane.compute.get();
+      const auto host = std::chrono::steady_clock::now();
+      upload_changes(s);
+      stats.host_seconds += seconds_since(host);
+      if (size_ > 0) {
+        const unsigned threads = 256;
+        const auto blocks = static_cast<unsigned>((size_ + threads - 1) / threads);
+        restart_kernel<<<blocks, threads, 0, s>>>(device_view(), size_, t_begin);
+        check(cudaGetLastError(), "particle restart");
+      }
+      const auto download = [&] {
+        if (size_ == 0) return;
+        const auto down = [&](auto* to, const auto* from) {
+          check(cudaMemcpyAsync(to, from, size_ * sizeof(*to), cudaMemcpyDeviceToHost, s),
+                "particle download");
+        };
+        const Mirror m = mirror();
+        for (std::size_t d = 0; d < 3; ++d) down(m.x[d], x_[d].get());
+        down(m.status, status_.get());
+      };
+      if (!plan.slabs.empty() && size_ > 0) {
+        owner_.run_slabs(lane, source, device_view(), size_, plan, t_end, options, stats, download);
+      } else {
+        download();
+        CudaAdvector::finish_call(lane);
+      }
+    } catch (...) {
+      cudaStreamSynchronize(lane.compute.get());
+      owner_.end_lane(lane);
+      throw;
+    }
+    owner_.end_lane(lane);
+    stats.total_seconds = seconds_since(start);
+    return stats;
+  }
+
+  View view() const override {
+    View v;
+    if (!host_) return v;
+    const Mirror m = mirror();
+    for (int d = 0; d < 3; ++d) v.x[d] = m.x[d];
+    v.status = m.status;
+    v.size = size_;
+    return v;
+  }
+
+ private:
+  struct Mirror {
+    double* x[3];
+    ParticleStatus* status;
+  };
+  Mirror mirror() const {
+    double* base = host_->as<double>();
+    return {{base, base + capacity_, base + 2 * capacity_},
+            reinterpret_cast<ParticleStatus*>(base + 3 * capacity_)};
+  }
+  DeviceParticles device_view() const {
+    return {{x_[0].get(), x_[1].get(), x_[2].get()}, t_.get(), h_.get(), evaluations_.get(),
+            status_.get(), nullptr};
+  }
+
+  SlotChange& change(std::uint32_t slot) {
+    if (slot >= change_of_.size()) change_of_.resize(std::max<std::size_t>(slot + 1, change_of_.size() * 3 / 2), 0);
+    std::uint32_t& k = change_of_[slot];
+    if (k == 0) {
+      changes_.push_back({});
+      k = static_cast<std::uint32_t>(changes_.size());
+    }
+    return changes_[k - 1];
+  }
+
+  // Grows the arrays to hold every changed slot (keeping what they hold; new slots parked),
+  // then uploads the changes and applies them, on stream s.
+  void upload_changes(cudaStream_t s) {
+    std::size_t needed = size_;
+    for (const SlotChange& c : changes_)
+      if (c.place) needed = std::max<std::size_t>(needed, std::size_t{c.slot} + 1);
+    if (needed > capacity_) {
+      const std::size_t c = std::max({needed, capacity_ + capacity_ / 2, std::size_t{4096}});
+      const auto grow = [&](auto& array) {
+        using A = std::remove_reference_t<decltype(array)>;
+        A bigger(c);
+        if (size_ > 0)
+          check(cudaMemcpyAsync(bigger.get(), array.get(), size_ * sizeof(*array.get()),
+                                cudaMemcpyDeviceToDevice, s),
+                "resident particles: copy");
+        check(cudaStreamSynchronize(s), "cudaStreamSynchronize");
+        array = std::move(bigger);
+      };
+      for (auto& a : x_) grow(a);
+      grow(t_);
+      grow(h_);
+      grow(evaluations_);
+      grow(status_);
+      const unsigned threads = 256;
+      const auto blocks = static_cast<unsigned>((c - size_ + threads - 1) / threads);
+      fill_kernel<ParticleStatus><<<blocks, threads, 0, s>>>(status_.get() + size_,
+                                                            ParticleStatus::time_bounds, c - size_);
+      check(cudaGetLastError(), "resident particles: park");
+      host_ = std::make_unique<PinnedBuffer>(c * (3 * sizeof(double) + sizeof(ParticleStatus)));
+      capacity_ = c;
+    }
+    size_ = needed;
+    if (changes_.empty()) return;
+    const std::size_t m = changes_.size();
+    if (m > staged_capacity_) {
+      check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the old buffers' last copy
+      staged_capacity_ = std::max(m, staged_capacity_ + staged_capacity_ / 2);
+      staged_ = std::make_unique<PinnedBuffer>(staged_capacity_ * sizeof(SlotChange));
+      device_changes_ = DeviceArray<SlotChange>(staged_capacity_);
+    } else {
+      check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the staging's last copy
+    }
+    parallel_copy(staged_->as<SlotChange>(), changes_.data(), m);
+    check(cudaMemcpyAsync(device_changes_.get(), staged_->as<SlotChange>(), m * sizeof(SlotChange),
+                          cudaMemcpyHostToDevice, s),
+          "resident particles: changes");
+    const unsigned threads = 256;
+    apply_changes_kernel<<<static_cast<unsigned>((m + threads - 1) / threads), threads, 0, s>>>(
+        device_changes_.get(), m, device_view());
+    check(cudaGetLastError(), "resident particles: apply");
+    for (const SlotChange& c : changes_) change_of_[c.slot] = 0;
+    changes_.clear();
+  }
+
+  CudaAdvector& owner_;
+  std::vector<SlotChange> changes_;
+  std::vector<std::uint32_t> change_of_;  ///< [slot]: index + 1 of its change (0: none)
+  std::size_t size_ = 0, capacity_ = 0, staged_capacity_ = 0;
+  std::array<DeviceArray<double>, 3> x_;
+  DeviceArray<double> t_, h_;
+  DeviceArray<std::uint32_t> evaluations_;
+  DeviceArray<ParticleStatus> status_;
+  std::unique_ptr<PinnedBuffer> host_;    ///< x, y, z, status by slot (capacity_ each)
+  std::unique_ptr<PinnedBuffer> staged_;  ///< the changes on their way up
+  DeviceArray<SlotChange> device_changes_;
+};
+
+std::unique_ptr<ResidentParticles> CudaAdvector::make_resident() {
+  return std::make_unique<CudaResident>(*this);
+}
 
 }  // namespace
 

@@ -110,6 +110,18 @@ std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t
   return s.evaluations;
 }
 
+std::unique_ptr<advect::ResidentParticles> BulkFlowMap::make_resident() const {
+  std::lock_guard lock(mutex_);
+  return backend_->make_resident();
+}
+
+std::size_t BulkFlowMap::advance(advect::ResidentParticles& particles, double t0, double t1) const {
+  std::lock_guard lock(mutex_);
+  const advect::AdvectionStatistics s = particles.advance(steps_, t0, t1, method_);
+  total_ += s;
+  return s.evaluations;
+}
+
 advect::AdvectionStatistics BulkFlowMap::statistics() const {
   std::lock_guard lock(mutex_);
   return total_;

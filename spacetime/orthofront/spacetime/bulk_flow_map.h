@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "orthofront/advect/batch_advector.h"
+#include "orthofront/advect/resident_particles.h"
 #include "orthofront/spacetime/brick_cache.h"
 #include "orthofront/spacetime/flow_map.h"
 
@@ -50,6 +51,10 @@ class BulkFlowMap final : public FlowMap {
   std::size_t advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
                          std::span<ParticleStatus> status) const override;
   const std::string& backend_name() const { return name_; }
+  /// Particles the backend keeps between calls (on the device for CUDA), moved by advance().
+  std::unique_ptr<advect::ResidentParticles> make_resident() const;
+  /// Moves the set's particles from t0 to t1 as advect_all would; returns the evaluations.
+  std::size_t advance(advect::ResidentParticles& particles, double t0, double t1) const;
   /// What the backend did, summed over calls.
   advect::AdvectionStatistics statistics() const;
 

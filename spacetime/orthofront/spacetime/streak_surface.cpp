@@ -49,10 +49,13 @@ void for_each_row(std::size_t n, const F& f) {
                     });
 }
 
+constexpr std::uint32_t kNoSlot = ~std::uint32_t{0};
+
 struct Particle {
   double s = 0;
   Vec3 x = Vec3::Zero();
   std::int32_t id = 0;
+  std::uint32_t slot = kNoSlot;  ///< in the resident set (moving particles only), if there is one
   ParticleStatus status = ParticleStatus::moving;
   bool alive() const { return status == ParticleStatus::moving; }
 };
@@ -71,6 +74,7 @@ struct FlowAccess {
   std::function<std::string()> read_error;      // empty string: no error
   std::vector<double> step_times;               // streamed: the series' times (break points)
   const FlowMap* map = nullptr;                 // bulk advection; null: integrate `flow`
+  const BulkFlowMap* bulk = nullptr;            // the same map, for particles kept on its backend
 };
 
 class StreakBuilder {
@@ -79,7 +83,9 @@ class StreakBuilder {
                 const StreakFrameSink& sink)
       : access_(access), flow_(access.flow), seed_(seed), o_(options), sink_(sink),
         integrated_(access.flow, options.tolerance),
-        map_(access.map ? *access.map : integrated_) {}
+        map_(access.map ? *access.map : integrated_) {
+    if (access.bulk && options.resident_particles) resident_ = access.bulk->make_resident();
+  }
 
   // A run that throws leaves a frame being finished: wait for it (its own error is dropped).
   ~StreakBuilder() {
@@ -94,7 +100,15 @@ class StreakBuilder {
   void validate();
   double seed_speed_median(const std::vector<double>& params) const;
   void release(double tau);
+  // A new moving particle takes a slot of the resident set and goes there; one leaving the rows
+  // gives its slot back (no-ops without a resident set).
+  void enter(Particle& p);
+  void leave(Particle& p);
   bool advance(double t_to);
+  // advance()'s move of the rows' moving particles: through the resident set, or all of them in
+  // one advect_all call. Returns how many moved.
+  std::size_t move_resident(double t_to, std::vector<std::array<std::size_t, 2>>& stopped);
+  std::size_t move_all(double t_to, std::vector<std::array<std::size_t, 2>>& stopped);
   void adapt();
   // A particle to insert on a row, after its particle `after`.
   struct Insert {
@@ -152,6 +166,9 @@ class StreakBuilder {
   double finishing_seconds_ = 0;
   std::exception_ptr finisher_error_;
   std::atomic<bool> frame_failed_{false};
+  std::unique_ptr<advect::ResidentParticles> resident_;
+  std::vector<std::uint32_t> free_slots_;  // given back, taken last first
+  std::uint32_t next_slot_ = 0;            // never handed out yet from here on
   std::vector<Vec3> x_;
   std::vector<double> from_;
   std::vector<ParticleStatus> status_;
@@ -230,6 +247,7 @@ void StreakBuilder::release(double tau) {
     p.status = st == FieldStatus::inside ? ParticleStatus::moving
                : st == FieldStatus::outside ? ParticleStatus::left_domain
                                             : ParticleStatus::no_data;
+    enter(p);
     row.p.push_back(p);
   }
   rows_.push_back(std::move(row));
@@ -245,6 +263,30 @@ bool StreakBuilder::advance(double t_to) {
       return false;
     }
   }
+  const std::size_t nr = rows_.size();
+  std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
+  const std::size_t n = resident_ ? move_resident(t_to, stopped) : move_all(t_to, stopped);
+  for (const auto& c : stopped) {
+    report_.left_domain += c[0];
+    report_.no_data += c[1];
+  }
+  report_.particle_steps += n;
+  report_.particle_time += static_cast<double>(n) * (t_to - t_);
+  ++report_.intervals;
+  t_ = t_to;
+  report_.time_reached = t_;
+  report_.advect_seconds += seconds_since(t0);
+  if (access_.read_error) {
+    if (const std::string e = access_.read_error(); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+  }
+  return true;
+}
+
+std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::size_t, 2>>& stopped) {
   // The moving particles, row after row (millions: each row finds its own, in parallel, at an
   // offset counted beforehand). Scratch buffers are members: they are reused every interval.
   const std::size_t nr = rows_.size();
@@ -267,7 +309,6 @@ bool StreakBuilder::advance(double t_to) {
       }
   });
   report_.evaluations += map_.advect_all(x_, from_, t_to, status_);
-  std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
   for_each_row(nr, [&](std::size_t r) {
     std::size_t k = first[r];
     for (Particle& p : rows_[r].p) {
@@ -278,24 +319,60 @@ bool StreakBuilder::advance(double t_to) {
       if (p.status == ParticleStatus::no_data) ++stopped[r][1];
     }
   });
-  for (const auto& c : stopped) {
-    report_.left_domain += c[0];
-    report_.no_data += c[1];
-  }
-  report_.particle_steps += n;
-  report_.particle_time += static_cast<double>(n) * (t_to - t_);
-  ++report_.intervals;
-  t_ = t_to;
-  report_.time_reached = t_;
-  report_.advect_seconds += seconds_since(t0);
-  if (access_.read_error) {
-    if (const std::string e = access_.read_error(); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
+  return n;
+}
+
+std::size_t StreakBuilder::move_resident(double t_to, std::vector<std::array<std::size_t, 2>>& stopped) {
+  report_.evaluations += access_.bulk->advance(*resident_, t_, t_to);
+  const advect::ResidentParticles::View v = resident_->view();
+  const std::size_t nr = rows_.size();
+  std::vector<std::size_t> moved(nr, 0), unplaced(nr, 0);
+  std::vector<std::vector<std::uint32_t>> freed(nr);  // slots of particles that stopped
+  for_each_row(nr, [&](std::size_t r) {
+    for (Particle& p : rows_[r].p) {
+      if (!p.alive()) continue;
+      if (p.slot >= v.size) {
+        ++unplaced[r];
+        continue;
+      }
+      ++moved[r];
+      p.x = Vec3(v.x[0][p.slot], v.x[1][p.slot], v.x[2][p.slot]);
+      p.status = v.status[p.slot];
+      if (p.alive()) continue;
+      if (p.status == ParticleStatus::left_domain) ++stopped[r][0];
+      if (p.status == ParticleStatus::no_data) ++stopped[r][1];
+      freed[r].push_back(p.slot);  // stopped there: nothing moves it again
+      p.slot = kNoSlot;
     }
+  });
+  std::size_t n = 0;
+  for (std::size_t r = 0; r < nr; ++r) {
+    if (unplaced[r] > 0)
+      throw Error("streak surface: " + std::to_string(unplaced[r]) +
+                  " moving particles of a row have no place in the resident set");
+    n += moved[r];
+    free_slots_.insert(free_slots_.end(), freed[r].begin(), freed[r].end());
   }
-  return true;
+  return n;
+}
+
+void StreakBuilder::enter(Particle& p) {
+  if (!resident_ || !p.alive()) return;
+  if (free_slots_.empty()) {
+    p.slot = next_slot_++;
+  } else {
+    p.slot = free_slots_.back();
+    free_slots_.pop_back();
+  }
+  const std::array<double, 3> x{p.x.x(), p.x.y(), p.x.z()};
+  resident_->place(std::span<const std::uint32_t>(&p.slot, 1), std::span<const std::array<double, 3>>(&x, 1));
+}
+
+void StreakBuilder::leave(Particle& p) {
+  if (p.slot == kNoSlot) return;
+  resident_->park(std::span<const std::uint32_t>(&p.slot, 1));
+  free_slots_.push_back(p.slot);
+  p.slot = kNoSlot;
 }
 
 // Largest distance between the particles of two rows that share a seed parameter.
@@ -423,6 +500,7 @@ bool StreakBuilder::refine_once() {
   } else {
     report_.interpolated_insertions += fresh.size();
   }
+  for (Particle* q : fresh) enter(*q);
   report_.s_insertions += along_count;
   report_.rows_inserted += across_count;
   for (const std::optional<Row>& row : across)
@@ -540,6 +618,7 @@ void StreakBuilder::coarsen() {
   // Along rows: a particle whose two edges are short goes (never a row's ends, and a row keeps
   // three particles), unless its neighbours would then be too far apart. Rows in parallel.
   std::vector<std::size_t> removed(rows_.size(), 0);
+  std::vector<std::vector<Particle>> gone(resident_ ? rows_.size() : 0);  // their slots go back
   for_each_row(rows_.size(), [&](std::size_t r) {
     std::vector<Particle>& p = rows_[r].p;
     std::vector<Particle> kept;
@@ -553,6 +632,7 @@ void StreakBuilder::coarsen() {
         if (a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
             (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge) {
           ++removed[r];
+          if (m.slot != kNoSlot) gone[r].push_back(m);
           continue;
         }
       }
@@ -561,6 +641,8 @@ void StreakBuilder::coarsen() {
     p.swap(kept);
   });
   for (const std::size_t n : removed) report_.s_removals += n;
+  for (std::vector<Particle>& row : gone)
+    for (Particle& p : row) leave(p);
   // Across rows: a row between two close ones goes (never the oldest or the newest). Which row
   // goes depends on the rows kept before it, so the walk is serial; the distances between
   // neighbouring rows, which it mostly asks, are measured beforehand in parallel.
@@ -579,6 +661,7 @@ void StreakBuilder::coarsen() {
       const double am = previous_kept ? next_distance[r - 1] : row_distance(a, m);
       if (am < short_edge && next_distance[r] < short_edge && row_distance(a, b) < long_edge) {
         ++report_.rows_removed;
+        for (Particle& p : rows_[r].p) leave(p);
         previous_kept = false;
         continue;
       }
@@ -852,6 +935,9 @@ StreakReport StreakBuilder::run() {
       p.particles = particle_count();
       p.rows = rows_.size();
       p.elapsed_seconds = seconds_since(start_);
+      p.advect_seconds = report_.advect_seconds;
+      p.refine_seconds = report_.refine_seconds;
+      p.frame_seconds = report_.frame_seconds;
       if (!o_.progress(p)) {
         stop("interrupted at t = " + number(t_) + " after " + std::to_string(next_frame) + " of " +
              std::to_string(o_.frames.size()) + " frames");
@@ -910,6 +996,7 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     bulk = std::make_unique<BulkFlowMap>(*steps, advect::make_advector(*options.device, options.device_bytes),
                                          method);
     access.map = bulk.get();
+    access.bulk = bulk.get();
   }
   StreakReport report = StreakBuilder(access, seed, options, sink).run();
   if (bulk) {

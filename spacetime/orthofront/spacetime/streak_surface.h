@@ -36,6 +36,7 @@ struct StreakProgress {
   std::size_t frames_written = 0, frames = 0;
   std::size_t particles = 0, rows = 0;
   double elapsed_seconds = 0;
+  double advect_seconds = 0, refine_seconds = 0, frame_seconds = 0;  ///< so far, as in the report
   bool streamed = false;
   CacheStatistics cache;            ///< streamed only
 };
@@ -55,6 +56,11 @@ struct StreakOptions {
   /// map of the streamed field.
   std::optional<advect::Device> device;
   std::size_t device_bytes = 0;     ///< steps the CUDA backend keeps on the device (0: half its free memory)
+  /// With `device`: the particles stay with the backend (device memory for CUDA) from interval to
+  /// interval; only particles placed anew go up, and positions and statuses come down. false:
+  /// every particle's state goes up and down each interval (the baseline of bench-gpu-streak
+  /// --particles-per-call). The same frames either way.
+  bool resident_particles = true;
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.

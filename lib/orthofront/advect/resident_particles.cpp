@@ -1,0 +1,82 @@
+#include "orthofront/advect/resident_particles.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <string>
+
+#include "orthofront/advect/advect_call.h"
+#include "orthofront/error.h"
+
+namespace orthofront::advect {
+namespace {
+
+/// Parked slots are marked time_bounds: no advect() moves them.
+constexpr ParticleStatus kParked = ParticleStatus::time_bounds;
+
+class HostResidentParticles final : public ResidentParticles {
+ public:
+  explicit HostResidentParticles(BatchAdvector& backend) : backend_(backend) {}
+
+  void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
+    if (slots.size() != x.size())
+      throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
+                            std::to_string(slots.size()) + " slots");
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      const std::size_t s = slots[i];
+      if (s >= batch_.size()) {
+        const std::size_t old = batch_.size();
+        batch_.resize(std::max(s + 1, old + old / 2));
+        std::fill(batch_.status.begin() + static_cast<std::ptrdiff_t>(old), batch_.status.end(), kParked);
+      }
+      for (std::size_t d = 0; d < 3; ++d) batch_.x[d][s] = x[i][d];
+      batch_.status[s] = ParticleStatus::moving;
+    }
+  }
+
+  void park(std::span<const std::uint32_t> slots) override {
+    for (const std::uint32_t s : slots)
+      if (s < batch_.size()) batch_.status[s] = kParked;
+  }
+
+  AdvectionStatistics advance(StepSource& source, double t_begin, double t_end,
+                              const MethodOptions& options) override {
+    check_method(options);
+    plan_resident(source.times(), t_begin, t_end);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, batch_.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                          if (batch_.status[i] != ParticleStatus::moving) continue;
+                          batch_.t[i] = t_begin;
+                          batch_.h[i] = 0;
+                          batch_.evaluations[i] = 0;
+                        }
+                      });
+    return backend_.advect(source, batch_, t_end, options);
+  }
+
+  View view() const override {
+    View v;
+    for (std::size_t d = 0; d < 3; ++d) v.x[d] = batch_.x[d].data();
+    v.status = batch_.status.data();
+    v.size = batch_.size();
+    return v;
+  }
+
+ private:
+  BatchAdvector& backend_;
+  ParticleBatch batch_;
+};
+
+}  // namespace
+
+std::unique_ptr<ResidentParticles> make_host_resident_particles(BatchAdvector& backend) {
+  return std::make_unique<HostResidentParticles>(backend);
+}
+
+std::unique_ptr<ResidentParticles> BatchAdvector::make_resident() {
+  return make_host_resident_particles(*this);
+}
+
+}  // namespace orthofront::advect
