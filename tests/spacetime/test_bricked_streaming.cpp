@@ -491,7 +491,7 @@ TEST_CASE("an OpenVDB series is read brick by brick, with the values of whole-st
 }
 
 TEST_CASE("bricked series: whole steps gathered from bricks give a slab StreamedField's values, "
-          "bit for bit",
+          "bit for bit, and copy_step the same floats",
           "[spacetime][bricks][advect]") {
   TempDir dir("bricks-gather");
   for (int dimension : {2, 3})
@@ -531,7 +531,16 @@ TEST_CASE("bricked series: whole steps gathered from bricks give a slab Streamed
           REQUIRE(status == advect::SampleStatus::inside);
           for (int d = 0; d < 3; ++d) REQUIRE(got[d] == want[d]);
         }
+        // copy_step gives the same floats, from the held step or gathered straight from the
+        // bricks, and leaves a held step held.
+        const std::size_t floats = g.point_count() * static_cast<std::size_t>(dimension);
+        std::vector<float> from_held(floats, -1.0f), gathered(floats, -2.0f);
+        steps.copy_step(k, from_held.data());
+        CHECK(std::memcmp(from_held.data(), slab.step0, floats * sizeof(float)) == 0);
+        CHECK(steps.acquire(k) == slab.step0);
         steps.release(k);
+        steps.copy_step(k, gathered.data());
+        CHECK(std::memcmp(gathered.data(), from_held.data(), floats * sizeof(float)) == 0);
       }
     }
 }

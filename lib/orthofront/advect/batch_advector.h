@@ -54,6 +54,9 @@ class StepSource {
   /// Throws what the reader throws.
   virtual const float* acquire(std::size_t step) = 0;
   virtual void release(std::size_t step) = 0;
+  /// Copies step k's floats (what acquire gives) to `to`, e.g. a device upload's pinned staging;
+  /// a source that assembles its steps from pieces writes them there directly, saving a copy.
+  virtual void copy_step(std::size_t step, float* to);
 
  private:
   std::uint64_t identity_;

@@ -451,14 +451,9 @@ class CudaAdvector final : public BatchAdvector {
         for (const cudaEvent_t e : readers)
           check(cudaStreamWaitEvent(upload_.get(), e, 0), "cudaStreamWaitEvent");
         const auto host = std::chrono::steady_clock::now();
-        const float* data = source.acquire(step);
         float* pinned = staging_[p]->get();
         const std::size_t floats = slot_floats_;
-        tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
-          const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
-          std::memcpy(pinned + lo, data + lo, (hi - lo) * sizeof(float));
-        });
-        source.release(step);
+        source.copy_step(step, pinned);
         stats.host_seconds += seconds_since(host);
         ++stats.steps_loaded;
         const std::size_t b = mark(upload_.get());

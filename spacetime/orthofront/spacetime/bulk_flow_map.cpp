@@ -30,9 +30,37 @@ const float* CachedSteps::acquire(std::size_t step) {
     h.data = h.pins.front().data();
     return held_.emplace(step, std::move(h)).first->second.data;
   }
+  h.gathered.resize(g.point_count() * c);
+  gather(step, h.gathered.data());
+  h.data = h.gathered.data();
+  return held_.emplace(step, std::move(h)).first->second.data;
+}
+
+void CachedSteps::copy_step(std::size_t step, float* to) {
+  const io::BrickLayout& layout = cache_.layout();
+  const bool held = held_.count(step) > 0;
+  if (held || (layout.bricks() == 1 && layout.size == geometry().size)) {
+    const float* data = acquire(step);
+    const std::size_t floats = geometry().point_count() * static_cast<std::size_t>(components());
+    tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
+      const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
+      std::copy(data + lo, data + hi, to + lo);
+    });
+    if (!held) release(step);  // a step held by acquire() stays held
+    return;
+  }
+  gather(step, to);
+}
+
+void CachedSteps::gather(std::size_t step, float* to) {
+  const io::BrickLayout& layout = cache_.layout();
+  const GridGeometry& g = geometry();
+  const auto c = static_cast<std::size_t>(components());
+  const auto key = [&](std::size_t b) {
+    return BrickKey{static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)};
+  };
   // Rows of each brick into their place in the step (edge bricks are padded past the grid), a
   // group of bricks at a time: beside a path surface's band, the cache need not hold a whole step.
-  h.gathered.resize(g.point_count() * c);
   const std::size_t bricks = layout.bricks();
   for (std::size_t first = 0; first < bricks; first += kGatherBricks) {
     const std::size_t last = std::min(bricks, first + kGatherBricks);
@@ -54,13 +82,11 @@ const float* CachedSteps::acquire(std::size_t step) {
         for (std::int64_t j = 0; j < std::min(layout.size[1], g.size[1] - j0); ++j) {
           const std::size_t from =
               static_cast<std::size_t>((k * layout.size[1] + j) * layout.size[0]) * c;
-          std::memcpy(h.gathered.data() + g.index(i0, j0 + j, k0 + k) * c, brick + from,
+          std::memcpy(to + g.index(i0, j0 + j, k0 + k) * c, brick + from,
                       static_cast<std::size_t>(ni) * c * sizeof(float));
         }
     });
   }
-  h.data = h.gathered.data();
-  return held_.emplace(step, std::move(h)).first->second.data;
 }
 
 void CachedSteps::release(std::size_t step) { held_.erase(step); }

@@ -29,8 +29,12 @@ class CachedSteps final : public advect::StepSource {
   const std::vector<double>& times() const override { return cache_.times(); }
   const float* acquire(std::size_t step) override;
   void release(std::size_t step) override;
+  /// Gathers the bricks straight into `to` (no step buffer of its own).
+  void copy_step(std::size_t step, float* to) override;
 
  private:
+  // The step's bricks, a group at a time, each into its place in `to` (a whole step).
+  void gather(std::size_t step, float* to);
   struct Held {
     std::vector<BrickCache::Handle> pins;
     std::vector<float> gathered;

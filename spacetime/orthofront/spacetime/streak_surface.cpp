@@ -115,7 +115,10 @@ class StreakBuilder {
     std::size_t after;
     Particle particle;
   };
-  bool refine_once();
+  // One pass of splits over the rows marked in `changed` (a row unchanged since a pass that found
+  // nothing to split in it, or between it and its unchanged neighbour, finds nothing again);
+  // marks the rows it changed or made for the next pass.
+  bool refine_once(std::vector<char>& changed);
   std::vector<Insert> inserts_along(std::size_t r, double long_edge) const;
   std::optional<Row> row_between(std::size_t r, double long_edge) const;
   std::vector<Face> strip(std::size_t r, const std::vector<std::int32_t>& va,
@@ -456,15 +459,18 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
   return true;
 }
 
-bool StreakBuilder::refine_once() {
+bool StreakBuilder::refine_once(std::vector<char>& changed) {
   const double long_edge = o_.split * o_.edge;
   // Each row's (and each pair of rows') new particles are found independently, in parallel, and
   // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
   std::vector<std::vector<Insert>> along(rows_.size());  // per row, by left particle
   std::vector<std::optional<Row>> across(rows_.size());  // [r]: the new row after row r
-  for_each_row(rows_.size(), [&](std::size_t r) { along[r] = inserts_along(r, long_edge); });
-  for_each_row(rows_.size() > 0 ? rows_.size() - 1 : 0,
-               [&](std::size_t r) { across[r] = row_between(r, long_edge); });
+  for_each_row(rows_.size(), [&](std::size_t r) {
+    if (changed[r]) along[r] = inserts_along(r, long_edge);
+  });
+  for_each_row(rows_.size() > 0 ? rows_.size() - 1 : 0, [&](std::size_t r) {
+    if (changed[r] || changed[r + 1]) across[r] = row_between(r, long_edge);
+  });
   std::size_t along_count = 0, across_count = 0;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     along_count += along[r].size();
@@ -523,15 +529,24 @@ bool StreakBuilder::refine_once() {
     }
     p.swap(merged);
   });
+  std::vector<char> next;
+  next.reserve(rows_.size() + across_count);
   if (across_count > 0) {
     std::vector<Row> rows;
     rows.reserve(rows_.size() + across_count);
     for (std::size_t r = 0; r < rows_.size(); ++r) {
       rows.push_back(std::move(rows_[r]));
-      if (across[r]) rows.push_back(std::move(*across[r]));
+      next.push_back(!along[r].empty());
+      if (across[r]) {
+        rows.push_back(std::move(*across[r]));
+        next.push_back(1);
+      }
     }
     rows_.swap(rows);
+  } else {
+    for (std::size_t r = 0; r < rows_.size(); ++r) next.push_back(!along[r].empty());
   }
+  changed.swap(next);
   return true;
 }
 
@@ -621,16 +636,22 @@ void StreakBuilder::coarsen() {
   std::vector<std::vector<Particle>> gone(resident_ ? rows_.size() : 0);  // their slots go back
   for_each_row(rows_.size(), [&](std::size_t r) {
     std::vector<Particle>& p = rows_[r].p;
+    const auto removable = [&](const Particle& a, const Particle& m, const Particle& b) {
+      return a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
+             (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge;
+    };
+    // Most rows lose nothing: find the first particle that goes before copying any.
+    std::size_t first = 1;
+    while (first + 1 < p.size() && !(p.size() > 3 && removable(p[first - 1], p[first], p[first + 1]))) ++first;
+    if (first + 1 >= p.size()) return;
     std::vector<Particle> kept;
     kept.reserve(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) {
+    kept.insert(kept.end(), p.begin(), p.begin() + static_cast<std::ptrdiff_t>(first));
+    for (std::size_t i = first; i < p.size(); ++i) {
       const bool interior = i > 0 && i + 1 < p.size();
       if (interior && !kept.empty() && p.size() - (i - kept.size()) > 3) {
-        const Particle& a = kept.back();
-        const Particle& m = p[i];
-        const Particle& b = p[i + 1];
-        if (a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
-            (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge) {
+        if (removable(kept.back(), p[i], p[i + 1])) {
+          const Particle& m = p[i];
           ++removed[r];
           if (m.slot != kNoSlot) gone[r].push_back(m);
           continue;
@@ -680,8 +701,9 @@ void StreakBuilder::coarsen() {
 void StreakBuilder::adapt() {
   if (!o_.adaptive) return;
   const auto t0 = Clock::now();
+  std::vector<char> changed(rows_.size(), 1);  // the first pass looks at every row
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
-    if (!refine_once()) break;
+    if (!refine_once(changed)) break;
     if (particle_count() > o_.max_vertices) break;
   }
   coarsen();
