@@ -1,10 +1,13 @@
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
 #include <numbers>
 #include <numeric>
+#include <vector>
 
 #include "orthofront/error.h"
 #include "orthofront/quality/quality.h"
@@ -357,4 +360,74 @@ TEST_CASE("quality: 300k-vertex grid", "[quality][slow]") {
   CHECK(r.boundary_edges == 4 * 549);
   CHECK(r.quad_angles_within_10 == 1.0);
   check_valid(r);
+}
+
+TEST_CASE("quality: order statistics and means of over a million values (the parallel selection) "
+          "are those of the sorted values",
+          "[quality]") {
+  // Angle deviations and edge ratios of a perturbed grid, recomputed here face by face.
+  const auto jitter = [](int i, int j) {
+    return Vec3(i + 0.3 * std::sin(0.7 * i + 1.3 * j), j + 0.3 * std::cos(1.1 * i - 0.4 * j),
+                0.2 * std::sin(0.05 * i * j));
+  };
+  const auto angle = [](const Vec3& u, const Vec3& w) {
+    return std::atan2(u.cross(w).norm(), u.dot(w)) * 180.0 / std::numbers::pi;
+  };
+  const auto quantile = [](std::vector<double> v, double q) {
+    std::sort(v.begin(), v.end());
+    const double pos = q * static_cast<double>(v.size() - 1);
+    const auto k = static_cast<std::size_t>(pos);
+    return k + 1 < v.size() ? v[k] + (pos - static_cast<double>(k)) * (v[k + 1] - v[k]) : v[k];
+  };
+  {
+    const Mesh m = grid(600, 450, jitter);  // 270,000 quads: 1,080,000 corners
+    std::vector<double> dev, spread;
+    double dev_sum = 0, spread_sum = 0;
+    for (const Face& f : m.faces) {
+      std::array<Vec3, 4> e;
+      double length[4], avg = 0;
+      for (int i = 0; i < 4; ++i) {
+        e[i] = m.positions[f.v[(i + 1) % 4]] - m.positions[f.v[i]];
+        length[i] = e[i].norm();
+        avg += 0.25 * length[i];
+      }
+      for (int i = 0; i < 4; ++i) {
+        dev.push_back(std::abs(angle(-e[(i + 3) % 4], e[i]) - 90));
+        spread.push_back(std::abs(1 - length[i] / avg));
+        dev_sum += dev.back();
+        spread_sum += spread.back();
+      }
+    }
+    REQUIRE(dev.size() > (std::size_t{1} << 20));
+    const QualityReport r = measure_quality(m);
+    CHECK(r.quad_angle_abs_dev_p90 == Approx(quantile(dev, 0.9)).epsilon(1e-12));
+    CHECK(r.edge_spread_median == Approx(quantile(spread, 0.5)).epsilon(1e-12));
+    CHECK(r.edge_spread_p90 == Approx(quantile(spread, 0.9)).epsilon(1e-12));
+    CHECK(r.quad_angle_mean_abs_dev == Approx(dev_sum / static_cast<double>(dev.size())).epsilon(1e-12));
+    CHECK(r.edge_spread_mean == Approx(spread_sum / static_cast<double>(spread.size())).epsilon(1e-12));
+  }
+  {
+    // 1,100,000 triangles: two per cell.
+    Mesh m;
+    const int nx = 1000, ny = 550;
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) m.add_vertex(jitter(i, j), 0, 0, 0, 0, 0, 0);
+    const auto id = [&](int i, int j) { return j * (nx + 1) + i; };
+    std::vector<double> smallest;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        m.faces.push_back(Face{{id(i, j), id(i + 1, j), id(i + 1, j + 1), -1}, 3});
+        m.faces.push_back(Face{{id(i, j), id(i + 1, j + 1), id(i, j + 1), -1}, 3});
+      }
+    for (const Face& f : m.faces) {
+      std::array<Vec3, 3> e;
+      for (int i = 0; i < 3; ++i) e[i] = m.positions[f.v[(i + 1) % 3]] - m.positions[f.v[i]];
+      double least = 180;
+      for (int i = 0; i < 3; ++i) least = std::min(least, angle(-e[(i + 2) % 3], e[i]));  // at corner i
+      smallest.push_back(least);
+    }
+    REQUIRE(smallest.size() > (std::size_t{1} << 20));
+    const QualityReport r = measure_quality(m);
+    CHECK(r.triangle_min_angle_median == Approx(quantile(smallest, 0.5)).epsilon(1e-12));
+  }
 }

@@ -873,7 +873,8 @@ class CudaResident final : public ResidentParticles {
     for (const SlotChange& c : changes_)
       if (c.place) needed = std::max<std::size_t>(needed, std::size_t{c.slot} + 1);
     if (needed > capacity_) {
-      const std::size_t c = std::max({needed, capacity_ + capacity_ / 2, std::size_t{4096}});
+      // Doubling from a million: each growth allocates pinned memory, slow to get.
+      const std::size_t c = std::max({needed, 2 * capacity_, std::size_t{1} << 20});
       const auto grow = [&](auto& array) {
         using A = std::remove_reference_t<decltype(array)>;
         A bigger(c);

@@ -193,46 +193,81 @@ std::uint64_t order_key(double x) {
   return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
 }
 
-/// The k-th smallest (from 0) of many values, without reordering them: the bin of its top 16 key
-/// bits is found from a histogram counted in parallel, then only that bin's values are ordered.
-double kth_smallest(const std::vector<double>& values, std::size_t k) {
+/// Values kept in parts (one list per block of faces, in face order), never joined: a frame of
+/// millions of faces would copy hundreds of megabytes, on one thread, to make one list.
+using Parts = std::vector<std::vector<double>>;
+
+std::size_t total_size(const Parts& parts) {
+  std::size_t n = 0;
+  for (const auto& p : parts) n += p.size();
+  return n;
+}
+
+/// The k-th and (k+1)-th smallest (from 0) of many values, without reordering them: the bins of
+/// their top 16 key bits are found from one histogram counted in parallel, then only those bins'
+/// values (gathered in parallel) are ordered. The second is the first where k is the last.
+std::pair<double, double> kth_smallest_pair(const Parts& parts, std::size_t k) {
   constexpr int kBits = 16;
   constexpr std::size_t kBins = std::size_t{1} << kBits;
   const auto bin_of = [](double x) { return static_cast<std::size_t>(order_key(x) >> (64 - kBits)); };
   tbb::enumerable_thread_specific<std::vector<std::size_t>> local(
       [] { return std::vector<std::size_t>(kBins, 0); });
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values.size(), 65536),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      std::vector<std::size_t>& h = local.local();
-                      for (std::size_t i = range.begin(); i < range.end(); ++i) ++h[bin_of(values[i])];
-                    });
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t p) {
+    std::vector<std::size_t>& h = local.local();
+    for (const double x : parts[p]) ++h[bin_of(x)];
+  });
   std::vector<std::size_t> counts(kBins, 0);
   for (const auto& h : local)
     for (std::size_t b = 0; b < kBins; ++b) counts[b] += h[b];
-  std::size_t bin = 0;
-  while (k >= counts[bin]) k -= counts[bin++];
-  std::vector<double> in_bin;
-  in_bin.reserve(counts[bin]);
-  for (const double x : values)
-    if (bin_of(x) == bin) in_bin.push_back(x);
-  const auto kth = in_bin.begin() + static_cast<std::ptrdiff_t>(k);
-  std::nth_element(in_bin.begin(), kth, in_bin.end());
-  return *kth;
+  const std::size_t n = total_size(parts);
+  const std::size_t k1 = std::min(k + 1, n - 1);
+  // Bins of the two, and how many values lie below the first bin.
+  std::size_t first = 0, below = 0;
+  while (below + counts[first] <= k) below += counts[first++];
+  std::size_t last = first, below_last = below;
+  while (below_last + counts[last] <= k1) below_last += counts[last++];
+  std::vector<std::vector<double>> found(parts.size());
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t p) {
+    for (const double x : parts[p]) {
+      const std::size_t b = bin_of(x);
+      if (b == first || b == last) found[p].push_back(x);
+    }
+  });
+  // The values of both bins, in bin order: [first's values, last's values].
+  std::vector<double> in_bins;
+  in_bins.reserve(counts[first] + (last != first ? counts[last] : 0));
+  for (const auto& f : found) in_bins.insert(in_bins.end(), f.begin(), f.end());
+  const auto split = std::partition(in_bins.begin(), in_bins.end(),
+                                    [&](double x) { return bin_of(x) == first; });
+  const auto nth = [&](std::size_t rank) {
+    // rank within all values; its bin's values start at `below` (first) or `below_last` (last).
+    const bool in_first = rank < below + counts[first];
+    const auto begin = in_first ? in_bins.begin() : split;
+    const auto end = in_first ? split : in_bins.end();
+    const auto at = begin + static_cast<std::ptrdiff_t>(rank - (in_first ? below : below_last));
+    std::nth_element(begin, at, end);
+    return *at;
+  };
+  const double a = nth(k);
+  return {a, k1 == k ? a : nth(k1)};
 }
 
-/// q-quantile with linear interpolation between order statistics; reorders `values` (small
-/// lists; many values are selected without reordering, in parallel).
-double quantile(std::vector<double>& values, double q) {
-  if (values.empty()) return 0;
-  const double pos = q * static_cast<double>(values.size() - 1);
+/// q-quantile with linear interpolation between order statistics (the same for any order of
+/// the values, so of the parts joined).
+double quantile(const Parts& parts, double q) {
+  const std::size_t n = total_size(parts);
+  if (n == 0) return 0;
+  const double pos = q * static_cast<double>(n - 1);
   const auto k = static_cast<std::size_t>(pos);
   constexpr std::size_t kManyValues = std::size_t{1} << 20;
-  if (values.size() >= kManyValues) {
-    const double lo = kth_smallest(values, k);
-    if (k + 1 >= values.size()) return lo;
-    const double hi = kth_smallest(values, k + 1);
+  if (n >= kManyValues) {
+    const auto [lo, hi] = kth_smallest_pair(parts, k);
+    if (k + 1 >= n) return lo;
     return lo + (pos - static_cast<double>(k)) * (hi - lo);
   }
+  std::vector<double> values;
+  values.reserve(n);
+  for (const auto& p : parts) values.insert(values.end(), p.begin(), p.end());
   const auto kth = values.begin() + static_cast<std::ptrdiff_t>(k);
   std::nth_element(values.begin(), kth, values.end());
   const double lo = *kth;
@@ -241,11 +276,14 @@ double quantile(std::vector<double>& values, double q) {
   return lo + (pos - static_cast<double>(k)) * (hi - lo);
 }
 
-double mean(const std::vector<double>& values) {
-  if (values.empty()) return 0;
+/// Summed in order, part after part: the serial sum of the joined list, bit for bit.
+double mean(const Parts& parts) {
+  const std::size_t n = total_size(parts);
+  if (n == 0) return 0;
   double sum = 0;
-  for (double x : values) sum += x;
-  return sum / static_cast<double>(values.size());
+  for (const auto& p : parts)
+    for (const double x : p) sum += x;
+  return sum / static_cast<double>(n);
 }
 
 /// Angle between two vectors in degrees; atan2 stays accurate near 0° and 180°.
@@ -526,15 +564,13 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
       }
     }
   });
-  std::vector<double> angle_dev, spread, tri_min;
-  angle_dev.reserve(4 * r.quads);
-  spread.reserve(4 * r.quads);
-  tri_min.reserve(r.triangles);
+  Parts angle_dev(blocks.size()), spread(blocks.size()), tri_min(blocks.size());
   std::size_t within_10 = 0, below_10 = 0;
   const auto add_counts = [](Histogram& to, const Histogram& from) {
     for (std::size_t i = 0; i < to.counts.size(); ++i) to.counts[i] += from.counts[i];
   };
-  for (Shapes& block : blocks) {
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    Shapes& block = blocks[b];
     r.measured_quads += block.measured_quads;
     r.measured_triangles += block.measured_triangles;
     within_10 += block.within_10;
@@ -542,26 +578,25 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
     add_counts(r.quad_angles, block.quad_angles);
     add_counts(r.edge_ratio, block.edge_ratio);
     add_counts(r.triangle_min_angle, block.triangle_min_angle);
-    angle_dev.insert(angle_dev.end(), block.angle_dev.begin(), block.angle_dev.end());
-    spread.insert(spread.end(), block.spread.begin(), block.spread.end());
-    tri_min.insert(tri_min.end(), block.tri_min.begin(), block.tri_min.end());
-    block = Shapes{};  // its lists are copied: free them as we go
+    angle_dev[b].swap(block.angle_dev);
+    spread[b].swap(block.spread);
+    tri_min[b].swap(block.tri_min);
   }
-  if (!angle_dev.empty()) {
-    r.quad_angles_within_10 =
-        static_cast<double>(within_10) / static_cast<double>(angle_dev.size());
+  const std::size_t angles = total_size(angle_dev), triangles = total_size(tri_min);
+  if (angles > 0) {
+    r.quad_angles_within_10 = static_cast<double>(within_10) / static_cast<double>(angles);
   }
-  r.quad_angle_mean_abs_dev = mean(angle_dev);
-  r.edge_spread_mean = mean(spread);
-  // Order statistics are exact whatever order the values are in: taken side by side.
-  tbb::parallel_invoke([&] { r.quad_angle_abs_dev_p90 = quantile(angle_dev, 0.9); },
+  // Means and order statistics side by side.
+  tbb::parallel_invoke([&] { r.quad_angle_mean_abs_dev = mean(angle_dev); },
+                       [&] { r.edge_spread_mean = mean(spread); },
+                       [&] { r.quad_angle_abs_dev_p90 = quantile(angle_dev, 0.9); },
                        [&] {
                          r.edge_spread_median = quantile(spread, 0.5);
                          r.edge_spread_p90 = quantile(spread, 0.9);
                        },
                        [&] { r.triangle_min_angle_median = quantile(tri_min, 0.5); });
-  if (!tri_min.empty()) {
-    r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(tri_min.size());
+  if (triangles > 0) {
+    r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(triangles);
   }
   return r;
 }
