@@ -68,14 +68,15 @@ std::atomic<std::uint64_t> next_source_identity{1};
 StepSource::StepSource() : identity_(next_source_identity.fetch_add(1)) {}
 StepSource::StepSource(const StepSource&) : identity_(next_source_identity.fetch_add(1)) {}
 
-void StepSource::copy_step(std::size_t step, float* to) {
-  const float* data = acquire(step);
-  const std::size_t floats = geometry().point_count() * static_cast<std::size_t>(components());
-  // In parts: one thread does not fill the memory bandwidth.
+void copy_floats(const float* from, float* to, std::size_t n) {
   tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
-    const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
-    std::copy(data + lo, data + hi, to + lo);
+    const std::size_t lo = n * part / 16, hi = n * (part + 1) / 16;
+    std::copy(from + lo, from + hi, to + lo);
   });
+}
+
+void StepSource::copy_step(std::size_t step, float* to) {
+  copy_floats(acquire(step), to, geometry().point_count() * static_cast<std::size_t>(components()));
   release(step);
 }
 

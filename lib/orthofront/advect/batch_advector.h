@@ -62,6 +62,9 @@ class StepSource {
   std::uint64_t identity_;
 };
 
+/// Copies n floats in parallel parts (one thread does not fill the memory bandwidth).
+void copy_floats(const float* from, float* to, std::size_t n);
+
 /// Steps held in memory (tests, benchmarks, analytic fields sampled on a grid).
 class ResidentSteps final : public StepSource {
  public:

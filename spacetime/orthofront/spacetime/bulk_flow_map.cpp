@@ -40,12 +40,7 @@ void CachedSteps::copy_step(std::size_t step, float* to) {
   const io::BrickLayout& layout = cache_.layout();
   const bool held = held_.count(step) > 0;
   if (held || (layout.bricks() == 1 && layout.size == geometry().size)) {
-    const float* data = acquire(step);
-    const std::size_t floats = geometry().point_count() * static_cast<std::size_t>(components());
-    tbb::parallel_for(std::size_t{0}, std::size_t{16}, [&](std::size_t part) {
-      const std::size_t lo = floats * part / 16, hi = floats * (part + 1) / 16;
-      std::copy(data + lo, data + hi, to + lo);
-    });
+    advect::copy_floats(acquire(step), to, geometry().point_count() * static_cast<std::size_t>(components()));
     if (!held) release(step);  // a step held by acquire() stays held
     return;
   }
