@@ -465,11 +465,10 @@ bool StreakBuilder::refine_once(std::vector<char>& changed) {
   // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
   std::vector<std::vector<Insert>> along(rows_.size());  // per row, by left particle
   std::vector<std::optional<Row>> across(rows_.size());  // [r]: the new row after row r
+  // Row r and the pair (r, r + 1) in one task: row r is still in cache for the pair.
   for_each_row(rows_.size(), [&](std::size_t r) {
     if (changed[r]) along[r] = inserts_along(r, long_edge);
-  });
-  for_each_row(rows_.size() > 0 ? rows_.size() - 1 : 0, [&](std::size_t r) {
-    if (changed[r] || changed[r + 1]) across[r] = row_between(r, long_edge);
+    if (r + 1 < rows_.size() && (changed[r] || changed[r + 1])) across[r] = row_between(r, long_edge);
   });
   std::size_t along_count = 0, across_count = 0;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
