@@ -340,3 +340,49 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
     CHECK(moving > 1000);
   }
 }
+
+TEST_CASE("cuda advection: a resident set's slot placed and parked again before any advance, at "
+          "the end of its arrays, is never written",
+          "[gpu][advect]") {
+  std::string why;
+  if (!cuda_available(&why)) {
+    WARN("[gpu] skipped: " << why);
+    return;
+  }
+  const auto gpu = make_advector(Device::cuda);
+  ResidentSteps series = sampled(2, false, 65, 3, false);
+  MethodOptions o;
+  o.method = Method::rk4;
+  o.rk4_step = 0.05;
+  const Box<3> box = series.geometry().bounds();
+  const std::array<double, 3> centre{0.5 * (box.lo[0] + box.hi[0]), 0.5 * (box.lo[1] + box.hi[1]), 0};
+  {
+    // A fresh set: nothing is placed in the end, so it holds no slot at all.
+    const auto set = gpu->make_resident();
+    const std::uint32_t slot = 0;
+    set->place(std::span<const std::uint32_t>(&slot, 1), std::span<const std::array<double, 3>>(&centre, 1));
+    set->park(std::span<const std::uint32_t>(&slot, 1));
+    set->advance(series, 0, 0.1, o);
+    CHECK(set->view().size == 0);
+  }
+  {
+    // The first growth holds exactly the slots placed (2^20); the slot after them is placed and
+    // parked: it lies past the arrays' end.
+    const auto set = gpu->make_resident();
+    const std::size_t n = std::size_t{1} << 20;
+    std::vector<std::uint32_t> slots(n);
+    std::vector<std::array<double, 3>> x(n, centre);
+    for (std::size_t i = 0; i < n; ++i) slots[i] = static_cast<std::uint32_t>(i);
+    set->place(slots, x);
+    const auto last = static_cast<std::uint32_t>(n);
+    set->place(std::span<const std::uint32_t>(&last, 1), std::span<const std::array<double, 3>>(&centre, 1));
+    set->park(std::span<const std::uint32_t>(&last, 1));
+    set->advance(series, 0, 0.1, o);
+    const ResidentParticles::View v = set->view();
+    REQUIRE(v.size == n);
+    CHECK(v.status[n - 1] == ParticleStatus::moving);
+    // The device is still usable: another advance runs.
+    set->advance(series, 0.1, 0.2, o);
+    CHECK(set->view().status[0] == ParticleStatus::moving);
+  }
+}

@@ -199,10 +199,14 @@ struct SlotChange {
   std::uint32_t place;  ///< 1: placed at x; 0: parked
 };
 
-__global__ void apply_changes_kernel(const SlotChange* changes, std::size_t m, DeviceParticles p) {
+/// Changes to slots below n (a slot at or past n was never placed, or placed and parked again
+/// before any advance: parked already, and maybe past the arrays' end).
+__global__ void apply_changes_kernel(const SlotChange* changes, std::size_t m, std::size_t n,
+                                     DeviceParticles p) {
   const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i >= m) return;
   const SlotChange c = changes[i];
+  if (c.slot >= n) return;
   if (c.place) {
     for (int d = 0; d < 3; ++d) p.x[d][c.slot] = c.x[d];
     p.status[c.slot] = ParticleStatus::moving;
@@ -915,7 +919,7 @@ class CudaResident final : public ResidentParticles {
           "resident particles: changes");
     const unsigned threads = 256;
     apply_changes_kernel<<<static_cast<unsigned>((m + threads - 1) / threads), threads, 0, s>>>(
-        device_changes_.get(), m, device_view());
+        device_changes_.get(), m, size_, device_view());
     check(cudaGetLastError(), "resident particles: apply");
     for (const SlotChange& c : changes_) change_of_[c.slot] = 0;
     changes_.clear();

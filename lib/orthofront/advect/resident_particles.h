@@ -32,7 +32,8 @@ class ResidentParticles {
   /// Moves every moving particle from t_begin to t_end through `source`, each as a
   /// BatchAdvector::advect of particles at t_begin with no step size yet moves it (the same
   /// bits). A particle that stops keeps its status until placed again. Throws InvalidArgument
-  /// when t_begin or t_end lies outside the source's times.
+  /// when t_begin or t_end lies outside the source's times; after any other exception (a read
+  /// error, the device) the set's contents are unspecified: place its particles again.
   virtual AdvectionStatistics advance(StepSource& source, double t_begin, double t_end,
                                       const MethodOptions& options) = 0;
   virtual View view() const = 0;
