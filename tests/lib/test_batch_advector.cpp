@@ -360,4 +360,16 @@ TEST_CASE("bulk advection: a resident set moves its particles as advect() moves 
   CHECK(no_data > 0);
   // Times outside the series are refused by name.
   CHECK_THROWS_WITH(set->advance(series, 0.5, 1.5, o), Catch::Contains("leave the series"));
+  // A set whose particles have all stopped reads no step.
+  const auto stopped = cpu->make_resident();
+  const std::uint32_t slot = 3;
+  const std::array<double, 3> outside{5, 0, 0};
+  stopped->place(std::span<const std::uint32_t>(&slot, 1), std::span<const std::array<double, 3>>(&outside, 1));
+  const AdvectionStatistics first = stopped->advance(series, 0.1, 0.2, o);
+  CHECK(first.particles == 1);
+  CHECK(stopped->view().status[slot] != ParticleStatus::moving);
+  const AdvectionStatistics second = stopped->advance(series, 0.2, 0.3, o);
+  CHECK(second.particles == 0);
+  CHECK(second.steps_loaded == 0);
+  CHECK(second.slabs == 0);
 }

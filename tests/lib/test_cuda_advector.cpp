@@ -342,7 +342,7 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
 }
 
 TEST_CASE("cuda advection: a resident set's slot placed and parked again before any advance, at "
-          "the end of its arrays, is never written",
+          "the end of its arrays, is never written; a set with nothing moving reads no step",
           "[gpu][advect]") {
   std::string why;
   if (!cuda_available(&why)) {
@@ -364,6 +364,15 @@ TEST_CASE("cuda advection: a resident set's slot placed and parked again before 
     set->park(std::span<const std::uint32_t>(&slot, 1));
     set->advance(series, 0, 0.1, o);
     CHECK(set->view().size == 0);
+    // A particle outside the grid stops at once; then nothing moves and no step is read.
+    const std::array<double, 3> outside{box.hi[0] + 1, centre[1], 0};
+    set->place(std::span<const std::uint32_t>(&slot, 1), std::span<const std::array<double, 3>>(&outside, 1));
+    CHECK(set->advance(series, 0, 0.1, o).particles == 1);
+    CHECK(set->view().status[0] == ParticleStatus::left_domain);
+    const AdvectionStatistics idle = set->advance(series, 0.1, 0.2, o);
+    CHECK(idle.particles == 0);
+    CHECK(idle.steps_loaded == 0);
+    CHECK(idle.slabs == 0);
   }
   {
     // The first growth holds exactly the slots placed (2^20); the slot after them is placed and

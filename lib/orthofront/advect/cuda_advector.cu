@@ -215,13 +215,19 @@ __global__ void apply_changes_kernel(const SlotChange* changes, std::size_t m, s
   }
 }
 
-/// Every moving particle starts afresh at t (as a call's particles do: no step size yet).
-__global__ void restart_kernel(DeviceParticles p, std::size_t n, double t) {
+/// Every moving particle starts afresh at t (as a call's particles do: no step size yet);
+/// *moving counts them (one atomic per warp).
+__global__ void restart_kernel(DeviceParticles p, std::size_t n, double t, unsigned long long* moving) {
   const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (i >= n || p.status[i] != ParticleStatus::moving) return;
-  p.t[i] = t;
-  p.h[i] = 0;
-  p.evaluations[i] = 0;
+  unsigned count = 0;
+  if (i < n && p.status[i] == ParticleStatus::moving) {
+    p.t[i] = t;
+    p.h[i] = 0;
+    p.evaluations[i] = 0;
+    count = 1;
+  }
+  for (int offset = 16; offset > 0; offset /= 2) count += __shfl_down_sync(0xffffffffu, count, offset);
+  if ((threadIdx.x & 31) == 0 && count) atomicAdd(moving, static_cast<unsigned long long>(count));
 }
 
 /// Launches the kernel for a grid kind (dispatch_grid's callee), one method per kernel.
@@ -794,7 +800,6 @@ class CudaResident final : public ResidentParticles {
     AdvectionStatistics stats;
     check_method(options);
     const SlabPlan plan = plan_resident(source.times(), t_begin, t_end);
-    stats.particles = size_;
     const std::size_t floats =
         source.geometry().point_count() * static_cast<std::size_t>(source.components());
     Lane& lane = owner_.begin_lane(floats);
@@ -804,10 +809,14 @@ class CudaResident final : public ResidentParticles {
       upload_changes(s);
       stats.host_seconds += seconds_since(host);
       if (size_ > 0) {
+        // Restarted and counted: with none moving, no step is read.
+        check(cudaMemsetAsync(lane.counters.get(), 0, sizeof(unsigned long long), s), "cudaMemset");
         const unsigned threads = 256;
         const auto blocks = static_cast<unsigned>((size_ + threads - 1) / threads);
-        restart_kernel<<<blocks, threads, 0, s>>>(device_view(), size_, t_begin);
+        restart_kernel<<<blocks, threads, 0, s>>>(device_view(), size_, t_begin, lane.counters.get());
         check(cudaGetLastError(), "particle restart");
+        CudaAdvector::finish_call(lane);
+        stats.particles = static_cast<std::size_t>(lane.counts.as<unsigned long long>()[0]);
       }
       const auto download = [&] {
         if (size_ == 0) return;
@@ -819,7 +828,7 @@ class CudaResident final : public ResidentParticles {
         for (std::size_t d = 0; d < 3; ++d) down(m.x[d], x_[d].get());
         down(m.status, status_.get());
       };
-      if (!plan.slabs.empty() && size_ > 0) {
+      if (!plan.slabs.empty() && stats.particles > 0) {
         owner_.run_slabs(lane, source, device_view(), size_, plan, t_end, options, stats, download);
       } else {
         download();

@@ -1,9 +1,10 @@
 #include "orthofront/advect/resident_particles.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <functional>
 #include <string>
 
 #include "orthofront/advect/advect_call.h"
@@ -44,16 +45,23 @@ class HostResidentParticles final : public ResidentParticles {
                               const MethodOptions& options) override {
     check_method(options);
     plan_resident(source.times(), t_begin, t_end);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, batch_.size(), 16384),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                          if (batch_.status[i] != ParticleStatus::moving) continue;
-                          batch_.t[i] = t_begin;
-                          batch_.h[i] = 0;
-                          batch_.evaluations[i] = 0;
-                        }
-                      });
-    return backend_.advect(source, batch_, t_end, options);
+    const std::size_t moving = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, batch_.size(), 16384), std::size_t{0},
+        [&](const tbb::blocked_range<std::size_t>& r, std::size_t count) {
+          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            if (batch_.status[i] != ParticleStatus::moving) continue;
+            batch_.t[i] = t_begin;
+            batch_.h[i] = 0;
+            batch_.evaluations[i] = 0;
+            ++count;
+          }
+          return count;
+        },
+        std::plus<>());
+    if (moving == 0) return {};  // no step is read
+    AdvectionStatistics stats = backend_.advect(source, batch_, t_end, options);
+    stats.particles = moving;  // not the parked slots
+    return stats;
   }
 
   View view() const override {
