@@ -14,9 +14,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <new>
 #include <string>
+#include <thread>
 
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
@@ -130,8 +132,35 @@ double child_read_seconds(std::size_t bytes) {
   return 10 + static_cast<double>(bytes) / 20e6;
 }
 
+namespace {
+
+// Whether every other thread of this process is asleep (no 'R' in /proc/self/task/*/stat).
+bool other_threads_asleep() {
+  const pid_t self = static_cast<pid_t>(::gettid());
+  std::error_code ec;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task", ec)) {
+    const std::string name = task.path().filename().string();
+    if (name == std::to_string(self)) continue;
+    std::ifstream stat(task.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;  // the thread has ended
+    const auto close = line.rfind(')');
+    if (close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'R') return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 void read_in_child(const std::string& file, const std::string& format,
                    const std::function<void()>& read, const ChildReadLimits& limits) {
+  // A forked child keeps every lock another thread held at the fork, the allocator's among them
+  // (a sanitizer's allocator does not take them around fork() as glibc's does), and would wait on
+  // it for ever. Threads that have just started are the risk: OpenVDB's module starts a logging
+  // thread pool when it loads, right before its first file is read here. Wait (at most 1 s)
+  // until every other thread sleeps.
+  for (int wait = 0; wait < 1000 && !other_threads_asleep(); ++wait)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0)
     throw IoError("cannot read " + file + ": pipe: " + std::strerror(errno));
