@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -194,8 +195,17 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
 
   SECTION("by SIGKILL at random moments, also while checkpoints are written") {
     const fs::path out = dir / "out-signal";
+    // Kill moments within an uninterrupted run's time, measured here: the whole job takes about
+    // 0.1 s on a fast machine, so fixed delays could outlast it and kill nothing.
+    const auto begin = std::chrono::steady_clock::now();
+    REQUIRE(run("batch " + job + " --out " + quoted(dir / "out-timed") +
+                " --checkpoint-every 0.000001 --quiet")
+                .status == 0);
+    const auto whole_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                              std::chrono::steady_clock::now() - begin)
+                              .count();
     std::mt19937 random(12345);
-    std::uniform_int_distribution<int> delay_ms(5, 120);
+    std::uniform_int_distribution<int> delay_ms(1, std::max(2, static_cast<int>(whole_ms * 4 / 5)));
     int kills = 0;
     for (int attempt = 0; attempt < 40; ++attempt) {
       std::vector<std::string> args{"batch",      (dir / "job.toml").string(), "--out",
