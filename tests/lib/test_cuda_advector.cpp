@@ -89,14 +89,18 @@ ParticleBatch random_batch(const GridGeometry& g, std::size_t n, unsigned seed) 
   return b;
 }
 
+// A CUDA build on a machine without a GPU (CI): the test says so and does nothing.
+bool skip_without_gpu() {
+  std::string why;
+  if (cuda_available(&why)) return false;
+  WARN("[gpu] skipped: " << why);
+  return true;
+}
+
 }  // namespace
 
 TEST_CASE("cuda advection agrees with the CPU backend", "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);  // a CUDA build on a machine without a GPU (CI)
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto cpu = make_cpu_advector();
   const auto gpu = make_advector(Device::cuda);
   for (const int dimension : {2, 3})
@@ -141,11 +145,7 @@ TEST_CASE("cuda advection agrees with the CPU backend", "[gpu][advect]") {
 
 TEST_CASE("cuda advection: the upload of the next step overlaps the kernels of this slab",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto gpu = make_advector(Device::cuda);
   ResidentSteps series = sampled(3, false, 160, 8, false);
   ParticleBatch b = random_batch(series.geometry(), 2'000'000, 9);
@@ -164,11 +164,7 @@ TEST_CASE("cuda advection: the upload of the next step overlaps the kernels of t
 
 TEST_CASE("cuda advection: steps stay on the device between calls on the same source",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto cpu = make_cpu_advector();
   const auto gpu = make_advector(Device::cuda);
   ResidentSteps series = sampled(2, false, 257, 11, false);
@@ -201,11 +197,7 @@ TEST_CASE("cuda advection: steps stay on the device between calls on the same so
 TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits; steps within "
           "the budget are not uploaded again",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto cpu = make_cpu_advector();
   ResidentSteps series = sampled(3, false, 65, 11, true);
   const std::size_t step_bytes = series.geometry().point_count() * 3 * sizeof(float);
@@ -240,11 +232,7 @@ TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits
 TEST_CASE("cuda advection: calls merged from several threads, one at a time or running at once, "
           "give each particle the bits of a call of its own",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   ResidentSteps series = sampled(3, true, 49, 11, true);
   const std::size_t step_bytes = series.geometry().point_count() * 3 * sizeof(float);
   MethodOptions o;
@@ -312,11 +300,7 @@ TEST_CASE("cuda advection: calls merged from several threads, one at a time or r
 TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's bits, interval "
           "after interval, as slots are parked, reused and added",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto cpu = make_cpu_advector();
   const auto gpu = make_advector(Device::cuda);
   for (const int dimension : {2, 3}) {
@@ -344,11 +328,7 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
 TEST_CASE("cuda advection: a resident set's slot placed and parked again before any advance, at "
           "the end of its arrays, is never written; a set with nothing moving reads no step",
           "[gpu][advect]") {
-  std::string why;
-  if (!cuda_available(&why)) {
-    WARN("[gpu] skipped: " << why);
-    return;
-  }
+  if (skip_without_gpu()) return;
   const auto gpu = make_advector(Device::cuda);
   ResidentSteps series = sampled(2, false, 65, 3, false);
   MethodOptions o;

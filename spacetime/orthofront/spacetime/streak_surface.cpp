@@ -289,6 +289,16 @@ bool StreakBuilder::advance(double t_to) {
   return true;
 }
 
+namespace {
+
+// Counts a particle's stop: [0] left the domain, [1] no data.
+void count_stop(ParticleStatus status, std::array<std::size_t, 2>& stopped) {
+  if (status == ParticleStatus::left_domain) ++stopped[0];
+  if (status == ParticleStatus::no_data) ++stopped[1];
+}
+
+}  // namespace
+
 std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::size_t, 2>>& stopped) {
   // The moving particles, row after row (millions: each row finds its own, in parallel, at an
   // offset counted beforehand). Scratch buffers are members: they are reused every interval.
@@ -318,8 +328,7 @@ std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::siz
       if (!p.alive()) continue;
       p.x = x_[k];
       p.status = status_[k++];
-      if (p.status == ParticleStatus::left_domain) ++stopped[r][0];
-      if (p.status == ParticleStatus::no_data) ++stopped[r][1];
+      count_stop(p.status, stopped[r]);
     }
   });
   return n;
@@ -342,8 +351,7 @@ std::size_t StreakBuilder::move_resident(double t_to, std::vector<std::array<std
       p.x = Vec3(v.x[0][p.slot], v.x[1][p.slot], v.x[2][p.slot]);
       p.status = v.status[p.slot];
       if (p.alive()) continue;
-      if (p.status == ParticleStatus::left_domain) ++stopped[r][0];
-      if (p.status == ParticleStatus::no_data) ++stopped[r][1];
+      count_stop(p.status, stopped[r]);
       freed[r].push_back(p.slot);  // stopped there: nothing moves it again
       p.slot = kNoSlot;
     }
