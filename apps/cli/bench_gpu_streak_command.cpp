@@ -48,6 +48,7 @@ struct BenchGpuStreakArgs {
   std::string out;              // write the frames here (DIR/NAME.pvd), as `streak` does
   bool frames_in_line = false;  // the baseline: finish frames before the particles move on
   bool per_call = false;        // the baseline: every particle up and down each interval
+  bool in_turn = false;         // the baseline: refinement waits for the particles' move
 };
 
 }  // namespace
@@ -77,6 +78,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
   c->add_flag("--particles-per-call", a->per_call,
               "Send every particle's state to the backend and back each interval: the baseline of "
               "particles kept on the device");
+  c->add_flag("--in-turn", a->in_turn,
+              "Refine the rows after the particles' move instead of while the next one runs: the "
+              "baseline of overlapped advection");
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
     if (flow->dimension() != 3) throw InvalidArgument("bench-gpu-streak: --field must be a 3D flow");
@@ -145,6 +149,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     o.device_bytes = device_bytes;
     o.finish_frames_aside = !a->frames_in_line;
     o.resident_particles = !a->per_call;
+    o.overlap_advection = !a->in_turn;
     const double last = o.frames.back();
     // Where the time goes along the run: six spans of simulated time (the release, then the
     // particles moving on), from the progress calls after each interval.
@@ -220,6 +225,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"device_step_budget_bytes", device_bytes},
         {"backend", r.device},
         {"particles_resident", !a->per_call},
+        {"advection_overlapped", !a->per_call && !a->in_turn},
+        {"catch_up_calls", r.catch_up_calls},
+        {"catch_up_particles", r.catch_up_particles},
         {"cpu_threads", tbb::info::default_concurrency()},
         {"complete", r.complete},
         {"message", r.message},
@@ -230,6 +238,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"seconds",
          {{"total", r.total_seconds},
           {"advect", r.advect_seconds},
+          {"catch_up", r.catch_up_seconds},
           {"refine", r.refine_seconds},
           {"frames", r.frame_seconds},
           {"frames_finish", r.frame_finish_seconds},
@@ -264,10 +273,17 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 "insertion: %zu particles at most, %zu in the last frame%s; particles %s\n\n",
                 a->seed.c_str(), a->release_end, a->frames, a->edge, r.max_particles, last_vertices,
                 r.complete ? "" : (" (incomplete: " + r.message + ")").c_str(),
-                a->per_call ? "up and down every interval" : "kept by the backend");
+                a->per_call ? "up and down every interval"
+                : a->in_turn ? "kept by the backend, refined in turn"
+                             : "kept by the backend, moving on while the rows are refined");
     std::printf("%-44s %10s\n", "", "seconds");
     std::printf("%-44s %10.3f\n", "end to end (streak surface)", r.total_seconds);
-    std::printf("%-44s %10.3f\n", "  advection (bulk calls)", r.advect_seconds);
+    std::printf("%-44s %10.3f\n", a->per_call || a->in_turn ? "  advection (bulk calls)"
+                                                             : "  advection (waits for moves, catch-up)",
+                r.advect_seconds);
+    if (r.catch_up_calls > 0)
+      std::printf("%-44s %10.3f  (%zu calls, %zu particles)\n", "    catch-up calls", r.catch_up_seconds,
+                  r.catch_up_calls, r.catch_up_particles);
     std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
     std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
     std::printf("%-44s %10.3f\n", a->frames_in_line ? "  frames (finished in line)"

@@ -8,6 +8,7 @@
 
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/advect/dispatch.h"
+#include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/sampled_series.h"
@@ -61,8 +62,8 @@ TEST_CASE("bulk advection: a slab samples StreamedField's values bit for bit",
 }
 
 TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines; a small "
-          "budget, and particles sent up and down each interval instead of kept by the backend, "
-          "give the same frames bit for bit",
+          "budget, particles sent up and down each interval instead of kept by the backend, and "
+          "moves in turn with refinement instead of beside it give the same frames bit for bit",
           "[spacetime][advect][streak]") {
   const auto flow = make_unsteady_field("double-gyre");
   const GridGeometry grid = uniform_grid(flow->domain(), 2, 201);
@@ -71,6 +72,7 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
   struct Run {
     std::size_t budget;
     bool resident;
+    bool overlap = true;
   };
   for (const auto insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
   INFO(to_string(insertion) << " insertion");
@@ -85,13 +87,15 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
   o.device = advect::Device::cpu;
   std::vector<std::vector<StreakFrame>> runs;
   for (const Run run : {Run{std::size_t{1} << 30, true}, Run{std::size_t{8} << 20, true},
-                        Run{std::size_t{1} << 30, false}}) {
+                        Run{std::size_t{1} << 30, false}, Run{std::size_t{1} << 30, true, false},
+                        Run{std::size_t{8} << 20, true, false}}) {
     CacheOptions co;
     co.budget_bytes = run.budget;
     co.whole_steps = true;
     BrickCache cache(series, co);
     std::vector<StreakFrame> frames;
     o.resident_particles = run.resident;
+    o.overlap_advection = run.overlap;
     const StreakReport r =
         build_streak_surface(cache, seed, o, [&](const StreakFrame& f) { frames.push_back(f); });
     REQUIRE(r.complete);
@@ -101,6 +105,9 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
     CHECK(r.s_insertions + r.rows_inserted > 0);
     INFO("removals " << r.s_removals << " rows " << r.rows_removed << " left " << r.left_domain);
     CHECK(r.s_removals + r.rows_removed > 0);  // slots were given back
+    // Overlapped: the particles released or inserted while the set moved on caught up.
+    CHECK((r.catch_up_particles > 0) == (run.resident && run.overlap));
+    if (run.resident && run.overlap) CHECK(r.catch_up_calls <= r.intervals);
     REQUIRE(frames.size() == 3);
     runs.push_back(std::move(frames));
   }
@@ -126,4 +133,55 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
   INFO("largest distance from the analytic path lines: " << worst);
   CHECK(worst < 2e-3);
   }
+}
+
+TEST_CASE("bulk advection: an overlapped streak surface stopped while its particles move on keeps "
+          "the frames before, and a sink that throws with a move in flight stops the run",
+          "[spacetime][advect][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const GridGeometry grid = uniform_grid(flow->domain(), 2, 101);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 3;
+  o.frames = {1.5, 3, 4.5};
+  o.edge = 0.03;
+  o.release_step = 0.5;
+  o.insertion = ParticleInsertion::interpolate;
+  o.device = advect::Device::cpu;
+  const auto run = [&](const StreakOptions& options, const StreakFrameSink& sink) {
+    BrickCache cache(series, CacheOptions{});
+    return build_streak_surface(cache, seed, options, sink);
+  };
+  std::vector<StreakFrame> whole;
+  const StreakReport full = run(o, [&](const StreakFrame& f) { whole.push_back(f); });
+  REQUIRE(full.complete);
+  REQUIRE(whole.size() == 3);
+
+  // Stopped by the progress callback at t = 3.7: a move to the next break is in flight then.
+  StreakOptions stopping = o;
+  stopping.progress = [](const StreakProgress& p) { return p.t < 3.7; };
+  std::vector<StreakFrame> kept;
+  const StreakReport r = run(stopping, [&](const StreakFrame& f) { kept.push_back(f); });
+  CHECK_FALSE(r.complete);
+  CHECK(r.message.find("interrupted") != std::string::npos);
+  CHECK(r.time_reached >= 3.7);
+  CHECK(r.time_reached < 4.5);
+  CHECK(r.intervals < full.intervals);
+  REQUIRE(kept.size() == 2);
+  for (std::size_t f = 0; f < 2; ++f) {
+    CHECK(kept[f].mesh.faces == whole[f].mesh.faces);
+    CHECK(kept[f].mesh.positions == whole[f].mesh.positions);
+  }
+
+  // A sink that throws: the run ends with its exception, the move in flight waited for.
+  std::vector<int> handed;
+  CHECK_THROWS_WITH(run(o,
+                        [&](const StreakFrame& f) {
+                          handed.push_back(f.index);
+                          if (f.index == 1) throw Error("frame 1: disk full");
+                        }),
+                    Catch::Contains("disk full"));
+  CHECK(handed == std::vector<int>{0, 1});
 }

@@ -87,9 +87,11 @@ class StreakBuilder {
     if (access.bulk && options.resident_particles) resident_ = access.bulk->make_resident();
   }
 
-  // A run that throws leaves a frame being finished: wait for it (its own error is dropped).
+  // A run that throws leaves a frame being finished, and maybe a move in flight: wait for them
+  // (their own errors are dropped).
   ~StreakBuilder() {
     if (finisher_.joinable()) finisher_.join();
+    if (flight_.joinable()) flight_.join();
   }
   StreakBuilder(const StreakBuilder&) = delete;
   StreakBuilder& operator=(const StreakBuilder&) = delete;
@@ -109,6 +111,24 @@ class StreakBuilder {
   // one advect_all call. Returns how many moved.
   std::size_t move_resident(double t_to, std::vector<std::array<std::size_t, 2>>& stopped);
   std::size_t move_all(double t_to, std::vector<std::array<std::size_t, 2>>& stopped);
+  // Takes the resident set's positions and statuses into the rows. Particles entered while a move
+  // was in flight are left as they are; with `fresh_at`, their indices go to (*fresh_at)[row].
+  // Returns how many it took.
+  std::size_t take_resident(std::vector<std::array<std::size_t, 2>>& stopped,
+                            std::vector<std::vector<std::uint32_t>>* fresh_at = nullptr);
+  // Overlapped advection: launch() sends the resident set on to t_to from a thread of its own
+  // while the driver refines the rows at t_; particles entering meanwhile are marked fresh and
+  // parks wait. land() takes the move's positions, moves the fresh particles to t_to in one
+  // catch-up call, places them, and makes t_to the current time. wait_flight() only waits.
+  bool launch(double t_to);
+  bool land();
+  void wait_flight() {
+    if (flight_.joinable()) flight_.join();
+  }
+  bool fresh(const Particle& p) const { return p.slot < fresh_.size() && fresh_[p.slot]; }
+  // Counts the moves of one interval of advance() or land().
+  void count_interval(std::size_t moved, double t_to,
+                      const std::vector<std::array<std::size_t, 2>>& stopped);
   void adapt();
   // A particle to insert on a row, after its particle `after`.
   struct Insert {
@@ -172,6 +192,16 @@ class StreakBuilder {
   std::unique_ptr<advect::ResidentParticles> resident_;
   std::vector<std::uint32_t> free_slots_;  // given back, taken last first
   std::uint32_t next_slot_ = 0;            // never handed out yet from here on
+  // The resident set's move to flight_to_, running beside refinement and frames (launch/land).
+  std::thread flight_;
+  bool in_flight_ = false;
+  double flight_to_ = 0;
+  std::size_t flight_evaluations_ = 0;
+  std::exception_ptr flight_error_;
+  std::vector<char> fresh_;                  // [slot]: entered while a move was in flight
+  std::vector<std::uint32_t> fresh_slots_;   // those slots
+  std::vector<std::uint32_t> flight_parks_;  // left while in flight: parked when it lands
+  std::vector<std::uint32_t> flight_freed_;  // given back while in flight: free once it lands
   std::vector<Vec3> x_;
   std::vector<double> from_;
   std::vector<ParticleStatus> status_;
@@ -269,15 +299,7 @@ bool StreakBuilder::advance(double t_to) {
   const std::size_t nr = rows_.size();
   std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
   const std::size_t n = resident_ ? move_resident(t_to, stopped) : move_all(t_to, stopped);
-  for (const auto& c : stopped) {
-    report_.left_domain += c[0];
-    report_.no_data += c[1];
-  }
-  report_.particle_steps += n;
-  report_.particle_time += static_cast<double>(n) * (t_to - t_);
-  ++report_.intervals;
-  t_ = t_to;
-  report_.time_reached = t_;
+  count_interval(n, t_to, stopped);
   report_.advect_seconds += seconds_since(t0);
   if (access_.read_error) {
     if (const std::string e = access_.read_error(); !e.empty()) {
@@ -287,6 +309,19 @@ bool StreakBuilder::advance(double t_to) {
     }
   }
   return true;
+}
+
+void StreakBuilder::count_interval(std::size_t moved, double t_to,
+                                   const std::vector<std::array<std::size_t, 2>>& stopped) {
+  for (const auto& c : stopped) {
+    report_.left_domain += c[0];
+    report_.no_data += c[1];
+  }
+  report_.particle_steps += moved;
+  report_.particle_time += static_cast<double>(moved) * (t_to - t_);
+  ++report_.intervals;
+  t_ = t_to;
+  report_.time_reached = t_;
 }
 
 namespace {
@@ -336,13 +371,24 @@ std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::siz
 
 std::size_t StreakBuilder::move_resident(double t_to, std::vector<std::array<std::size_t, 2>>& stopped) {
   report_.evaluations += access_.bulk->advance(*resident_, t_, t_to);
+  return take_resident(stopped);
+}
+
+std::size_t StreakBuilder::take_resident(std::vector<std::array<std::size_t, 2>>& stopped,
+                                         std::vector<std::vector<std::uint32_t>>* fresh_at) {
   const advect::ResidentParticles::View v = resident_->view();
   const std::size_t nr = rows_.size();
   std::vector<std::size_t> moved(nr, 0), unplaced(nr, 0);
   std::vector<std::vector<std::uint32_t>> freed(nr);  // slots of particles that stopped
   for_each_row(nr, [&](std::size_t r) {
-    for (Particle& p : rows_[r].p) {
+    std::vector<Particle>& row = rows_[r].p;
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      Particle& p = row[i];
       if (!p.alive()) continue;
+      if (fresh(p)) {
+        if (fresh_at) (*fresh_at)[r].push_back(static_cast<std::uint32_t>(i));
+        continue;
+      }
       if (p.slot >= v.size) {
         ++unplaced[r];
         continue;
@@ -375,15 +421,127 @@ void StreakBuilder::enter(Particle& p) {
     p.slot = free_slots_.back();
     free_slots_.pop_back();
   }
+  if (in_flight_) {  // placed when the move lands, at the position it has then
+    if (p.slot >= fresh_.size()) fresh_.resize(std::size_t{p.slot} + 1, 0);
+    fresh_[p.slot] = 1;
+    fresh_slots_.push_back(p.slot);
+    return;
+  }
   const std::array<double, 3> x{p.x.x(), p.x.y(), p.x.z()};
   resident_->place(std::span<const std::uint32_t>(&p.slot, 1), std::span<const std::array<double, 3>>(&x, 1));
 }
 
 void StreakBuilder::leave(Particle& p) {
   if (p.slot == kNoSlot) return;
-  resident_->park(std::span<const std::uint32_t>(&p.slot, 1));
-  free_slots_.push_back(p.slot);
+  if (!in_flight_) {
+    resident_->park(std::span<const std::uint32_t>(&p.slot, 1));
+    free_slots_.push_back(p.slot);
+  } else {
+    // The set is moving: a fresh particle was never placed; an old one is parked on landing. The
+    // slot is not handed out again before then.
+    if (fresh(p)) {
+      fresh_[p.slot] = 0;
+    } else {
+      flight_parks_.push_back(p.slot);
+    }
+    flight_freed_.push_back(p.slot);
+  }
   p.slot = kNoSlot;
+}
+
+bool StreakBuilder::launch(double t_to) {
+  if (access_.prepare) {
+    if (const std::string e = access_.prepare(t_, t_to); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+  }
+  in_flight_ = true;
+  flight_to_ = t_to;
+  flight_evaluations_ = 0;
+  flight_error_ = nullptr;
+  flight_ = std::thread([this, t_from = t_, t_to] {
+    try {
+      flight_evaluations_ = access_.bulk->advance(*resident_, t_from, t_to);
+    } catch (...) {
+      flight_error_ = std::current_exception();
+    }
+  });
+  return true;
+}
+
+bool StreakBuilder::land() {
+  const auto t0 = Clock::now();
+  wait_flight();
+  in_flight_ = false;
+  if (flight_error_) std::rethrow_exception(std::exchange(flight_error_, nullptr));
+  report_.evaluations += flight_evaluations_;
+  const std::size_t nr = rows_.size();
+  std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
+  std::vector<std::vector<std::uint32_t>> fresh_at(nr);  // [row]: its fresh particles
+  std::size_t moved = take_resident(stopped, &fresh_at);
+  if (!flight_parks_.empty()) resident_->park(flight_parks_);
+  flight_parks_.clear();
+
+  // Catch-up: the fresh particles (at t_), row after row, to flight_to_ in one call; each moves
+  // as it would have in the set (a call of particles with no step size yet: the same bits).
+  const auto c0 = Clock::now();
+  std::vector<std::size_t> first(nr + 1, 0);
+  for (std::size_t r = 0; r < nr; ++r) first[r + 1] = first[r] + fresh_at[r].size();
+  const std::size_t n = first[nr];
+  if (n > 0) {
+    x_.resize(n);
+    from_.assign(n, t_);
+    status_.resize(n);
+    const auto rows_with_fresh = [&](const auto& f) {
+      for_each_row(nr, [&](std::size_t r) {
+        for (std::size_t j = 0; j < fresh_at[r].size(); ++j) f(r, rows_[r].p[fresh_at[r][j]], first[r] + j);
+      });
+    };
+    rows_with_fresh([&](std::size_t, const Particle& p, std::size_t k) { x_[k] = p.x; });
+    report_.evaluations += map_.advect_all(x_, from_, flight_to_, status_);
+    std::vector<std::uint32_t> slots(n);
+    std::vector<std::array<double, 3>> at(n);
+    rows_with_fresh([&](std::size_t r, Particle& p, std::size_t k) {
+      p.x = x_[k];
+      p.status = status_[k];
+      slots[k] = p.slot;
+      at[k] = {p.x.x(), p.x.y(), p.x.z()};
+      if (p.alive()) return;
+      count_stop(p.status, stopped[r]);
+      p.slot = kNoSlot;
+    });
+    // Those still moving go into the set; the slots of those that stopped are free.
+    std::size_t placed = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (status_[k] != ParticleStatus::moving) {
+        free_slots_.push_back(slots[k]);
+        continue;
+      }
+      slots[placed] = slots[k];
+      at[placed++] = at[k];
+    }
+    resident_->place(std::span(slots.data(), placed), std::span(at.data(), placed));
+    moved += n;
+    ++report_.catch_up_calls;
+    report_.catch_up_particles += n;
+    report_.catch_up_seconds += seconds_since(c0);
+  }
+  for (const std::uint32_t slot : fresh_slots_) fresh_[slot] = 0;
+  fresh_slots_.clear();
+  free_slots_.insert(free_slots_.end(), flight_freed_.begin(), flight_freed_.end());
+  flight_freed_.clear();
+  count_interval(moved, flight_to_, stopped);
+  report_.advect_seconds += seconds_since(t0);
+  if (access_.read_error) {
+    if (const std::string e = access_.read_error(); !e.empty()) {
+      report_.complete = false;
+      report_.message = "stopped at t = " + number(t_) + ": " + e;
+      return false;
+    }
+  }
+  return true;
 }
 
 // Largest distance between the particles of two rows that share a seed parameter.
@@ -422,6 +580,9 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
     report_.evaluations += map_.advect_all(x, from, t_, status);
     return true;
   }
+  // The sweep below moves the field's band and reads earlier steps: not while the set moves on
+  // (it lands later; the particles inserted here are fresh and catch up then).
+  wait_flight();
   std::vector<std::size_t> order(x.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return from[a] < from[b]; });
@@ -934,10 +1095,16 @@ StreakReport StreakBuilder::run() {
     report_.complete = false;
     report_.message = why;
   };
-  for (const double b : breaks) {
-    if (b > t_) {
+  // With overlap, the particles move on to the next break while this one is refined.
+  const bool overlap = resident_ && o_.overlap_advection;
+  for (std::size_t i = 0; i < breaks.size(); ++i) {
+    const double b = breaks[i];
+    if (in_flight_) {
+      if (!land()) break;
+    } else if (b > t_) {
       if (!advance(b)) break;
     }
+    if (overlap && i + 1 < breaks.size() && !launch(breaks[i + 1])) break;
     if (next_release < releases.size() && releases[next_release] == b) {
       release(b);
       ++next_release;
@@ -974,6 +1141,7 @@ StreakReport StreakBuilder::run() {
       }
     }
   }
+  wait_flight();  // a run stopped early: that move's positions are not taken
   const auto t_join = Clock::now();
   join_finisher();
   report_.frame_seconds += seconds_since(t_join);

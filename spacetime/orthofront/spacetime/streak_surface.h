@@ -61,6 +61,11 @@ struct StreakOptions {
   /// every particle's state goes up and down each interval (the baseline of bench-gpu-streak
   /// --particles-per-call). The same frames either way.
   bool resident_particles = true;
+  /// With resident particles: the particles move on to the next break on the backend (from a
+  /// thread of its own) while the rows of this break are refined and its frame is built; the
+  /// particles placed meanwhile catch up in one call when the move lands. false: in turn, each
+  /// waiting for the other (the baseline of bench-gpu-streak --in-turn). The same frames either way.
+  bool overlap_advection = true;
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.
@@ -116,7 +121,12 @@ struct StreakReport {
   std::vector<StreakFrameRecord> frames;
   CacheStatistics cache;            ///< streamed only
   std::size_t slow_evaluations = 0; ///< streamed: evaluations outside the pinned band
+  /// advect_seconds: the driver's time on advection. With overlap_advection it waits for a move
+  /// to land, takes its positions and moves the particles placed meanwhile (catch-up calls); the
+  /// move itself runs beside refinement and frames.
   double total_seconds = 0, advect_seconds = 0, refine_seconds = 0;
+  std::size_t catch_up_calls = 0, catch_up_particles = 0;
+  double catch_up_seconds = 0;      ///< of advect_seconds
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
   /// frame_finish_seconds, summed over frames.
