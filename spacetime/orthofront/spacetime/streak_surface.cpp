@@ -51,6 +51,29 @@ void for_each_row(std::size_t n, const F& f) {
 
 constexpr std::uint32_t kNoSlot = ~std::uint32_t{0};
 
+// Compares lengths |d| with a limit as `d.norm() < limit` (or <=) does, bit for bit, without a
+// square root where |d|² is clearly on one side (the passes over every edge of every row are
+// bound by the root's latency otherwise).
+class LengthLimit {
+ public:
+  explicit LengthLimit(double limit)
+      : limit_(limit), below_(limit * limit * (1 - 1e-12)), above_(limit * limit * (1 + 1e-12)) {}
+  bool shorter(const Vec3& d) const {
+    const double q = d.squaredNorm();
+    return q < below_ || (q <= above_ && std::sqrt(q) < limit_);
+  }
+  bool not_longer(const Vec3& d) const {
+    const double q = d.squaredNorm();
+    return q < below_ || (q <= above_ && std::sqrt(q) <= limit_);
+  }
+
+ private:
+  double limit_, below_, above_;
+};
+
+// A distance between neighbouring rows not measured yet (or changed since).
+constexpr double kUnmeasured = -1;
+
 struct Particle {
   double s = 0;
   Vec3 x = Vec3::Zero();
@@ -138,14 +161,17 @@ class StreakBuilder {
   // One pass of splits over the rows marked in `changed` (a row unchanged since a pass that found
   // nothing to split in it, or between it and its unchanged neighbour, finds nothing again);
   // marks the rows it changed or made for the next pass.
-  bool refine_once(std::vector<char>& changed);
+  // gap[r]: the distance of rows r and r + 1 where known (kUnmeasured otherwise), kept up to date
+  // as rows change and reused by coarsen().
+  bool refine_once(std::vector<char>& changed, std::vector<double>& gap);
   std::vector<Insert> inserts_along(std::size_t r, double long_edge) const;
-  std::optional<Row> row_between(std::size_t r, double long_edge) const;
+  // Measures the rows' distance into `gap` when it has to.
+  std::optional<Row> row_between(std::size_t r, double long_edge, double& gap) const;
   std::vector<Face> strip(std::size_t r, const std::vector<std::int32_t>& va,
                           const std::vector<std::int32_t>& vb) const;
   bool release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
                           std::vector<ParticleStatus>& status);
-  void coarsen();
+  void coarsen(std::vector<double>& gap);
   void emit(int index);
   // Quality, longest edge and the sink of the frame in finishing_ (built: the seconds its
   // vertices and faces took); an exception is kept for collect_frame().
@@ -554,11 +580,11 @@ double StreakBuilder::row_distance(const Row& a, const Row& b) const {
     } else if (b.p[k].s < a.p[i].s) {
       ++k;
     } else {
-      if (a.p[i].alive() && b.p[k].alive()) d = std::max(d, (a.p[i].x - b.p[k].x).norm());
+      if (a.p[i].alive() && b.p[k].alive()) d = std::max(d, (a.p[i].x - b.p[k].x).squaredNorm());
       ++i, ++k;
     }
   }
-  return d;
+  return std::sqrt(d);  // the largest root is the root of the largest square, bit for bit
 }
 
 namespace {
@@ -628,7 +654,7 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
   return true;
 }
 
-bool StreakBuilder::refine_once(std::vector<char>& changed) {
+bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>& gap) {
   const double long_edge = o_.split * o_.edge;
   // Each row's (and each pair of rows') new particles are found independently, in parallel, and
   // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
@@ -637,7 +663,7 @@ bool StreakBuilder::refine_once(std::vector<char>& changed) {
   // Row r and the pair (r, r + 1) in one task: row r is still in cache for the pair.
   for_each_row(rows_.size(), [&](std::size_t r) {
     if (changed[r]) along[r] = inserts_along(r, long_edge);
-    if (r + 1 < rows_.size() && (changed[r] || changed[r + 1])) across[r] = row_between(r, long_edge);
+    if (r + 1 < rows_.size() && (changed[r] || changed[r + 1])) across[r] = row_between(r, long_edge, gap[r]);
   });
   std::size_t along_count = 0, across_count = 0;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
@@ -697,24 +723,33 @@ bool StreakBuilder::refine_once(std::vector<char>& changed) {
     }
     p.swap(merged);
   });
+  // A row that got particles may have changed its distance to both neighbours; a new row has
+  // none measured.
   std::vector<char> next;
+  std::vector<double> next_gap;
   next.reserve(rows_.size() + across_count);
+  next_gap.reserve(rows_.size() + across_count);
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    next.push_back(!along[r].empty());
+    if (across[r]) {
+      next.push_back(1);
+      next_gap.insert(next_gap.end(), {kUnmeasured, kUnmeasured});
+    } else {
+      const bool same = r + 1 < rows_.size() && along[r].empty() && along[r + 1].empty();
+      next_gap.push_back(same ? gap[r] : kUnmeasured);
+    }
+  }
   if (across_count > 0) {
     std::vector<Row> rows;
     rows.reserve(rows_.size() + across_count);
     for (std::size_t r = 0; r < rows_.size(); ++r) {
       rows.push_back(std::move(rows_[r]));
-      next.push_back(!along[r].empty());
-      if (across[r]) {
-        rows.push_back(std::move(*across[r]));
-        next.push_back(1);
-      }
+      if (across[r]) rows.push_back(std::move(*across[r]));
     }
     rows_.swap(rows);
-  } else {
-    for (std::size_t r = 0; r < rows_.size(); ++r) next.push_back(!along[r].empty());
   }
   changed.swap(next);
+  gap.swap(next_gap);
   return true;
 }
 
@@ -722,6 +757,7 @@ bool StreakBuilder::refine_once(std::vector<char>& changed) {
 std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
                                                                 double long_edge) const {
   std::vector<Insert> along;
+  const LengthLimit long_limit(long_edge);
   const bool closed = seed_.closed();
   const std::vector<Particle>& p = rows_[r].p;
   const std::size_t n = p.size();
@@ -731,7 +767,7 @@ std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
     const Particle& b = p[(i + 1) % n];
     if (!a.alive() || !b.alive()) continue;
     const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
-    if (sb - a.s <= min_ds_ || (a.x - b.x).norm() <= long_edge) continue;
+    if (sb - a.s <= min_ds_ || long_limit.not_longer(a.x - b.x)) continue;
     Particle q;
     q.s = 0.5 * (a.s + sb);  // < 1: a closed row starts at s = 0, which is never removed
     if (o_.insertion == ParticleInsertion::interpolate) {
@@ -752,11 +788,12 @@ std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
 }
 
 // The row to insert between rows r and r + 1 when they are more than `long_edge` apart.
-std::optional<Row> StreakBuilder::row_between(std::size_t r,
-                                                             double long_edge) const {
+std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, double& gap) const {
   const Row& a = rows_[r];
   const Row& b = rows_[r + 1];
-  if (b.tau - a.tau <= min_dtau_ || row_distance(a, b) <= long_edge) return std::nullopt;
+  if (b.tau - a.tau <= min_dtau_) return std::nullopt;
+  gap = row_distance(a, b);
+  if (gap <= long_edge) return std::nullopt;
   Row row;
   row.tau = 0.5 * (a.tau + b.tau);
   std::size_t i = 0, k = 0;
@@ -795,9 +832,10 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r,
   return row;
 }
 
-void StreakBuilder::coarsen() {
+void StreakBuilder::coarsen(std::vector<double>& gap) {
   const double short_edge = o_.merge * o_.edge;
   const double long_edge = o_.split * o_.edge;
+  const LengthLimit short_limit(short_edge), long_limit(long_edge);
   // Along rows: a particle whose two edges are short goes (never a row's ends, and a row keeps
   // three particles), unless its neighbours would then be too far apart. Rows in parallel.
   std::vector<std::size_t> removed(rows_.size(), 0);
@@ -805,8 +843,8 @@ void StreakBuilder::coarsen() {
   for_each_row(rows_.size(), [&](std::size_t r) {
     std::vector<Particle>& p = rows_[r].p;
     const auto removable = [&](const Particle& a, const Particle& m, const Particle& b) {
-      return a.alive() && m.alive() && b.alive() && (a.x - m.x).norm() < short_edge &&
-             (m.x - b.x).norm() < short_edge && (a.x - b.x).norm() < long_edge;
+      return a.alive() && m.alive() && b.alive() && short_limit.shorter(a.x - m.x) &&
+             short_limit.shorter(m.x - b.x) && long_limit.shorter(a.x - b.x);
     };
     // Most rows lose nothing: find the first particle that goes before copying any.
     std::size_t first = 1;
@@ -829,7 +867,12 @@ void StreakBuilder::coarsen() {
     }
     p.swap(kept);
   });
-  for (const std::size_t n : removed) report_.s_removals += n;
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    if (removed[r] == 0) continue;
+    report_.s_removals += removed[r];
+    gap[r] = kUnmeasured;
+    if (r > 0) gap[r - 1] = kUnmeasured;
+  }
   for (std::vector<Particle>& row : gone)
     for (Particle& p : row) leave(p);
   // Across rows: a row between two close ones goes (never the oldest or the newest). Which row
@@ -837,8 +880,9 @@ void StreakBuilder::coarsen() {
   // neighbouring rows, which it mostly asks, are measured beforehand in parallel.
   if (rows_.size() > 2) {
     std::vector<double> next_distance(rows_.size() - 1);  // [r]: rows r and r + 1
-    for_each_row(next_distance.size(),
-                 [&](std::size_t r) { next_distance[r] = row_distance(rows_[r], rows_[r + 1]); });
+    for_each_row(next_distance.size(), [&](std::size_t r) {
+      next_distance[r] = gap[r] != kUnmeasured ? gap[r] : row_distance(rows_[r], rows_[r + 1]);
+    });
     std::vector<Row> kept;
     kept.reserve(rows_.size());
     kept.push_back(std::move(rows_[0]));
@@ -870,11 +914,12 @@ void StreakBuilder::adapt() {
   if (!o_.adaptive) return;
   const auto t0 = Clock::now();
   std::vector<char> changed(rows_.size(), 1);  // the first pass looks at every row
+  std::vector<double> gap(rows_.size(), kUnmeasured);
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
-    if (!refine_once(changed)) break;
+    if (!refine_once(changed, gap)) break;
     if (particle_count() > o_.max_vertices) break;
   }
-  coarsen();
+  coarsen(gap);
   report_.refine_seconds += seconds_since(t0);
 }
 
