@@ -20,11 +20,56 @@
 #include <tbb/parallel_reduce.h>
 
 #include "orthofront/error.h"
+#include "orthofront/field/huge_pages.h"
 
 namespace orthofront {
 namespace {
 
 constexpr double kDegrees = 180.0 / std::numbers::pi;
+
+/// Leaves elements default-initialized (trivial ones untouched): the buffers of a mesh of
+/// millions of faces are then first touched, and their pages faulted in, by the parallel loops
+/// that fill them, not zeroed by one thread beforehand (which kept the measurement from scaling).
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  using value_type = T;
+  UninitializedAllocator() = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) {
+      ::new (static_cast<void*>(p)) U;
+    } else {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  }
+};
+template <class T>
+using Buffer = std::vector<T, UninitializedAllocator<T>>;
+
+/// n elements, unwritten, on huge pages where the system gives them.
+template <class T>
+Buffer<T> untouched(std::size_t n) {
+  Buffer<T> b;
+  b.reserve(n);
+  advise_huge_pages(b.data(), n * sizeof(T));
+  b.resize(n);
+  return b;
+}
+
+/// body(i) for i in [0, n), in parallel blocks.
+template <class F>
+void for_each_index(std::size_t n, const F& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i < range.end(); ++i) body(i);
+                    });
+}
 
 /// Open-addressing hash map from 64-bit keys to 32-bit values (grid cells of the T-junction
 /// search). Sized once from an upper bound on the number of keys, so it never rehashes.
@@ -75,10 +120,10 @@ class FlatMap {
 
 /// One undirected edge and the faces using it.
 struct Edge {
-  std::int32_t a = 0, b = 0;  ///< a < b
-  std::int32_t f0 = -1, f1 = -1;
-  std::uint32_t count = 0;
-  bool inconsistent = false;  ///< f1 traverses it in the same direction as f0
+  std::int32_t a, b;  ///< a < b
+  std::int32_t f0, f1;  ///< f1 = -1 when count < 2
+  std::uint32_t count;
+  bool inconsistent;  ///< f1 traverses it in the same direction as f0
 };
 
 /// Undirected edges with the faces using them, by smaller vertex index, then larger. Each face
@@ -87,38 +132,37 @@ struct Edge {
 /// keyed on the smaller index act as a perfect hash of the sorted pair and keep memory access
 /// local for meshes stored front by front. Buckets are counted, filled and sorted in parallel; the
 /// order within a bucket is total, so the edges do not depend on the schedule.
-std::vector<Edge> build_edges(const Mesh& mesh) {
+Buffer<Edge> build_edges(const Mesh& mesh) {
   struct Use {
     std::int32_t other, face;
     bool forward;  ///< the face traverses smaller -> other
   };
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
-  const auto each = [](std::size_t n, const auto& body) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t i = range.begin(); i < range.end(); ++i) body(i);
-                      });
+  const auto& each = [](std::size_t n, const auto& body) { for_each_index(n, body); };
+  Buffer<std::uint32_t> fill = untouched<std::uint32_t>(nv + 1);
+  const auto bump = [&](std::size_t v) {
+    return std::atomic_ref<std::uint32_t>(fill[v]).fetch_add(1, std::memory_order_relaxed);
   };
-  std::vector<std::atomic<std::uint32_t>> fill(nv + 1);
-  each(nv + 1, [&](std::size_t v) { fill[v].store(0, std::memory_order_relaxed); });
+  each(nv + 1, [&](std::size_t v) { fill[v] = 0; });
   each(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
-      if (u != w) fill[static_cast<std::size_t>(std::min(u, w)) + 1].fetch_add(1, std::memory_order_relaxed);
+      if (u != w) bump(static_cast<std::size_t>(std::min(u, w)) + 1);
     }
   });
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] = start[v] + fill[v + 1].load(std::memory_order_relaxed);
-  each(nv, [&](std::size_t v) { fill[v].store(start[v], std::memory_order_relaxed); });
-  std::vector<Use> uses(start[nv]);
+  Buffer<std::uint32_t> start = untouched<std::uint32_t>(nv + 1);
+  start[0] = 0;
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] = start[v] + fill[v + 1];
+  each(nv, [&](std::size_t v) { fill[v] = start[v]; });
+  Buffer<Use> uses = untouched<Use>(start[nv]);
   each(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
       if (u == w) continue;
-      const std::uint32_t slot = fill[static_cast<std::size_t>(std::min(u, w))].fetch_add(1, std::memory_order_relaxed);
+      const std::uint32_t slot = bump(static_cast<std::size_t>(std::min(u, w)));
       uses[slot] = Use{std::max(u, w), static_cast<std::int32_t>(f), u < w};
     }
   });
@@ -128,7 +172,8 @@ std::vector<Edge> build_edges(const Mesh& mesh) {
     if (x.other != y.other) return x.other < y.other;
     return x.face != y.face ? x.face < y.face : x.forward < y.forward;
   };
-  std::vector<std::uint32_t> first_edge(nv + 1, 0);
+  Buffer<std::uint32_t> first_edge = untouched<std::uint32_t>(nv + 1);
+  first_edge[0] = 0;
   each(nv, [&](std::size_t a) {
     const auto first = uses.begin() + start[a], last = uses.begin() + start[a + 1];
     if (last - first > 32) {
@@ -146,7 +191,7 @@ std::vector<Edge> build_edges(const Mesh& mesh) {
     first_edge[a + 1] = distinct;
   });
   for (std::size_t a = 0; a < nv; ++a) first_edge[a + 1] += first_edge[a];
-  std::vector<Edge> edges(first_edge[nv]);
+  Buffer<Edge> edges = untouched<Edge>(first_edge[nv]);
   each(nv, [&](std::size_t a) {
     const auto last = uses.begin() + start[a + 1];
     std::size_t e = first_edge[a];
@@ -336,7 +381,7 @@ bool has_repeated_index(const Face& face) {
 /// Boundary vertices lying strictly inside a boundary edge they are not an endpoint of. Edges go
 /// into a uniform grid (cell ~ mean boundary edge length) and each vertex tests only its cell, so
 /// the cost grows with the boundary size, not its square.
-std::size_t count_t_junctions(const Mesh& mesh, const std::vector<Edge>& edges,
+std::size_t count_t_junctions(const Mesh& mesh, const Buffer<Edge>& edges,
                               const std::vector<std::uint32_t>& boundary) {
   if (boundary.empty()) return 0;
   const auto& p = mesh.positions;
@@ -445,25 +490,28 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   r.edge_ratio = make_histogram(-1, 1, options.edge_bins);
   r.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
 
-  for (const Face& face : mesh.faces) (face.is_quad() ? r.quads : r.triangles) += 1;
+  r.quads = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.faces.size(), 65536), std::size_t{0},
+      [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
+        for (std::size_t f = range.begin(); f < range.end(); ++f) n += mesh.faces[f].is_quad();
+        return n;
+      },
+      [](std::size_t a, std::size_t b) { return a + b; });
+  r.triangles = mesh.faces.size() - r.quads;
   r.quad_share = r.faces ? static_cast<double>(r.quads) / static_cast<double>(r.faces) : 0.0;
 
-  const std::vector<Edge> edges = build_edges(mesh);
+  const Buffer<Edge> edges = build_edges(mesh);
 
   // Degenerate faces and unit normals (zero where degenerate, which keeps them out of folds).
   // Per-face work runs in parallel into per-face slots; everything summed is summed serially in
   // face order afterwards, so the figures do not depend on the number of threads.
   const std::size_t nf = mesh.faces.size();
-  std::vector<Vec3> normals(nf, Vec3::Zero());
-  std::vector<char> degenerate(nf, 0);
-  const auto per_face = [nf](const auto& body) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1024),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t f = range.begin(); f < range.end(); ++f) body(f);
-                      });
-  };
-  per_face([&](std::size_t f) {
+  Buffer<Vec3> normals = untouched<Vec3>(nf);
+  Buffer<char> degenerate = untouched<char>(nf);
+  for_each_index(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
+    normals[f].setZero();
+    degenerate[f] = 0;
     if (has_repeated_index(face)) {
       degenerate[f] = 1;
       return;
@@ -483,8 +531,15 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
 
   // Edge counts in parallel (sums of counts: the same in any order); the boundary in order.
   std::vector<std::uint32_t> boundary;
-  for (std::size_t e = 0; e < edges.size(); ++e)
-    if (edges[e].count == 1) boundary.push_back(static_cast<std::uint32_t>(e));
+  {
+    constexpr std::size_t kBlock = 65536;  // found block by block in parallel, joined in order
+    std::vector<std::vector<std::uint32_t>> found((edges.size() + kBlock - 1) / kBlock);
+    tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t b) {
+      for (std::size_t e = b * kBlock; e < std::min(edges.size(), (b + 1) * kBlock); ++e)
+        if (edges[e].count == 1) found[b].push_back(static_cast<std::uint32_t>(e));
+    });
+    for (const auto& f : found) boundary.insert(boundary.end(), f.begin(), f.end());
+  }
   using EdgeCounts = std::array<std::size_t, 3>;  // non-manifold, inconsistent, folds
   const EdgeCounts counted = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, edges.size(), 16384), EdgeCounts{0, 0, 0},
@@ -530,7 +585,10 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
     out.quad_angles = make_histogram(0, 180, options.angle_bins);
     out.edge_ratio = make_histogram(-1, 1, options.edge_bins);
     out.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
-    for (std::size_t f = b * kShapeBlock; f < std::min(nf, (b + 1) * kShapeBlock); ++f) {
+    const std::size_t end = std::min(nf, (b + 1) * kShapeBlock);
+    out.angle_dev.reserve(4 * (end - b * kShapeBlock));  // no regrowth: at most 4 a face
+    out.spread.reserve(4 * (end - b * kShapeBlock));
+    for (std::size_t f = b * kShapeBlock; f < end; ++f) {
       const Face& face = mesh.faces[f];
       const int n = face.size;
       std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
