@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -520,13 +521,25 @@ bool StreakBuilder::land() {
     x_.resize(n);
     from_.assign(n, t_);
     status_.resize(n);
+    // Only the rows that have fresh particles; a few thousand particles are not worth waking
+    // the threads for (this runs every interval, between the moves).
+    std::vector<std::size_t> with;
+    for (std::size_t r = 0; r < nr; ++r)
+      if (!fresh_at[r].empty()) with.push_back(r);
     const auto rows_with_fresh = [&](const auto& f) {
-      for_each_row(nr, [&](std::size_t r) {
+      const auto row = [&](std::size_t r) {
         for (std::size_t j = 0; j < fresh_at[r].size(); ++j) f(r, rows_[r].p[fresh_at[r][j]], first[r] + j);
-      });
+      };
+      if (n < 32768) {
+        for (const std::size_t r : with) row(r);
+      } else {
+        for_each_row(with.size(), [&](std::size_t w) { row(with[w]); });
+      }
     };
     rows_with_fresh([&](std::size_t, const Particle& p, std::size_t k) { x_[k] = p.x; });
+    const auto call = Clock::now();
     report_.evaluations += map_.advect_all(x_, from_, flight_to_, status_);
+    report_.catch_up_call_seconds += seconds_since(call);
     std::vector<std::uint32_t> slots(n);
     std::vector<std::array<double, 3>> at(n);
     rows_with_fresh([&](std::size_t r, Particle& p, std::size_t k) {
@@ -959,12 +972,10 @@ void StreakBuilder::emit(int index) {
     first[r + 1] += first[r];
   }
   const std::size_t nv = first[nr];
-  mesh.positions.resize(nv);
-  mesh.s.resize(nv);
-  mesh.release_time.resize(nv);
-  mesh.age.resize(nv);
-  mesh.speed.resize(nv);
-  mesh.particle_id.resize(nv);
+  // Side by side: a frame larger than the last one fills its new elements with zeros.
+  tbb::parallel_invoke([&] { mesh.positions.resize(nv); }, [&] { mesh.s.resize(nv); },
+                       [&] { mesh.release_time.resize(nv); }, [&] { mesh.age.resize(nv); },
+                       [&] { mesh.speed.resize(nv); }, [&] { mesh.particle_id.resize(nv); });
   std::vector<std::vector<std::int32_t>> vertex(nr);
   for_each_row(nr, [&](std::size_t r) {
     const Row& row = rows_[r];
@@ -1140,7 +1151,8 @@ StreakReport StreakBuilder::run() {
     report_.complete = false;
     report_.message = why;
   };
-  // With overlap, the particles move on to the next break while this one is refined.
+  // With overlap, the particles move on to the next break while this one is refined (a row
+  // released here goes with them: it needs no catch-up).
   const bool overlap = resident_ && o_.overlap_advection;
   for (std::size_t i = 0; i < breaks.size(); ++i) {
     const double b = breaks[i];
@@ -1149,11 +1161,11 @@ StreakReport StreakBuilder::run() {
     } else if (b > t_) {
       if (!advance(b)) break;
     }
-    if (overlap && i + 1 < breaks.size() && !launch(breaks[i + 1])) break;
     if (next_release < releases.size() && releases[next_release] == b) {
       release(b);
       ++next_release;
     }
+    if (overlap && i + 1 < breaks.size() && !launch(breaks[i + 1])) break;
     adapt();
     if (!report_.complete) break;  // a read error while inserting
     report_.max_particles = std::max(report_.max_particles, particle_count());

@@ -127,6 +127,7 @@ struct StreakReport {
   double total_seconds = 0, advect_seconds = 0, refine_seconds = 0;
   std::size_t catch_up_calls = 0, catch_up_particles = 0;
   double catch_up_seconds = 0;      ///< of advect_seconds
+  double catch_up_call_seconds = 0; ///< of catch_up_seconds: in the bulk calls
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
   /// frame_finish_seconds, summed over frames.
