@@ -116,6 +116,7 @@ class StreakBuilder {
   ~StreakBuilder() {
     if (finisher_.joinable()) finisher_.join();
     if (flight_.joinable()) flight_.join();
+    if (catch_up_.joinable()) catch_up_.join();
   }
   StreakBuilder(const StreakBuilder&) = delete;
   StreakBuilder& operator=(const StreakBuilder&) = delete;
@@ -141,15 +142,19 @@ class StreakBuilder {
   std::size_t take_resident(std::vector<std::array<std::size_t, 2>>& stopped,
                             std::vector<std::vector<std::uint32_t>>* fresh_at = nullptr);
   // Overlapped advection: launch() sends the resident set on to t_to from a thread of its own
-  // while the driver refines the rows at t_; particles entering meanwhile are marked fresh and
-  // parks wait. land() takes the move's positions, moves the fresh particles to t_to in one
-  // catch-up call, places them, and makes t_to the current time. wait_flight() only waits.
+  // while the driver refines the rows at t_; particles entering meanwhile are marked fresh (with
+  // their positions) and parks wait. start_catch_up() moves the fresh particles to t_to in one
+  // call from another thread (after the move: the calls take turns), beside coarsening and the
+  // frame. land() takes the positions of both, places the fresh particles still in the rows, and
+  // makes t_to the current time. wait_flight() only waits for both.
   bool launch(double t_to);
+  void start_catch_up();
   bool land();
   void wait_flight() {
     if (flight_.joinable()) flight_.join();
+    if (catch_up_.joinable()) catch_up_.join();
   }
-  bool fresh(const Particle& p) const { return p.slot < fresh_.size() && fresh_[p.slot]; }
+  bool fresh(const Particle& p) const { return p.slot < fresh_.size() && fresh_[p.slot] != 0; }
   // Counts the moves of one interval of advance() or land().
   void count_interval(std::size_t moved, double t_to,
                       const std::vector<std::array<std::size_t, 2>>& stopped);
@@ -225,8 +230,17 @@ class StreakBuilder {
   double flight_to_ = 0;
   std::size_t flight_evaluations_ = 0;
   std::exception_ptr flight_error_;
-  std::vector<char> fresh_;                  // [slot]: entered while a move was in flight
-  std::vector<std::uint32_t> fresh_slots_;   // those slots
+  std::vector<std::uint32_t> fresh_;         // [slot]: 1 + its index in fresh_slots_, 0: not fresh
+  std::vector<std::uint32_t> fresh_slots_;   // slots entered while a move was in flight
+  std::vector<Vec3> fresh_x_;                // their positions then (at t_)
+  std::thread catch_up_;
+  bool catching_up_ = false;                 // start_catch_up() ran for this move
+  std::vector<Vec3> catch_x_;                // the catch-up call's particles, as fresh_slots_
+  std::vector<double> catch_from_;
+  std::vector<ParticleStatus> catch_status_;
+  std::size_t catch_up_evaluations_ = 0;
+  double catch_up_call_seconds_ = 0;
+  std::exception_ptr catch_up_error_;
   std::vector<std::uint32_t> flight_parks_;  // left while in flight: parked when it lands
   std::vector<std::uint32_t> flight_freed_;  // given back while in flight: free once it lands
   std::vector<Vec3> x_;
@@ -448,10 +462,12 @@ void StreakBuilder::enter(Particle& p) {
     p.slot = free_slots_.back();
     free_slots_.pop_back();
   }
-  if (in_flight_) {  // placed when the move lands, at the position it has then
+  if (in_flight_) {  // catches up, and is placed when the move lands
+    if (catching_up_) throw Error("streak surface: a particle entered after its catch-up started");
     if (p.slot >= fresh_.size()) fresh_.resize(std::size_t{p.slot} + 1, 0);
-    fresh_[p.slot] = 1;
     fresh_slots_.push_back(p.slot);
+    fresh_x_.push_back(p.x);
+    fresh_[p.slot] = static_cast<std::uint32_t>(fresh_slots_.size());
     return;
   }
   const std::array<double, 3> x{p.x.x(), p.x.y(), p.x.z()};
@@ -498,12 +514,45 @@ bool StreakBuilder::launch(double t_to) {
   return true;
 }
 
+void StreakBuilder::start_catch_up() {
+  catching_up_ = true;
+  catch_up_evaluations_ = 0;
+  catch_up_call_seconds_ = 0;
+  catch_up_error_ = nullptr;
+  catch_x_.swap(fresh_x_);
+  fresh_x_.clear();
+  const std::size_t n = catch_x_.size();
+  if (n == 0) return;
+  catch_from_.assign(n, t_);
+  catch_status_.assign(n, ParticleStatus::moving);
+  ++report_.catch_up_calls;
+  report_.catch_up_particles += n;
+  // Each moves as it would have in the set (a call of particles with no step size yet: the same
+  // bits).
+  catch_up_ = std::thread([this, t_to = flight_to_] {
+    const auto call = Clock::now();
+    try {
+      catch_up_evaluations_ = map_.advect_all(catch_x_, catch_from_, t_to, catch_status_);
+    } catch (...) {
+      catch_up_error_ = std::current_exception();
+    }
+    catch_up_call_seconds_ = seconds_since(call);
+  });
+}
+
 bool StreakBuilder::land() {
   const auto t0 = Clock::now();
+  if (!catching_up_) start_catch_up();
+  if (flight_.joinable()) flight_.join();
+  const auto c0 = Clock::now();
   wait_flight();
   in_flight_ = false;
+  catching_up_ = false;
   if (flight_error_) std::rethrow_exception(std::exchange(flight_error_, nullptr));
-  report_.evaluations += flight_evaluations_;
+  if (catch_up_error_) std::rethrow_exception(std::exchange(catch_up_error_, nullptr));
+  report_.evaluations += flight_evaluations_ + catch_up_evaluations_;
+  report_.catch_up_call_seconds += catch_up_call_seconds_;
+  double catch_up_seconds = seconds_since(c0);
   const std::size_t nr = rows_.size();
   std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
   std::vector<std::vector<std::uint32_t>> fresh_at(nr);  // [row]: its fresh particles
@@ -511,50 +560,41 @@ bool StreakBuilder::land() {
   if (!flight_parks_.empty()) resident_->park(flight_parks_);
   flight_parks_.clear();
 
-  // Catch-up: the fresh particles (at t_), row after row, to flight_to_ in one call; each moves
-  // as it would have in the set (a call of particles with no step size yet: the same bits).
-  const auto c0 = Clock::now();
+  // The fresh particles still in the rows take their catch-up positions; those still moving go
+  // into the set, the slots of those that stopped are free.
+  const auto c1 = Clock::now();
   std::vector<std::size_t> first(nr + 1, 0);
   for (std::size_t r = 0; r < nr; ++r) first[r + 1] = first[r] + fresh_at[r].size();
   const std::size_t n = first[nr];
   if (n > 0) {
-    x_.resize(n);
-    from_.assign(n, t_);
-    status_.resize(n);
-    // Only the rows that have fresh particles; a few thousand particles are not worth waking
-    // the threads for (this runs every interval, between the moves).
-    std::vector<std::size_t> with;
+    std::vector<std::size_t> with;  // only the rows with fresh particles
     for (std::size_t r = 0; r < nr; ++r)
       if (!fresh_at[r].empty()) with.push_back(r);
-    const auto rows_with_fresh = [&](const auto& f) {
-      const auto row = [&](std::size_t r) {
-        for (std::size_t j = 0; j < fresh_at[r].size(); ++j) f(r, rows_[r].p[fresh_at[r][j]], first[r] + j);
-      };
-      if (n < 32768) {
-        for (const std::size_t r : with) row(r);
-      } else {
-        for_each_row(with.size(), [&](std::size_t w) { row(with[w]); });
-      }
-    };
-    rows_with_fresh([&](std::size_t, const Particle& p, std::size_t k) { x_[k] = p.x; });
-    const auto call = Clock::now();
-    report_.evaluations += map_.advect_all(x_, from_, flight_to_, status_);
-    report_.catch_up_call_seconds += seconds_since(call);
     std::vector<std::uint32_t> slots(n);
     std::vector<std::array<double, 3>> at(n);
-    rows_with_fresh([&](std::size_t r, Particle& p, std::size_t k) {
-      p.x = x_[k];
-      p.status = status_[k];
-      slots[k] = p.slot;
-      at[k] = {p.x.x(), p.x.y(), p.x.z()};
-      if (p.alive()) return;
-      count_stop(p.status, stopped[r]);
-      p.slot = kNoSlot;
-    });
-    // Those still moving go into the set; the slots of those that stopped are free.
+    std::vector<char> moving(n);
+    const auto row = [&](std::size_t r) {
+      for (std::size_t j = 0; j < fresh_at[r].size(); ++j) {
+        Particle& p = rows_[r].p[fresh_at[r][j]];
+        const std::size_t k = first[r] + j, c = fresh_[p.slot] - 1;
+        p.x = catch_x_[c];
+        p.status = catch_status_[c];
+        slots[k] = p.slot;
+        at[k] = {p.x.x(), p.x.y(), p.x.z()};
+        moving[k] = p.alive();
+        if (p.alive()) continue;
+        count_stop(p.status, stopped[r]);
+        p.slot = kNoSlot;
+      }
+    };
+    if (n < 32768) {  // a few thousand particles are not worth waking the threads for
+      for (const std::size_t r : with) row(r);
+    } else {
+      for_each_row(with.size(), [&](std::size_t w) { row(with[w]); });
+    }
     std::size_t placed = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      if (status_[k] != ParticleStatus::moving) {
+      if (!moving[k]) {
         free_slots_.push_back(slots[k]);
         continue;
       }
@@ -563,14 +603,13 @@ bool StreakBuilder::land() {
     }
     resident_->place(std::span(slots.data(), placed), std::span(at.data(), placed));
     moved += n;
-    ++report_.catch_up_calls;
-    report_.catch_up_particles += n;
-    report_.catch_up_seconds += seconds_since(c0);
   }
   for (const std::uint32_t slot : fresh_slots_) fresh_[slot] = 0;
   fresh_slots_.clear();
   free_slots_.insert(free_slots_.end(), flight_freed_.begin(), flight_freed_.end());
   flight_freed_.clear();
+  catch_up_seconds += seconds_since(c1);
+  report_.catch_up_seconds += catch_up_seconds;
   count_interval(moved, flight_to_, stopped);
   report_.advect_seconds += seconds_since(t0);
   if (access_.read_error) {
@@ -932,6 +971,7 @@ void StreakBuilder::adapt() {
     if (!refine_once(changed, gap)) break;
     if (particle_count() > o_.max_vertices) break;
   }
+  if (in_flight_) start_catch_up();  // the inserted particles move on beside coarsening
   coarsen(gap);
   report_.refine_seconds += seconds_since(t0);
 }
