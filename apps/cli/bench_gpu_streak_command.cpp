@@ -283,8 +283,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                                                              : "  advection (waits for moves, catch-up)",
                 r.advect_seconds);
     if (r.catch_up_calls > 0)
-      std::printf("%-44s %10.3f  (%zu calls, %zu particles; %.3f s in the calls)\n", "    catch-up",
-                  r.catch_up_seconds, r.catch_up_calls, r.catch_up_particles, r.catch_up_call_seconds);
+      std::printf("%-44s %10.3f  (%zu calls, %zu particles; %.3f s on their thread)\n",
+                  "    waiting for the catch-up, placing it", r.catch_up_seconds, r.catch_up_calls,
+                  r.catch_up_particles, r.catch_up_call_seconds);
     std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
     std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
     std::printf("%-44s %10.3f\n", a->frames_in_line ? "  frames (finished in line)"

@@ -63,8 +63,9 @@ struct StreakOptions {
   bool resident_particles = true;
   /// With resident particles: the particles move on to the next break on the backend (from a
   /// thread of its own) while the rows of this break are refined and its frame is built; the
-  /// particles placed meanwhile catch up in one call when the move lands. false: in turn, each
-  /// waiting for the other (the baseline of bench-gpu-streak --in-turn). The same frames either way.
+  /// particles inserted meanwhile catch up in one call, beside coarsening and the frame. false:
+  /// in turn, each waiting for the other (the baseline of bench-gpu-streak --in-turn). The same
+  /// frames either way.
   bool overlap_advection = true;
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
   int max_refinement_rounds = 12;   ///< split passes after each time step
@@ -122,12 +123,12 @@ struct StreakReport {
   CacheStatistics cache;            ///< streamed only
   std::size_t slow_evaluations = 0; ///< streamed: evaluations outside the pinned band
   /// advect_seconds: the driver's time on advection. With overlap_advection it waits for a move
-  /// to land, takes its positions and moves the particles placed meanwhile (catch-up calls); the
-  /// move itself runs beside refinement and frames.
+  /// and its catch-up call to land and takes their positions (catch_up_seconds: the catch-up's
+  /// part); both run beside refinement, coarsening and frames.
   double total_seconds = 0, advect_seconds = 0, refine_seconds = 0;
   std::size_t catch_up_calls = 0, catch_up_particles = 0;
   double catch_up_seconds = 0;      ///< of advect_seconds
-  double catch_up_call_seconds = 0; ///< of catch_up_seconds: in the bulk calls
+  double catch_up_call_seconds = 0; ///< the catch-up calls on their thread (waiting for the move included)
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
   /// frame_finish_seconds, summed over frames.
