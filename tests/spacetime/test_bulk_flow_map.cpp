@@ -61,21 +61,12 @@ TEST_CASE("bulk advection: a slab samples StreamedField's values bit for bit",
   CHECK(compared == 4 * 300);  // 5 steps: 4 slabs
 }
 
-TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines; a small "
-          "budget, particles sent up and down each interval instead of kept by the backend, and "
-          "moves in turn with refinement instead of beside it give the same frames bit for bit",
-          "[spacetime][advect][streak]") {
-  const auto flow = make_unsteady_field("double-gyre");
-  const GridGeometry grid = uniform_grid(flow->domain(), 2, 201);
-  const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
-  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
-  struct Run {
-    std::size_t budget;
-    bool resident;
-    bool overlap = true;
-  };
-  for (const auto insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
-  INFO(to_string(insertion) << " insertion");
+namespace {
+
+// The double gyre's streak surface of these tests: a row every 0.5 from t = 0 to 3 off a short
+// seed line, frames at 1.5, 3 and 4.5, moved by the CPU backend.
+const SeedCurve kGyreSeed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+StreakOptions gyre_options(ParticleInsertion insertion) {
   StreakOptions o;
   o.release_begin = 0;
   o.release_end = 3;
@@ -83,8 +74,29 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
   o.edge = 0.03;
   o.release_step = 0.5;
   o.insertion = insertion;
-  o.merge = 0.75;  // particles and rows removed where the flow compresses the surface
   o.device = advect::Device::cpu;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines; a small "
+          "budget, particles sent up and down each interval instead of kept by the backend, and "
+          "moves in turn with refinement instead of beside it give the same frames bit for bit",
+          "[spacetime][advect][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const GridGeometry grid = uniform_grid(flow->domain(), 2, 201);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
+  const SeedCurve& seed = kGyreSeed;
+  struct Run {
+    std::size_t budget;
+    bool resident;
+    bool overlap = true;
+  };
+  for (const auto insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
+  INFO(to_string(insertion) << " insertion");
+  StreakOptions o = gyre_options(insertion);
+  o.merge = 0.75;  // particles and rows removed where the flow compresses the surface
   std::vector<std::vector<StreakFrame>> runs;
   for (const Run run : {Run{std::size_t{1} << 30, true}, Run{std::size_t{8} << 20, true},
                         Run{std::size_t{1} << 30, false}, Run{std::size_t{1} << 30, true, false},
@@ -141,18 +153,10 @@ TEST_CASE("bulk advection: an overlapped streak surface stopped while its partic
   const auto flow = make_unsteady_field("double-gyre");
   const GridGeometry grid = uniform_grid(flow->domain(), 2, 101);
   const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
-  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
-  StreakOptions o;
-  o.release_begin = 0;
-  o.release_end = 3;
-  o.frames = {1.5, 3, 4.5};
-  o.edge = 0.03;
-  o.release_step = 0.5;
-  o.insertion = ParticleInsertion::interpolate;
-  o.device = advect::Device::cpu;
+  const StreakOptions o = gyre_options(ParticleInsertion::interpolate);
   const auto run = [&](const StreakOptions& options, const StreakFrameSink& sink) {
     BrickCache cache(series, CacheOptions{});
-    return build_streak_surface(cache, seed, options, sink);
+    return build_streak_surface(cache, kGyreSeed, options, sink);
   };
   std::vector<StreakFrame> whole;
   const StreakReport full = run(o, [&](const StreakFrame& f) { whole.push_back(f); });

@@ -131,6 +131,13 @@ class StreakBuilder {
   // gives its slot back (no-ops without a resident set).
   void enter(Particle& p);
   void leave(Particle& p);
+  // Stops the run at t_ for `error` (a read error; empty: none). Returns whether there was none.
+  bool no_error(const std::string& error) {
+    if (error.empty()) return true;
+    report_.complete = false;
+    report_.message = "stopped at t = " + number(t_) + ": " + error;
+    return false;
+  }
   bool advance(double t_to);
   // advance()'s move of the rows' moving particles: through the resident set, or all of them in
   // one advect_all call. Returns how many moved.
@@ -330,26 +337,13 @@ void StreakBuilder::release(double tau) {
 
 bool StreakBuilder::advance(double t_to) {
   const auto t0 = Clock::now();
-  if (access_.prepare) {
-    if (const std::string e = access_.prepare(t_, t_to); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
-    }
-  }
+  if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return false;
   const std::size_t nr = rows_.size();
   std::vector<std::array<std::size_t, 2>> stopped(nr, {0, 0});  // [r]: left the domain, no data
   const std::size_t n = resident_ ? move_resident(t_to, stopped) : move_all(t_to, stopped);
   count_interval(n, t_to, stopped);
   report_.advect_seconds += seconds_since(t0);
-  if (access_.read_error) {
-    if (const std::string e = access_.read_error(); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
-    }
-  }
-  return true;
+  return !access_.read_error || no_error(access_.read_error());
 }
 
 void StreakBuilder::count_interval(std::size_t moved, double t_to,
@@ -493,13 +487,7 @@ void StreakBuilder::leave(Particle& p) {
 }
 
 bool StreakBuilder::launch(double t_to) {
-  if (access_.prepare) {
-    if (const std::string e = access_.prepare(t_, t_to); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
-    }
-  }
+  if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return false;
   in_flight_ = true;
   flight_to_ = t_to;
   flight_evaluations_ = 0;
@@ -612,14 +600,7 @@ bool StreakBuilder::land() {
   report_.catch_up_seconds += catch_up_seconds;
   count_interval(moved, flight_to_, stopped);
   report_.advect_seconds += seconds_since(t0);
-  if (access_.read_error) {
-    if (const std::string e = access_.read_error(); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
-    }
-  }
-  return true;
+  return !access_.read_error || no_error(access_.read_error());
 }
 
 // Largest distance between the particles of two rows that share a seed parameter.
@@ -676,11 +657,7 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
   std::vector<ParticleStatus> bst;
   std::vector<std::size_t> which;
   for (const double b : stops) {
-    if (const std::string e = access_.prepare(c, b); !e.empty()) {
-      report_.complete = false;
-      report_.message = "stopped at t = " + number(t_) + ": " + e;
-      return false;
-    }
+    if (!no_error(access_.prepare(c, b))) return false;
     while (started < order.size() && from[order[started]] < b) ++started;
     bx.clear(), bfrom.clear(), bst.clear(), which.clear();
     for (std::size_t k = 0; k < started; ++k) {
@@ -698,12 +675,7 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
     }
     c = b;
   }
-  if (const std::string e = access_.prepare(t_, t_); !e.empty()) {
-    report_.complete = false;
-    report_.message = "stopped at t = " + number(t_) + ": " + e;
-    return false;
-  }
-  return true;
+  return no_error(access_.prepare(t_, t_));
 }
 
 bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>& gap) {
