@@ -27,8 +27,8 @@ inline void advise_huge_pages(const void* data, std::size_t bytes) {
 }
 
 /// Reserves `count` elements of `values` on huge pages (then resize() touches them).
-template <class T>
-void reserve_huge_pages(std::vector<T>& values, std::size_t count) {
+template <class T, class Allocator>
+void reserve_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
   if (values.capacity() >= count) return;
   values.reserve(count);
   advise_huge_pages(values.data(), count * sizeof(T));

@@ -56,8 +56,7 @@ using Buffer = std::vector<T, UninitializedAllocator<T>>;
 template <class T>
 Buffer<T> untouched(std::size_t n) {
   Buffer<T> b;
-  b.reserve(n);
-  advise_huge_pages(b.data(), n * sizeof(T));
+  reserve_huge_pages(b, n);
   b.resize(n);
   return b;
 }
@@ -139,13 +138,12 @@ Buffer<Edge> build_edges(const Mesh& mesh) {
   };
   const std::size_t nv = mesh.positions.size();
   const std::size_t nf = mesh.faces.size();
-  const auto& each = [](std::size_t n, const auto& body) { for_each_index(n, body); };
   Buffer<std::uint32_t> fill = untouched<std::uint32_t>(nv + 1);
   const auto bump = [&](std::size_t v) {
     return std::atomic_ref<std::uint32_t>(fill[v]).fetch_add(1, std::memory_order_relaxed);
   };
-  each(nv + 1, [&](std::size_t v) { fill[v] = 0; });
-  each(nf, [&](std::size_t f) {
+  for_each_index(nv + 1, [&](std::size_t v) { fill[v] = 0; });
+  for_each_index(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
@@ -155,9 +153,9 @@ Buffer<Edge> build_edges(const Mesh& mesh) {
   Buffer<std::uint32_t> start = untouched<std::uint32_t>(nv + 1);
   start[0] = 0;
   for (std::size_t v = 0; v < nv; ++v) start[v + 1] = start[v] + fill[v + 1];
-  each(nv, [&](std::size_t v) { fill[v] = start[v]; });
+  for_each_index(nv, [&](std::size_t v) { fill[v] = start[v]; });
   Buffer<Use> uses = untouched<Use>(start[nv]);
-  each(nf, [&](std::size_t f) {
+  for_each_index(nf, [&](std::size_t f) {
     const Face& face = mesh.faces[f];
     for (int i = 0; i < face.size; ++i) {
       const std::int32_t u = face.v[i], w = face.v[(i + 1) % face.size];
@@ -174,7 +172,7 @@ Buffer<Edge> build_edges(const Mesh& mesh) {
   };
   Buffer<std::uint32_t> first_edge = untouched<std::uint32_t>(nv + 1);
   first_edge[0] = 0;
-  each(nv, [&](std::size_t a) {
+  for_each_index(nv, [&](std::size_t a) {
     const auto first = uses.begin() + start[a], last = uses.begin() + start[a + 1];
     if (last - first > 32) {
       std::sort(first, last, before);
@@ -192,7 +190,7 @@ Buffer<Edge> build_edges(const Mesh& mesh) {
   });
   for (std::size_t a = 0; a < nv; ++a) first_edge[a + 1] += first_edge[a];
   Buffer<Edge> edges = untouched<Edge>(first_edge[nv]);
-  each(nv, [&](std::size_t a) {
+  for_each_index(nv, [&](std::size_t a) {
     const auto last = uses.begin() + start[a + 1];
     std::size_t e = first_edge[a];
     for (auto it = uses.begin() + start[a]; it != last;) {

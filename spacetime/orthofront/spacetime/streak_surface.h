@@ -126,6 +126,8 @@ struct StreakReport {
   /// and its catch-up call to land and takes their positions (catch_up_seconds: the catch-up's
   /// part); both run beside refinement, coarsening and frames.
   double total_seconds = 0, advect_seconds = 0, refine_seconds = 0;
+  /// Overlapped: calls that moved the particles inserted during a move, and those particles
+  /// (coarsening may remove some of them before the move lands).
   std::size_t catch_up_calls = 0, catch_up_particles = 0;
   double catch_up_seconds = 0;      ///< of advect_seconds
   double catch_up_call_seconds = 0; ///< the catch-up calls on their thread (waiting for the move included)
