@@ -240,7 +240,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"advect", r.advect_seconds},
           {"catch_up", r.catch_up_seconds},
           {"catch_up_calls", r.catch_up_call_seconds},
+          {"take", r.take_seconds},
           {"refine", r.refine_seconds},
+          {"coarsen", r.coarsen_seconds},
           {"frames", r.frame_seconds},
           {"frames_finish", r.frame_finish_seconds},
           {"wait", r.wait_seconds},
@@ -286,8 +288,10 @@ void add_bench_gpu_streak_command(CLI::App& app) {
       std::printf("%-44s %10.3f  (%zu calls, %zu particles; %.3f s on their thread)\n",
                   "    waiting for the catch-up, placing it", r.catch_up_seconds, r.catch_up_calls,
                   r.catch_up_particles, r.catch_up_call_seconds);
+    std::printf("%-44s %10.3f\n", "    taking the positions into the rows", r.take_seconds);
     std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
     std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
+    std::printf("%-44s %10.3f\n", "    of which coarsening", r.coarsen_seconds);
     std::printf("%-44s %10.3f\n", a->frames_in_line ? "  frames (finished in line)"
                                                       : "  frames (vertices, faces; waits)",
                 r.frame_seconds);

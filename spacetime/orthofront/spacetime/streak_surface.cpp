@@ -411,6 +411,7 @@ std::size_t StreakBuilder::move_resident(double t_to, std::vector<std::array<std
 
 std::size_t StreakBuilder::take_resident(std::vector<std::array<std::size_t, 2>>& stopped,
                                          std::vector<std::vector<std::uint32_t>>* fresh_at) {
+  const auto t0 = Clock::now();
   const advect::ResidentParticles::View v = resident_->view();
   const std::size_t nr = rows_.size();
   std::vector<std::size_t> moved(nr, 0), unplaced(nr, 0);
@@ -445,6 +446,7 @@ std::size_t StreakBuilder::take_resident(std::vector<std::array<std::size_t, 2>>
     n += moved[r];
     free_slots_.insert(free_slots_.end(), freed[r].begin(), freed[r].end());
   }
+  report_.take_seconds += seconds_since(t0);
   return n;
 }
 
@@ -944,7 +946,9 @@ void StreakBuilder::adapt() {
     if (particle_count() > o_.max_vertices) break;
   }
   if (in_flight_) start_catch_up();  // the inserted particles move on beside coarsening
+  const auto c0 = Clock::now();
   coarsen(gap);
+  report_.coarsen_seconds += seconds_since(c0);
   report_.refine_seconds += seconds_since(t0);
 }
 

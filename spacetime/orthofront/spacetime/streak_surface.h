@@ -131,6 +131,8 @@ struct StreakReport {
   std::size_t catch_up_calls = 0, catch_up_particles = 0;
   double catch_up_seconds = 0;      ///< of advect_seconds
   double catch_up_call_seconds = 0; ///< the catch-up calls on their thread (waiting for the move included)
+  double take_seconds = 0;          ///< of advect_seconds: the set's positions taken into the rows
+  double coarsen_seconds = 0;       ///< of refine_seconds
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
   /// frame_finish_seconds, summed over frames.
