@@ -130,6 +130,8 @@ class StreakBuilder {
   // A new moving particle takes a slot of the resident set and goes there; one leaving the rows
   // gives its slot back (no-ops without a resident set).
   void enter(Particle& p);
+  // enter() of each in order, in parallel.
+  void enter(const std::vector<Particle*>& ps);
   void leave(Particle& p);
   // Stops the run at t_ for `error` (a read error; empty: none). Returns whether there was none.
   bool no_error(const std::string& error) {
@@ -171,15 +173,27 @@ class StreakBuilder {
     std::size_t after;
     Particle particle;
   };
-  // One pass of splits over the rows marked in `changed` (a row unchanged since a pass that found
-  // nothing to split in it, or between it and its unchanged neighbour, finds nothing again);
-  // marks the rows it changed or made for the next pass.
-  // gap[r]: the distance of rows r and r + 1 where known (kUnmeasured otherwise), kept up to date
-  // as rows change and reused by coarsen().
-  bool refine_once(std::vector<char>& changed, std::vector<double>& gap);
-  std::vector<Insert> inserts_along(std::size_t r, double long_edge) const;
-  // Measures the rows' distance into `gap` when it has to.
+  // What changed in a row since the last pass looked at it: all of it (a new row, or the first
+  // pass), or the particles at `added` (indices, increasing). An edge or a row distance that a pass
+  // found short stays short while its particles stay where they are, so the next pass looks only
+  // at the edges beside added particles and updates the distances with them.
+  struct RowChange {
+    bool whole = true;
+    std::vector<std::uint32_t> added;
+    bool any() const { return whole || !added.empty(); }
+  };
+  // One pass of splits over the rows that changed since the last one; sets `change` for the next
+  // pass. gap[r]: the distance of rows r and r + 1 where known (kUnmeasured otherwise), kept up to
+  // date as rows change and reused by coarsen().
+  bool refine_once(std::vector<RowChange>& change, std::vector<double>& gap);
+  // The particles to insert on row r's edges longer than `long_edge`: all edges, or those beside
+  // the particles `added`.
+  std::vector<Insert> inserts_along(std::size_t r, double long_edge, const RowChange& change) const;
+  // The row to insert between rows r and r + 1 when they are more than `long_edge` apart;
+  // measures their distance into `gap` when it is not known.
   std::optional<Row> row_between(std::size_t r, double long_edge, double& gap) const;
+  // The distance of rows r and r + 1 after particles were added to them (`gap`: before).
+  double grown_gap(std::size_t r, double gap, const RowChange& a, const RowChange& b) const;
   std::vector<Face> strip(std::size_t r, const std::vector<std::int32_t>& va,
                           const std::vector<std::int32_t>& vb) const;
   bool release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
@@ -470,6 +484,72 @@ void StreakBuilder::enter(Particle& p) {
   resident_->place(std::span<const std::uint32_t>(&p.slot, 1), std::span<const std::array<double, 3>>(&x, 1));
 }
 
+void StreakBuilder::enter(const std::vector<Particle*>& ps) {
+  if (!resident_ || ps.empty()) return;
+  // The k-th moving particle takes the slot the k-th call of enter(p) would: the free slots from
+  // the back, then new ones. Counted in blocks, then handed out block by block in parallel.
+  constexpr std::size_t kBlock = 1 << 14;
+  const std::size_t blocks = (ps.size() + kBlock - 1) / kBlock;
+  std::vector<std::size_t> before(blocks + 1, 0);  // moving particles before each block
+  const auto block_range = [&](std::size_t b) {
+    return std::pair(b * kBlock, std::min(ps.size(), (b + 1) * kBlock));
+  };
+  for_each_row(blocks, [&](std::size_t b) {
+    const auto [lo, hi] = block_range(b);
+    before[b + 1] = static_cast<std::size_t>(std::count_if(ps.begin() + static_cast<std::ptrdiff_t>(lo),
+                                                           ps.begin() + static_cast<std::ptrdiff_t>(hi),
+                                                           [](const Particle* p) { return p->alive(); }));
+  });
+  for (std::size_t b = 0; b < blocks; ++b) before[b + 1] += before[b];
+  const std::size_t moving = before[blocks];
+  if (moving == 0) return;
+  if (in_flight_ && catching_up_) throw Error("streak surface: a particle entered after its catch-up started");
+  const std::size_t free = free_slots_.size();
+  const auto slot_of = [&](std::size_t k) {
+    return k < free ? free_slots_[free - 1 - k] : next_slot_ + static_cast<std::uint32_t>(k - free);
+  };
+  // Where the moving particles go: the fresh lists while a move is in flight (they catch up and
+  // are placed when it lands), else the set, in one call.
+  const std::size_t base = fresh_slots_.size();
+  std::vector<std::uint32_t> slots;
+  std::vector<std::array<double, 3>> at;
+  if (in_flight_) {
+    fresh_slots_.resize(base + moving);
+    fresh_x_.resize(base + moving);
+  } else {
+    slots.resize(moving);
+    at.resize(moving);
+  }
+  for_each_row(blocks, [&](std::size_t b) {
+    const auto [lo, hi] = block_range(b);
+    std::size_t k = before[b];
+    for (std::size_t i = lo; i < hi; ++i) {
+      Particle& p = *ps[i];
+      if (!p.alive()) continue;
+      p.slot = slot_of(k);
+      if (in_flight_) {
+        fresh_slots_[base + k] = p.slot;
+        fresh_x_[base + k] = p.x;
+      } else {
+        slots[k] = p.slot;
+        at[k] = {p.x.x(), p.x.y(), p.x.z()};
+      }
+      ++k;
+    }
+  });
+  free_slots_.resize(free - std::min(free, moving));
+  if (moving > free) next_slot_ += static_cast<std::uint32_t>(moving - free);
+  if (in_flight_) {
+    if (fresh_.size() < next_slot_) fresh_.resize(next_slot_, 0);
+    for_each_row(blocks, [&](std::size_t b) {
+      const std::size_t lo = base + std::min(moving, b * kBlock), hi = base + std::min(moving, (b + 1) * kBlock);
+      for (std::size_t k = lo; k < hi; ++k) fresh_[fresh_slots_[k]] = static_cast<std::uint32_t>(k + 1);
+    });
+  } else {
+    resident_->place(slots, at);
+  }
+}
+
 void StreakBuilder::leave(Particle& p) {
   if (p.slot == kNoSlot) return;
   if (!in_flight_) {
@@ -607,17 +687,18 @@ bool StreakBuilder::land() {
 
 // Largest distance between the particles of two rows that share a seed parameter.
 double StreakBuilder::row_distance(const Row& a, const Row& b) const {
+  // A merge by s without branches on it (rows drift apart in s, so they would be mispredicted).
   double d = 0;
   std::size_t i = 0, k = 0;
-  while (i < a.p.size() && k < b.p.size()) {
-    if (a.p[i].s < b.p[k].s) {
-      ++i;
-    } else if (b.p[k].s < a.p[i].s) {
-      ++k;
-    } else {
-      if (a.p[i].alive() && b.p[k].alive()) d = std::max(d, (a.p[i].x - b.p[k].x).squaredNorm());
-      ++i, ++k;
-    }
+  const std::size_t na = a.p.size(), nb = b.p.size();
+  while (i < na && k < nb) {
+    const Particle& pa = a.p[i];
+    const Particle& pb = b.p[k];
+    const double q = (pa.x - pb.x).squaredNorm();
+    const bool pair = pa.s == pb.s && pa.alive() && pb.alive();
+    d = pair && q > d ? q : d;
+    i += pa.s <= pb.s;
+    k += pb.s <= pa.s;
   }
   return std::sqrt(d);  // the largest root is the root of the largest square, bit for bit
 }
@@ -680,7 +761,7 @@ bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<d
   return no_error(access_.prepare(t_, t_));
 }
 
-bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>& gap) {
+bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<double>& gap) {
   const double long_edge = o_.split * o_.edge;
   // Each row's (and each pair of rows') new particles are found independently, in parallel, and
   // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
@@ -688,8 +769,9 @@ bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>&
   std::vector<std::optional<Row>> across(rows_.size());  // [r]: the new row after row r
   // Row r and the pair (r, r + 1) in one task: row r is still in cache for the pair.
   for_each_row(rows_.size(), [&](std::size_t r) {
-    if (changed[r]) along[r] = inserts_along(r, long_edge);
-    if (r + 1 < rows_.size() && (changed[r] || changed[r + 1])) across[r] = row_between(r, long_edge, gap[r]);
+    if (change[r].any()) along[r] = inserts_along(r, long_edge, change[r]);
+    if (r + 1 < rows_.size() && (change[r].any() || change[r + 1].any()))
+      across[r] = row_between(r, long_edge, gap[r]);
   });
   std::size_t along_count = 0, across_count = 0;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
@@ -698,21 +780,32 @@ bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>&
   }
   if (along_count == 0 && across_count == 0) return false;
 
-  // Exact positions: every new particle released at its own (s, τ), moved to t in one batch.
-  std::vector<Particle*> fresh;
-  std::vector<double> from;
-  for (std::size_t r = 0; r < rows_.size(); ++r)
+  // The new particles in order (along each row, then the new rows), gathered row by row in
+  // parallel at offsets counted beforehand; ids follow that order.
+  const std::size_t nr = rows_.size();
+  std::vector<std::size_t> first(2 * nr + 1, 0);  // [r]: along row r; [nr + r]: the row after r
+  for (std::size_t r = 0; r < nr; ++r) first[r + 1] = first[r] + along[r].size();
+  for (std::size_t r = 0; r < nr; ++r) first[nr + r + 1] = first[nr + r] + (across[r] ? across[r]->p.size() : 0);
+  std::vector<Particle*> fresh(first[2 * nr]);
+  std::vector<double> from(fresh.size());
+  const auto id0 = next_id_;
+  for_each_row(nr, [&](std::size_t r) {
+    std::size_t k = first[r];
     for (Insert& ins : along[r]) {
-      fresh.push_back(&ins.particle);
-      from.push_back(rows_[r].tau);
+      fresh[k] = &ins.particle;
+      from[k] = rows_[r].tau;
+      ins.particle.id = id0 + static_cast<std::int32_t>(k++);
     }
-  for (std::optional<Row>& row : across)
-    if (row)
-      for (Particle& q : row->p) {
-        fresh.push_back(&q);
-        from.push_back(row->tau);
-      }
-  for (Particle* q : fresh) q->id = next_id_++;
+    if (!across[r]) return;
+    k = first[nr + r];
+    for (Particle& q : across[r]->p) {
+      fresh[k] = &q;
+      from[k] = across[r]->tau;
+      q.id = id0 + static_cast<std::int32_t>(k++);
+    }
+  });
+  next_id_ += static_cast<std::int32_t>(fresh.size());
+  // Exact positions: every new particle released at its own (s, τ), moved to t in one batch.
   if (o_.insertion == ParticleInsertion::exact) {
     std::vector<Vec3> x(fresh.size());
     std::vector<ParticleStatus> status(fresh.size());
@@ -726,74 +819,92 @@ bool StreakBuilder::refine_once(std::vector<char>& changed, std::vector<double>&
   } else {
     report_.interpolated_insertions += fresh.size();
   }
-  for (Particle* q : fresh) enter(*q);
+  enter(fresh);
   report_.s_insertions += along_count;
   report_.rows_inserted += across_count;
   for (const std::optional<Row>& row : across)
     if (row) report_.row_particles += row->p.size();
 
-  // Insert along rows, then the new rows: each row and the row list rebuilt once, in linear time
-  // (an insertion in the middle of a vector per new particle is quadratic in a long row). A new
-  // particle goes right after its left neighbour (the closing edge of a closed row: after the
-  // last particle).
+  // Insert along rows in place, from the back (each row grows once, in linear time, mostly in the
+  // room it has), then the new rows. A new particle goes right after its left neighbour (the
+  // closing edge of a closed row: after the last particle); its index is kept for the next pass.
+  std::vector<RowChange> next(rows_.size() + across_count);
+  std::vector<std::size_t> at(rows_.size());  // row r's index after the new rows
+  for (std::size_t r = 0, k = 0; r < rows_.size(); ++r) {
+    at[r] = k;
+    k += across[r] ? 2 : 1;
+  }
   for_each_row(rows_.size(), [&](std::size_t r) {
     const std::vector<Insert>& ins = along[r];
+    RowChange& c = next[at[r]];
+    c.whole = false;
     if (ins.empty()) return;
     std::vector<Particle>& p = rows_[r].p;
-    std::vector<Particle> merged;
-    merged.reserve(p.size() + ins.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      merged.push_back(p[i]);
-      if (k < ins.size() && ins[k].after == i) merged.push_back(ins[k++].particle);
+    const std::size_t old = p.size();
+    p.resize(old + ins.size());
+    std::size_t w = p.size(), k = ins.size();
+    for (std::size_t i = old; i-- > 0 && k > 0;) {
+      if (ins[k - 1].after == i) p[--w] = ins[--k].particle;
+      p[--w] = p[i];
     }
-    p.swap(merged);
+    c.added.resize(ins.size());
+    for (std::size_t j = 0; j < ins.size(); ++j) c.added[j] = static_cast<std::uint32_t>(ins[j].after + j + 1);
   });
-  // A row that got particles may have changed its distance to both neighbours; a new row has
-  // none measured.
-  std::vector<char> next;
-  std::vector<double> next_gap;
-  next.reserve(rows_.size() + across_count);
-  next_gap.reserve(rows_.size() + across_count);
-  for (std::size_t r = 0; r < rows_.size(); ++r) {
-    next.push_back(!along[r].empty());
-    if (across[r]) {
-      next.push_back(1);
-      next_gap.insert(next_gap.end(), {kUnmeasured, kUnmeasured});
-    } else {
-      const bool same = r + 1 < rows_.size() && along[r].empty() && along[r + 1].empty();
-      next_gap.push_back(same ? gap[r] : kUnmeasured);
-    }
-  }
   if (across_count > 0) {
     std::vector<Row> rows;
     rows.reserve(rows_.size() + across_count);
     for (std::size_t r = 0; r < rows_.size(); ++r) {
       rows.push_back(std::move(rows_[r]));
-      if (across[r]) rows.push_back(std::move(*across[r]));
+      if (across[r]) rows.push_back(std::move(*across[r]));  // next[]: whole, as made
     }
     rows_.swap(rows);
   }
-  changed.swap(next);
+  // Distances: a new row has none measured; rows that only got particles grow theirs by those.
+  std::vector<double> next_gap(rows_.size(), kUnmeasured);
+  for_each_row(gap.size(), [&](std::size_t r) {
+    if (across[r] || r + 1 >= gap.size() || gap[r] == kUnmeasured) return;
+    const std::size_t a = at[r];
+    next_gap[a] = grown_gap(a, gap[r], next[a], next[a + 1]);
+  });
+  change.swap(next);
   gap.swap(next_gap);
   return true;
 }
 
+double StreakBuilder::grown_gap(std::size_t r, double gap, const RowChange& a, const RowChange& b) const {
+  if (a.added.empty() && b.added.empty()) return gap;
+  // The largest square over the pairs the added particles make with the other row: the root of
+  // the larger of it and gap² is row_distance's, bit for bit.
+  double d = 0;
+  const auto pairs = [&](const Row& with_added, const std::vector<std::uint32_t>& added, const Row& other) {
+    const std::vector<Particle>& o = other.p;
+    for (const std::uint32_t i : added) {
+      const Particle& q = with_added.p[i];
+      if (!q.alive()) continue;
+      const auto it = std::lower_bound(o.begin(), o.end(), q.s, [](const Particle& x, double s) { return x.s < s; });
+      if (it != o.end() && it->s == q.s && it->alive()) d = std::max(d, (q.x - it->x).squaredNorm());
+    }
+  };
+  pairs(rows_[r], a.added, rows_[r + 1]);
+  pairs(rows_[r + 1], b.added, rows_[r]);
+  return std::max(gap, std::sqrt(d));
+}
+
 // The particles to insert on row r's edges longer than `long_edge`, by left particle.
-std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
-                                                                double long_edge) const {
+std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r, double long_edge,
+                                                                const RowChange& change) const {
   std::vector<Insert> along;
   const LengthLimit long_limit(long_edge);
   const bool closed = seed_.closed();
   const std::vector<Particle>& p = rows_[r].p;
   const std::size_t n = p.size();
   const std::size_t edges = closed ? n : n - 1;
-  for (std::size_t i = 0; i < edges; ++i) {
+  const auto edge = [&](std::size_t i) {  // i: the edge's left particle
     const Particle& a = p[i];
     const Particle& b = p[(i + 1) % n];
-    if (!a.alive() || !b.alive()) continue;
+    if (!a.alive() || !b.alive()) return;
     const double sb = (i + 1 == n) ? b.s + 1.0 : b.s;
-    if (sb - a.s <= min_ds_ || long_limit.not_longer(a.x - b.x)) continue;
+    if (sb - a.s <= min_ds_ || long_limit.not_longer(a.x - b.x)) return;
     Particle q;
     q.s = 0.5 * (a.s + sb);  // < 1: a closed row starts at s = 0, which is never removed
     if (o_.insertion == ParticleInsertion::interpolate) {
@@ -809,6 +920,17 @@ std::vector<StreakBuilder::Insert> StreakBuilder::inserts_along(std::size_t r,
       q.x = (p0 && p3) ? cubic_middle(p0->x, a.x, b.x, p3->x) : 0.5 * (a.x + b.x);
     }
     along.push_back({i, q});
+  };
+  if (change.whole) {
+    for (std::size_t i = 0; i < edges; ++i) edge(i);
+    return along;
+  }
+  // Only the edges on either side of an added particle (never the first: added after another),
+  // each once and in order.
+  std::size_t next = 0;  // edges before it are done
+  for (const std::uint32_t j : change.added) {
+    for (std::size_t i = std::max<std::size_t>(next, j - 1); i <= j && i < edges; ++i) edge(i);
+    next = std::size_t{j} + 1;
   }
   return along;
 }
@@ -818,7 +940,7 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, d
   const Row& a = rows_[r];
   const Row& b = rows_[r + 1];
   if (b.tau - a.tau <= min_dtau_) return std::nullopt;
-  gap = row_distance(a, b);
+  if (gap == kUnmeasured) gap = row_distance(a, b);
   if (gap <= long_edge) return std::nullopt;
   Row row;
   row.tau = 0.5 * (a.tau + b.tau);
@@ -872,26 +994,23 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
       return a.alive() && m.alive() && b.alive() && short_limit.shorter(a.x - m.x) &&
              short_limit.shorter(m.x - b.x) && long_limit.shorter(a.x - b.x);
     };
-    // Most rows lose nothing: find the first particle that goes before copying any.
+    // Most rows lose nothing: find the first particle that goes before moving any. The kept
+    // particles close up in place: p[0, w) are kept, and p[i + 1] is not moved yet.
+    const std::size_t n = p.size();
     std::size_t first = 1;
-    while (first + 1 < p.size() && !(p.size() > 3 && removable(p[first - 1], p[first], p[first + 1]))) ++first;
-    if (first + 1 >= p.size()) return;
-    std::vector<Particle> kept;
-    kept.reserve(p.size());
-    kept.insert(kept.end(), p.begin(), p.begin() + static_cast<std::ptrdiff_t>(first));
-    for (std::size_t i = first; i < p.size(); ++i) {
-      const bool interior = i > 0 && i + 1 < p.size();
-      if (interior && !kept.empty() && p.size() - (i - kept.size()) > 3) {
-        if (removable(kept.back(), p[i], p[i + 1])) {
-          const Particle& m = p[i];
-          ++removed[r];
-          if (m.slot != kNoSlot) gone[r].push_back(m);
-          continue;
-        }
+    while (first + 1 < n && !(n > 3 && removable(p[first - 1], p[first], p[first + 1]))) ++first;
+    if (first + 1 >= n) return;
+    std::size_t w = first;
+    for (std::size_t i = first; i < n; ++i) {
+      const bool interior = i + 1 < n;
+      if (interior && n - (i - w) > 3 && removable(p[w - 1], p[i], p[i + 1])) {
+        ++removed[r];
+        if (p[i].slot != kNoSlot) gone[r].push_back(p[i]);
+        continue;
       }
-      kept.push_back(p[i]);
+      p[w++] = p[i];
     }
-    p.swap(kept);
+    p.resize(w);
   });
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     if (removed[r] == 0) continue;
@@ -939,10 +1058,10 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
 void StreakBuilder::adapt() {
   if (!o_.adaptive) return;
   const auto t0 = Clock::now();
-  std::vector<char> changed(rows_.size(), 1);  // the first pass looks at every row
+  std::vector<RowChange> change(rows_.size());  // the first pass looks at every row
   std::vector<double> gap(rows_.size(), kUnmeasured);
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
-    if (!refine_once(changed, gap)) break;
+    if (!refine_once(change, gap)) break;
     if (particle_count() > o_.max_vertices) break;
   }
   if (in_flight_) start_catch_up();  // the inserted particles move on beside coarsening
