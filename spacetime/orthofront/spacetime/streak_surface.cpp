@@ -41,14 +41,22 @@ std::string number(double value) {
   return text;
 }
 
-// Runs f(r) for r in [0, n), rows in parallel (each row's work is independent of the others').
+// Runs f(r) for r in [0, n), rows in parallel (each row's work is independent of the others'), or
+// in turn where the work is too small to wake the threads for (`parallel` false).
 template <class F>
-void for_each_row(std::size_t n, const F& f) {
+void for_each_row(std::size_t n, const F& f, bool parallel = true) {
+  if (!parallel) {
+    for (std::size_t r = 0; r < n; ++r) f(r);
+    return;
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t r = range.begin(); r != range.end(); ++r) f(r);
                     });
 }
+
+// Fewer particles than this are handled in turn: waking the threads costs more.
+constexpr std::size_t kParallelParticles = 32768;
 
 constexpr std::uint32_t kNoSlot = ~std::uint32_t{0};
 
@@ -494,12 +502,13 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
   const auto block_range = [&](std::size_t b) {
     return std::pair(b * kBlock, std::min(ps.size(), (b + 1) * kBlock));
   };
+  const bool parallel = ps.size() >= kParallelParticles;
   for_each_row(blocks, [&](std::size_t b) {
     const auto [lo, hi] = block_range(b);
     before[b + 1] = static_cast<std::size_t>(std::count_if(ps.begin() + static_cast<std::ptrdiff_t>(lo),
                                                            ps.begin() + static_cast<std::ptrdiff_t>(hi),
                                                            [](const Particle* p) { return p->alive(); }));
-  });
+  }, parallel);
   for (std::size_t b = 0; b < blocks; ++b) before[b + 1] += before[b];
   const std::size_t moving = before[blocks];
   if (moving == 0) return;
@@ -536,7 +545,7 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
       }
       ++k;
     }
-  });
+  }, parallel);
   free_slots_.resize(free - std::min(free, moving));
   if (moving > free) next_slot_ += static_cast<std::uint32_t>(moving - free);
   if (in_flight_) {
@@ -544,7 +553,7 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
     for_each_row(blocks, [&](std::size_t b) {
       const std::size_t lo = base + std::min(moving, b * kBlock), hi = base + std::min(moving, (b + 1) * kBlock);
       for (std::size_t k = lo; k < hi; ++k) fresh_[fresh_slots_[k]] = static_cast<std::uint32_t>(k + 1);
-    });
+    }, parallel);
   } else {
     resident_->place(slots, at);
   }
@@ -657,7 +666,7 @@ bool StreakBuilder::land() {
         p.slot = kNoSlot;
       }
     };
-    if (n < 32768) {  // a few thousand particles are not worth waking the threads for
+    if (n < kParallelParticles) {
       for (const std::size_t r : with) row(r);
     } else {
       for_each_row(with.size(), [&](std::size_t w) { row(with[w]); });
@@ -803,7 +812,7 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
       from[k] = across[r]->tau;
       q.id = id0 + static_cast<std::int32_t>(k++);
     }
-  });
+  }, fresh.size() >= kParallelParticles);
   next_id_ += static_cast<std::int32_t>(fresh.size());
   // Exact positions: every new particle released at its own (s, τ), moved to t in one batch.
   if (o_.insertion == ParticleInsertion::exact) {
@@ -865,7 +874,7 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
     if (across[r] || r + 1 >= gap.size() || gap[r] == kUnmeasured) return;
     const std::size_t a = at[r];
     next_gap[a] = grown_gap(a, gap[r], next[a], next[a + 1]);
-  });
+  }, along_count >= kParallelParticles / 16);  // a search in a row for each
   change.swap(next);
   gap.swap(next_gap);
   return true;
