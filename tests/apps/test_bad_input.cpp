@@ -31,10 +31,6 @@ using namespace grid_test;
 
 namespace {
 
-// The cases check which files a run leaves: the mesh and the report, no histograms beside the
-// report. ctest asks for none; a direct run of this binary asks here, for the commands it starts.
-const int kNoHistograms = ::setenv("ORTHOFRONT_HISTOGRAMS", "0", 1);
-
 std::string lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
