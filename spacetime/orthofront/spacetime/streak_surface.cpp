@@ -135,10 +135,9 @@ class StreakBuilder {
   void validate();
   double seed_speed_median(const std::vector<double>& params) const;
   void release(double tau);
-  // A new moving particle takes a slot of the resident set and goes there; one leaving the rows
-  // gives its slot back (no-ops without a resident set).
-  void enter(Particle& p);
-  // enter() of each in order, in parallel.
+  // New moving particles take slots of the resident set, in order (freed slots last first, then
+  // new ones), and go there (while a move is in flight: they catch up and go there when it
+  // lands); one leaving the rows gives its slot back (no-ops without a resident set).
   void enter(const std::vector<Particle*>& ps);
   void leave(Particle& p);
   // Stops the run at t_ for `error` (a read error; empty: none). Returns whether there was none.
@@ -350,9 +349,11 @@ void StreakBuilder::release(double tau) {
     p.status = st == FieldStatus::inside ? ParticleStatus::moving
                : st == FieldStatus::outside ? ParticleStatus::left_domain
                                             : ParticleStatus::no_data;
-    enter(p);
     row.p.push_back(p);
   }
+  std::vector<Particle*> entering(row.p.size());
+  for (std::size_t i = 0; i < row.p.size(); ++i) entering[i] = &row.p[i];
+  enter(entering);
   rows_.push_back(std::move(row));
   ++report_.rows_released;
 }
@@ -472,30 +473,10 @@ std::size_t StreakBuilder::take_resident(std::vector<std::array<std::size_t, 2>>
   return n;
 }
 
-void StreakBuilder::enter(Particle& p) {
-  if (!resident_ || !p.alive()) return;
-  if (free_slots_.empty()) {
-    p.slot = next_slot_++;
-  } else {
-    p.slot = free_slots_.back();
-    free_slots_.pop_back();
-  }
-  if (in_flight_) {  // catches up, and is placed when the move lands
-    if (catching_up_) throw Error("streak surface: a particle entered after its catch-up started");
-    if (p.slot >= fresh_.size()) fresh_.resize(std::size_t{p.slot} + 1, 0);
-    fresh_slots_.push_back(p.slot);
-    fresh_x_.push_back(p.x);
-    fresh_[p.slot] = static_cast<std::uint32_t>(fresh_slots_.size());
-    return;
-  }
-  const std::array<double, 3> x{p.x.x(), p.x.y(), p.x.z()};
-  resident_->place(std::span<const std::uint32_t>(&p.slot, 1), std::span<const std::array<double, 3>>(&x, 1));
-}
-
 void StreakBuilder::enter(const std::vector<Particle*>& ps) {
   if (!resident_ || ps.empty()) return;
-  // The k-th moving particle takes the slot the k-th call of enter(p) would: the free slots from
-  // the back, then new ones. Counted in blocks, then handed out block by block in parallel.
+  // The k-th moving particle takes the k-th slot: the free slots from the back, then new ones.
+  // Counted in blocks, then handed out block by block in parallel.
   constexpr std::size_t kBlock = 1 << 14;
   const std::size_t blocks = (ps.size() + kBlock - 1) / kBlock;
   std::vector<std::size_t> before(blocks + 1, 0);  // moving particles before each block
@@ -666,11 +647,7 @@ bool StreakBuilder::land() {
         p.slot = kNoSlot;
       }
     };
-    if (n < kParallelParticles) {
-      for (const std::size_t r : with) row(r);
-    } else {
-      for_each_row(with.size(), [&](std::size_t w) { row(with[w]); });
-    }
+    for_each_row(with.size(), [&](std::size_t w) { row(with[w]); }, n >= kParallelParticles);
     std::size_t placed = 0;
     for (std::size_t k = 0; k < n; ++k) {
       if (!moving[k]) {
