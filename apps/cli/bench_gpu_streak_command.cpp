@@ -250,8 +250,12 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"gpu_compute", b.compute_seconds},
           {"backend_calls", b.total_seconds},
           {"uploads", b.upload_seconds},
-          {"host_staging", b.host_seconds}}},
+          {"host_staging", b.host_seconds},
+          {"downloads", b.download_seconds}}},
         {"bytes_uploaded", b.bytes_uploaded},
+        {"bytes_downloaded", b.bytes_downloaded},
+        {"steps_uploaded", b.steps_loaded},
+        {"steps_read_ahead", b.steps_read_ahead},
         {"h2d_bytes_per_second", h2d},
         {"pcie_pinned_bytes_per_second", pcie},
         {"total_over_floor", r.total_seconds / floor}};
@@ -303,6 +307,12 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 b.compute_seconds);
     std::printf("%-44s %10.3f  (%.2f GiB, %.1f GB/s; pinned PCIe %.1f GB/s)\n", "uploads (steps)",
                 b.upload_seconds, static_cast<double>(b.bytes_uploaded) / (1u << 30), h2d / 1e9, pcie / 1e9);
+    if (cuda)
+      std::printf("%-44s %10.3f  (%.2f GiB, %.1f GB/s)\n", "downloads (particles)", b.download_seconds,
+                  static_cast<double>(b.bytes_downloaded) / (1u << 30),
+                  b.download_seconds > 0 ? static_cast<double>(b.bytes_downloaded) / b.download_seconds / 1e9 : 0.0);
+    std::printf("%-44s %10.3f  (%zu of %zu steps read ahead, between calls)\n",
+                "host work in the backend (staging, changes)", b.host_seconds, b.steps_read_ahead, b.steps_loaded);
     std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
                 r.total_seconds / floor);
     std::printf("\nalong the run (seconds; frames: built in line, waits)\n%-12s %9s %12s %9s %9s %9s %9s\n",

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <thread>
@@ -323,6 +324,58 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
     for (const ParticleStatus s : records.back().status) moving += s == ParticleStatus::moving;
     CHECK(moving > 1000);
   }
+}
+
+TEST_CASE("cuda advection: a resident set's next step is read between calls; each step is "
+          "uploaded once and counted by the call that uses it; the CPU backend's bits",
+          "[gpu][advect]") {
+  if (skip_without_gpu()) return;
+  const auto cpu = make_cpu_advector();
+  const auto gpu = make_advector(Device::cuda);
+  ResidentSteps series = sampled(2, false, 257, 11, false);  // steps 0.1 apart
+  const std::size_t step_bytes = series.geometry().point_count() * 2 * sizeof(float);
+  const ParticleBatch start = random_batch(series.geometry(), 4000, 9);
+  std::vector<std::uint32_t> slots;
+  std::vector<std::array<double, 3>> at;
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    slots.push_back(static_cast<std::uint32_t>(i));
+    at.push_back({start.x[0][i], start.x[1][i], 0});
+  }
+  MethodOptions o;
+  o.method = Method::dopri5;
+  const auto on_gpu = gpu->make_resident();
+  const auto on_cpu = cpu->make_resident();
+  on_gpu->place(slots, at);
+  on_cpu->place(slots, at);
+  // Four intervals a step, as a streak surface's are shorter than a step: the step after the
+  // last a call read is staged for a later call while the caller waits (here: sleeps).
+  std::size_t loaded = 0, ahead = 0, uploaded = 0, calls_reading = 0;
+  for (int k = 1; k <= 40; ++k) {
+    const double t0 = 0.025 * (k - 1), t1 = 0.025 * k;
+    const AdvectionStatistics g = on_gpu->advance(series, t0, t1, o);
+    on_cpu->advance(series, t0, t1, o);
+    loaded += g.steps_loaded;
+    ahead += g.steps_read_ahead;
+    uploaded += g.bytes_uploaded;
+    calls_reading += g.steps_loaded > 0;
+    CHECK(g.steps_read_ahead <= g.steps_loaded);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  CHECK(loaded == 11);  // every step once: read ahead or in the call
+  CHECK(uploaded == 11 * step_bytes);
+  CHECK(ahead == 9);    // all but the first call's two
+  CHECK(calls_reading == 10);  // the first, then each first call in a new step
+  // (The host set grows by half its size: slots past those placed are parked.)
+  const ResidentParticles::View a = on_cpu->view(), b = on_gpu->view();
+  REQUIRE(a.size >= start.size());
+  REQUIRE(b.size == start.size());
+  std::size_t moving = 0;
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    REQUIRE(a.status[i] == b.status[i]);
+    for (std::size_t d = 0; d < 2; ++d) REQUIRE(a.x[d][i] == b.x[d][i]);
+    moving += a.status[i] == ParticleStatus::moving;
+  }
+  CHECK(moving > 1000);
 }
 
 TEST_CASE("cuda advection: a resident set's slot placed and parked again before any advance, at "

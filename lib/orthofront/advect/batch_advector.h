@@ -92,12 +92,15 @@ struct AdvectionStatistics {
   std::size_t particle_steps = 0;   ///< accepted integration steps, all particles
   std::size_t evaluations = 0;      ///< field samples
   std::size_t steps_loaded = 0;     ///< acquire() calls
+  std::size_t steps_read_ahead = 0; ///< of those, read between calls (CUDA resident sets)
   std::size_t bytes_uploaded = 0;   ///< host-to-device bytes (0 on the CPU)
+  std::size_t bytes_downloaded = 0; ///< device-to-host particle bytes behind the kernels
   double total_seconds = 0;
   double compute_seconds = 0;       ///< kernels (device events) or the parallel loops
   double upload_seconds = 0;        ///< host-to-device copies (device events)
   double host_seconds = 0;          ///< acquire() and staging copies on the host
   double overlap_seconds = 0;       ///< copies running while a kernel ran (device events)
+  double download_seconds = 0;      ///< the particles' way back (device events)
 
   /// Adds another call's figures (totals over calls).
   AdvectionStatistics& operator+=(const AdvectionStatistics& o) {
@@ -106,12 +109,15 @@ struct AdvectionStatistics {
     particle_steps += o.particle_steps;
     evaluations += o.evaluations;
     steps_loaded += o.steps_loaded;
+    steps_read_ahead += o.steps_read_ahead;
     bytes_uploaded += o.bytes_uploaded;
+    bytes_downloaded += o.bytes_downloaded;
     total_seconds += o.total_seconds;
     compute_seconds += o.compute_seconds;
     upload_seconds += o.upload_seconds;
     host_seconds += o.host_seconds;
     overlap_seconds += o.overlap_seconds;
+    download_seconds += o.download_seconds;
     return *this;
   }
 };

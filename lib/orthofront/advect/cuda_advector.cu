@@ -9,6 +9,8 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <optional>
+#include <thread>
 #include <memory>
 #include <cstring>
 #include <type_traits>
@@ -295,6 +297,14 @@ class CudaAdvector final : public BatchAdvector {
     name_ = std::string("cuda (") + prop.name + ")";
   }
   ~CudaAdvector() override {
+    if (stager_.joinable()) {
+      {
+        std::lock_guard lock(ahead_mutex_);
+        stop_stager_ = true;
+        ahead_cv_.notify_all();
+      }
+      stager_.join();
+    }
     // Nothing may still read the buffers freed next.
     for (const auto& lane : lanes_) cudaStreamSynchronize(lane->compute.get());
     cudaStreamSynchronize(upload_.get());
@@ -347,6 +357,8 @@ class CudaAdvector final : public BatchAdvector {
     Event ready_event;
     bool ready = false;
     bool filling = false;  ///< a lane is reading its step in (source and step already set)
+    bool ahead = false;    ///< staged ahead, for no call yet (its reading not yet counted)
+    double ahead_seconds = 0;  ///< the host seconds of that reading
     int pins = 0;
   };
 
@@ -354,7 +366,7 @@ class CudaAdvector final : public BatchAdvector {
            double t_end, const MethodOptions& options, AdvectionStatistics& stats) {
     const DeviceParticles view = upload_particles(lane, particles);
     run_slabs(lane, source, view, particles.size(), plan, t_end, options, stats,
-              [&] { enqueue_download(lane, particles.size()); });
+              [&] { return enqueue_download(lane, particles.size()); });
     copy_downloaded(lane, particles);
   }
 
@@ -423,7 +435,10 @@ class CudaAdvector final : public BatchAdvector {
         // Another lane may still be reading the step in: wait for it (its upload is queued
         // when `filling` ends; the kernels wait for the ready event).
         slot_filled_.wait(lock, [&] { return !slots_[found]->filling; });
-        if (holds(found)) return found;
+        if (holds(found)) {
+          take_staged_ahead(*slots_[found], stats);
+          return found;
+        }
         drop_pin(lane, found);  // its read failed: the slot holds nothing now
       }
       // The least recently used slot no call has pinned; while there is none, wait for one
@@ -437,55 +452,13 @@ class CudaAdvector final : public BatchAdvector {
         if (victim >= 0) break;
         slot_freed_.wait(lock);
       }
-      Slot& slot = *slots_[victim];
-      // The slot is free once the kernels of calls in flight that read its old step finished
-      // (calls that ended synchronized; nobody records these events again: the slot is pinned).
-      const auto uv = static_cast<std::size_t>(victim);
-      std::vector<cudaEvent_t> readers;
-      for (const auto& other : lanes_)
-        if (other->used.size() > uv && other->used[uv]) readers.push_back(other->used_event[uv]->get());
-      // (Nothing below throws before the read: `mine` has room for three.)
       pin(victim);
-      slot.source = source.identity();
-      slot.step = step;
-      slot.filling = true;
-      lock.unlock();
-      // Reading and staging the step holds the staging lock only: other lanes go on finding
-      // their steps and launching kernels meanwhile.
-      try {
-        std::lock_guard staging(staging_mutex_);
-        const int p = next_staging_;
-        next_staging_ = 1 - next_staging_;
-        // The pinned buffer is free once its last upload finished.
-        if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
-        for (const cudaEvent_t e : readers)
-          check(cudaStreamWaitEvent(upload_.get(), e, 0), "cudaStreamWaitEvent");
-        const auto host = std::chrono::steady_clock::now();
-        float* pinned = staging_[p]->get();
-        const std::size_t floats = slot_floats_;
-        source.copy_step(step, pinned);
-        stats.host_seconds += seconds_since(host);
-        ++stats.steps_loaded;
-        const std::size_t b = mark(upload_.get());
-        check(cudaMemcpyAsync(slot.data.get(), pinned, floats * sizeof(float),
-                              cudaMemcpyHostToDevice, upload_.get()),
-              "cudaMemcpyAsync");
-        upload_marks.push_back({b, mark(upload_.get())});
-        check(cudaEventRecord(slot.ready_event.get(), upload_.get()), "cudaEventRecord");
-        check(cudaEventRecord(staged_event_[p].get(), upload_.get()), "cudaEventRecord");
-        staged_[p] = true;
-        stats.bytes_uploaded += floats * sizeof(float);
-      } catch (...) {
-        lock.lock();
-        slot.source = 0;  // holds nothing (identities start at 1)
-        slot.filling = false;
-        slot_filled_.notify_all();
-        throw;
-      }
-      lock.lock();
-      slot.ready = true;
-      slot.filling = false;
-      slot_filled_.notify_all();
+      std::size_t upload_begin = 0;
+      stats.host_seconds += fill_slot(lock, victim, source, step,
+                                      [&] { upload_begin = mark(upload_.get()); },
+                                      [&] { upload_marks.push_back({upload_begin, mark(upload_.get())}); });
+      ++stats.steps_loaded;
+      stats.bytes_uploaded += slot_floats_ * sizeof(float);
       return victim;
     };
 
@@ -528,7 +501,9 @@ class CudaAdvector final : public BatchAdvector {
       }
     }
     // The particles and the counters come down behind the kernels; one wait for all of it.
-    download();
+    const std::size_t down_begin = mark(stream);
+    stats.bytes_downloaded += download();
+    const std::size_t down_end = mark(stream);
     finish_call(lane);
     // This call's uploads have ended: its kernels waited for them.
     const auto* counts = lane.counts.as<unsigned long long>();
@@ -543,10 +518,150 @@ class CudaAdvector final : public BatchAdvector {
     for (const auto& km : kernel_marks) kernels.push_back({at(km[0]), at(km[1])});
     for (const auto& um : upload_marks) uploads.push_back({at(um[0]), at(um[1])});
     for (const auto& kn : kernels) stats.compute_seconds += kn[1] - kn[0];
+    stats.download_seconds += at(down_end) - at(down_begin);
     for (const auto& u : uploads) {
       stats.upload_seconds += u[1] - u[0];
       for (const auto& kn : kernels) stats.overlap_seconds += overlap(u[0], u[1], kn[0], kn[1]);
     }
+  }
+
+  /// Reads `step` of `source` into the pinned staging and uploads it into slot `victim` (pinned
+  /// by the caller, under `lock`, which is let go meanwhile and held again on return) behind the
+  /// kernels still reading the slot's old step. `before` and `after` run around the copy's
+  /// enqueueing (the upload stream's order is the staging lock's). Returns the host seconds.
+  template <class Before, class After>
+  double fill_slot(std::unique_lock<std::mutex>& lock, int victim, StepSource& source, std::size_t step,
+                   const Before& before, const After& after) {
+    Slot& slot = *slots_[victim];
+    // The slot is free once the kernels of calls in flight that read its old step finished
+    // (calls that ended synchronized; nobody records these events again: the slot is pinned).
+    const auto uv = static_cast<std::size_t>(victim);
+    std::vector<cudaEvent_t> readers;
+    for (const auto& other : lanes_)
+      if (other->used.size() > uv && other->used[uv]) readers.push_back(other->used_event[uv]->get());
+    slot.source = source.identity();
+    slot.step = step;
+    slot.filling = true;
+    slot.ahead = false;
+    lock.unlock();
+    double host_seconds = 0;
+    // Reading and staging the step holds the staging lock only: other lanes go on finding
+    // their steps and launching kernels meanwhile.
+    try {
+      std::lock_guard staging(staging_mutex_);
+      const int p = next_staging_;
+      next_staging_ = 1 - next_staging_;
+      // The pinned buffer is free once its last upload finished.
+      if (staged_[p]) check(cudaEventSynchronize(staged_event_[p].get()), "cudaEventSynchronize");
+      for (const cudaEvent_t e : readers)
+        check(cudaStreamWaitEvent(upload_.get(), e, 0), "cudaStreamWaitEvent");
+      const auto host = std::chrono::steady_clock::now();
+      float* pinned = staging_[p]->get();
+      source.copy_step(step, pinned);
+      host_seconds = seconds_since(host);
+      before();
+      check(cudaMemcpyAsync(slot.data.get(), pinned, slot_floats_ * sizeof(float),
+                            cudaMemcpyHostToDevice, upload_.get()),
+            "cudaMemcpyAsync");
+      after();
+      check(cudaEventRecord(slot.ready_event.get(), upload_.get()), "cudaEventRecord");
+      check(cudaEventRecord(staged_event_[p].get(), upload_.get()), "cudaEventRecord");
+      staged_[p] = true;
+    } catch (...) {
+      lock.lock();
+      slot.source = 0;  // holds nothing (identities start at 1)
+      slot.filling = false;
+      slot_filled_.notify_all();
+      throw;
+    }
+    lock.lock();
+    slot.ready = true;
+    slot.filling = false;
+    slot_filled_.notify_all();
+    return host_seconds;
+  }
+
+  /// A call that finds its step staged ahead counts its reading and upload as its own (under
+  /// mutex_): the totals hold every step read, and a call that reads none counts none.
+  void take_staged_ahead(Slot& slot, AdvectionStatistics& stats) const {
+    if (!slot.ahead) return;
+    slot.ahead = false;
+    ++stats.steps_loaded;
+    ++stats.steps_read_ahead;
+    stats.bytes_uploaded += slot_floats_ * sizeof(float);
+    stats.host_seconds += slot.ahead_seconds;
+  }
+
+  /// Reads `step` of `source` into a slot on a thread of its own, for a later call: a resident
+  /// set's next interval after its last step. A newer request replaces one not yet started;
+  /// nothing is staged where no slot is free, the step is there already or the slots are laid
+  /// out for another step size. A read that fails leaves the slot empty (the call that needs
+  /// the step reads it again and reports the error).
+  void stage_ahead(StepSource& source, std::size_t step) {
+    std::lock_guard lock(ahead_mutex_);
+    if (!stager_.joinable()) stager_ = std::thread([this] { stager_loop(); });
+    ahead_request_ = AheadRequest{&source, step};
+    ahead_cv_.notify_all();
+  }
+
+  /// Waits until no step is being staged ahead or waits to be (before a source may go).
+  void finish_staging_ahead() {
+    std::unique_lock lock(ahead_mutex_);
+    ahead_request_.reset();
+    ahead_cv_.wait(lock, [&] { return !ahead_busy_; });
+  }
+
+  void stager_loop() {
+    std::unique_lock ahead(ahead_mutex_);
+    for (;;) {
+      ahead_cv_.wait(ahead, [&] { return stop_stager_ || ahead_request_.has_value(); });
+      if (stop_stager_) return;
+      const AheadRequest request = *ahead_request_;
+      ahead_request_.reset();
+      ahead_busy_ = true;
+      ahead.unlock();
+      try {
+        stage_one_ahead(*request.source, request.step);
+      } catch (...) {
+        // The call that needs the step reads it itself.
+      }
+      ahead.lock();
+      ahead_busy_ = false;
+      ahead_cv_.notify_all();
+    }
+  }
+
+  void stage_one_ahead(StepSource& source, std::size_t step) {
+    std::unique_lock lock(mutex_);
+    const std::size_t floats = source.geometry().point_count() * static_cast<std::size_t>(source.components());
+    if (floats != slot_floats_) return;
+    int victim = -1;
+    for (int s = 0; s < static_cast<int>(slots_.size()); ++s) {
+      const Slot& slot = *slots_[s];
+      if (slot.source == source.identity() && slot.step == step) return;  // there or coming
+      if (slot.pins > 0) continue;
+      if (victim < 0 || slot.last_use < slots_[victim]->last_use) victim = s;
+    }
+    if (victim < 0) return;
+    Slot& slot = *slots_[victim];
+    ++slot.pins;
+    slot.last_use = ++clock_;
+    ++staging_ahead_;
+    try {
+      const double host = fill_slot(lock, victim, source, step, [] {}, [] {});
+      slot.ahead = true;
+      slot.ahead_seconds = host;
+    } catch (...) {
+      --slot.pins;
+      --staging_ahead_;
+      slot_freed_.notify_all();
+      lane_free_.notify_all();
+      throw;
+    }
+    --slot.pins;
+    --staging_ahead_;
+    slot_freed_.notify_all();
+    lane_free_.notify_all();
   }
 
   /// Calls that may be in flight at once: each pins up to three slots and waits for a third
@@ -575,7 +690,7 @@ class CudaAdvector final : public BatchAdvector {
     if (floats == 0) throw Error("CUDA: a step of the source has no samples");
     std::unique_lock lock(mutex_);
     lane_free_.wait(lock, [&] {
-      return floats == slot_floats_ ? in_flight_ < lanes_in_use() : in_flight_ == 0;
+      return floats == slot_floats_ ? in_flight_ < lanes_in_use() : in_flight_ == 0 && staging_ahead_ == 0;
     });
     if (floats != slot_floats_) prepare_buffers(floats);
     Lane* lane = nullptr;
@@ -695,18 +810,22 @@ class CudaAdvector final : public BatchAdvector {
   }
 
   // After the kernels (same stream): the particles back into the pinned staging.
-  static void enqueue_download(Lane& lane, std::size_t n) {
+  // Returns the bytes enqueued.
+  static std::size_t enqueue_download(Lane& lane, std::size_t n) {
     const Staged h = staged(lane);
     const cudaStream_t s = lane.compute.get();
+    std::size_t bytes = 0;
     const auto down = [&](auto* host, const auto* device) {
       check(cudaMemcpyAsync(host, device, n * sizeof(*host), cudaMemcpyDeviceToHost, s),
             "particle download");
+      bytes += n * sizeof(*host);
     };
     for (std::size_t d = 0; d < 3; ++d) down(h.x[d], lane.px[d].get());
     down(h.t, lane.pt.get());
     down(h.h, lane.ph.get());
     down(h.evaluations, lane.pe.get());
     down(h.status, lane.ps.get());
+    return bytes;
   }
 
   // The counters come down behind everything the lane's stream has; waits for all of it.
@@ -769,6 +888,19 @@ class CudaAdvector final : public BatchAdvector {
   std::vector<std::unique_ptr<Lane>> lanes_;
   std::vector<Lane*> free_lanes_;
   std::size_t in_flight_ = 0;
+  std::size_t staging_ahead_ = 0;  ///< the stager is filling a slot (under mutex_)
+
+  // The stager (stage_ahead): one request waiting at most, taken under ahead_mutex_.
+  struct AheadRequest {
+    StepSource* source;
+    std::size_t step;
+  };
+  std::mutex ahead_mutex_;
+  std::condition_variable ahead_cv_;
+  std::optional<AheadRequest> ahead_request_;
+  bool ahead_busy_ = false;
+  bool stop_stager_ = false;
+  std::thread stager_;
 };
 
 /// A resident set in device memory: changes wait on the host (one per slot, the last) until the
@@ -778,6 +910,7 @@ class CudaResident final : public ResidentParticles {
  public:
   explicit CudaResident(CudaAdvector& owner) : owner_(owner) {}
   ~CudaResident() override {
+    owner_.finish_staging_ahead();  // the source may go once the set has gone
     // Nothing may still use the arrays freed next (an advance that threw synchronized its lane).
     cudaDeviceSynchronize();
   }
@@ -818,18 +951,26 @@ class CudaResident final : public ResidentParticles {
         CudaAdvector::finish_call(lane);
         stats.particles = static_cast<std::size_t>(lane.counts.as<unsigned long long>()[0]);
       }
-      const auto download = [&] {
-        if (size_ == 0) return;
+      const auto download = [&]() -> std::size_t {
+        if (size_ == 0) return 0;
+        std::size_t bytes = 0;
         const auto down = [&](auto* to, const auto* from) {
           check(cudaMemcpyAsync(to, from, size_ * sizeof(*to), cudaMemcpyDeviceToHost, s),
                 "particle download");
+          bytes += size_ * sizeof(*to);
         };
         const Mirror m = mirror();
         for (std::size_t d = 0; d < 3; ++d) down(m.x[d], x_[d].get());
         down(m.status, status_.get());
+        return bytes;
       };
       if (!plan.slabs.empty() && stats.particles > 0) {
         owner_.run_slabs(lane, source, device_view(), size_, plan, t_end, options, stats, download);
+        // The step after the last this call read goes up while the caller works on: the next
+        // interval's or a later one's (a streak surface's intervals are shorter than a step).
+        const std::size_t last = plan.slabs.back();
+        if (plan.forward ? last + 2 < source.times().size() : last >= 1)
+          owner_.stage_ahead(source, plan.forward ? last + 2 : last - 1);
       } else {
         download();
         CudaAdvector::finish_call(lane);

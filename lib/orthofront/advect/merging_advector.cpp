@@ -87,12 +87,15 @@ AdvectionStatistics share_of(const AdvectionStatistics& all, std::size_t particl
   s.particle_steps = part(all.particle_steps);
   s.evaluations = evaluations;
   s.steps_loaded = part(all.steps_loaded);
+  s.steps_read_ahead = part(all.steps_read_ahead);
   s.bytes_uploaded = part(all.bytes_uploaded);
+  s.bytes_downloaded = part(all.bytes_downloaded);
   s.total_seconds = all.total_seconds * f;
   s.compute_seconds = all.compute_seconds * f;
   s.upload_seconds = all.upload_seconds * f;
   s.host_seconds = all.host_seconds * f;
   s.overlap_seconds = all.overlap_seconds * f;
+  s.download_seconds = all.download_seconds * f;
   return s;
 }
 

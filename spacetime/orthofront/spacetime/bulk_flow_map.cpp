@@ -103,11 +103,35 @@ Advected BulkFlowMap::advect(const Vec3& x, double t0, double t1) const {
   return out;
 }
 
+std::unique_lock<std::mutex> BulkFlowMap::call_lock() const {
+  std::unique_lock lock(call_mutex_, std::defer_lock);
+  if (backend_->max_concurrent_calls() <= 1) lock.lock();
+  return lock;
+}
+
 std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t0, double t1,
                                     std::span<ParticleStatus> status) const {
-  std::lock_guard lock(mutex_);
-  // The arrays are kept between calls (a streak surface makes one call per interval).
-  advect::ParticleBatch& batch = batch_;
+  const std::unique_lock call = call_lock();
+  std::unique_ptr<advect::ParticleBatch> taken;
+  {
+    std::lock_guard lock(mutex_);
+    if (batches_.empty()) {
+      taken = std::make_unique<advect::ParticleBatch>();
+    } else {
+      taken = std::move(batches_.back());
+      batches_.pop_back();
+    }
+  }
+  // Back into the pool however the call ends.
+  struct PutBack {
+    const BulkFlowMap& map;
+    std::unique_ptr<advect::ParticleBatch>& batch;
+    ~PutBack() {
+      std::lock_guard lock(map.mutex_);
+      map.batches_.push_back(std::move(batch));
+    }
+  } put_back{*this, taken};
+  advect::ParticleBatch& batch = *taken;
   batch.resize(x.size());
   const auto each = [n = x.size()](auto&& f) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 16384),
@@ -127,6 +151,7 @@ std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t
     for (int d = 0; d < 3; ++d) x[i][d] = batch.x[static_cast<std::size_t>(d)][i];
     status[i] = batch.status[i];
   });
+  std::lock_guard lock(mutex_);
   total_ += s;
   return s.evaluations;
 }
@@ -137,8 +162,9 @@ std::unique_ptr<advect::ResidentParticles> BulkFlowMap::make_resident() const {
 }
 
 std::size_t BulkFlowMap::advance(advect::ResidentParticles& particles, double t0, double t1) const {
-  std::lock_guard lock(mutex_);
+  const std::unique_lock call = call_lock();
   const advect::AdvectionStatistics s = particles.advance(steps_, t0, t1, method_);
+  std::lock_guard lock(mutex_);
   total_ += s;
   return s.evaluations;
 }

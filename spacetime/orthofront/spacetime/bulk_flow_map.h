@@ -45,7 +45,8 @@ class CachedSteps final : public advect::StepSource {
 };
 
 /// Non-owning: `steps` must outlive the map. advect_all is the bulk call; advect() moves a batch
-/// of one. Calls are serialized (one batch at a time runs on the backend).
+/// of one. Calls from several threads run at once where the backend allows it (CUDA lanes:
+/// a streak surface's catch-up beside the move of its resident set), one at a time otherwise.
 class BulkFlowMap final : public FlowMap {
  public:
   BulkFlowMap(advect::StepSource& steps, std::unique_ptr<advect::BatchAdvector> backend,
@@ -67,8 +68,13 @@ class BulkFlowMap final : public FlowMap {
   std::unique_ptr<advect::BatchAdvector> backend_;
   advect::MethodOptions method_;
   std::string name_;
-  mutable std::mutex mutex_;
-  mutable advect::ParticleBatch batch_;  // a call's particles (under mutex_)
+  // Taken for a whole call where the backend runs one call at a time.
+  std::unique_lock<std::mutex> call_lock() const;
+  mutable std::mutex call_mutex_;
+  mutable std::mutex mutex_;  // the pool and the totals
+  // Particle arrays of calls in flight, kept between calls (a streak surface makes one call per
+  // interval): each call takes one out and puts it back.
+  mutable std::vector<std::unique_ptr<advect::ParticleBatch>> batches_;
   mutable advect::AdvectionStatistics total_;
 };
 

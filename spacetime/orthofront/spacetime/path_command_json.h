@@ -15,6 +15,7 @@ inline nlohmann::json device_json(const std::string& backend, std::size_t min_fr
           {"particles", d.particles},
           {"slabs", d.slabs},
           {"steps_loaded", d.steps_loaded},
+          {"steps_read_ahead", d.steps_read_ahead},
           {"particle_steps", d.particle_steps},
           {"evaluations", d.evaluations},
           {"seconds", d.total_seconds},
@@ -22,6 +23,8 @@ inline nlohmann::json device_json(const std::string& backend, std::size_t min_fr
           {"upload_seconds", d.upload_seconds},
           {"host_seconds", d.host_seconds},
           {"bytes_uploaded", d.bytes_uploaded},
+          {"download_seconds", d.download_seconds},
+          {"bytes_downloaded", d.bytes_downloaded},
           {"overlap_seconds", d.overlap_seconds}};
 }
 
