@@ -3,8 +3,15 @@
 // advection lies on its particles' path lines, streamed or resident alike.
 #include <catch2/catch.hpp>
 
+#include <array>
+#include <chrono>
+#include <condition_variable>
 #include <cstring>
+#include <mutex>
+#include <set>
+#include <thread>
 #include <random>
+#include <vector>
 
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/advect/dispatch.h"
@@ -59,6 +66,91 @@ TEST_CASE("bulk advection: a slab samples StreamedField's values bit for bit",
     }
   }
   CHECK(compared == 4 * 300);  // 5 steps: 4 slabs
+}
+
+namespace {
+
+// The CPU backend, saying that calls may run at once (as CUDA's lanes do). Each call marks its
+// particle arrays busy while it runs (two calls given the same arrays are counted) and waits
+// for a second call to be in flight, so that calls the map lets through overlap.
+class OverlappingBackend final : public advect::BatchAdvector {
+ public:
+  std::string name() const override { return "cpu, calls at once"; }
+  std::size_t max_concurrent_calls() const override { return 4; }
+  advect::AdvectionStatistics advect(advect::StepSource& source, advect::ParticleBatch& particles,
+                                     double t_end, const advect::MethodOptions& o) override {
+    {
+      std::unique_lock lock(mutex_);
+      if (!busy_.insert(&particles).second) ++shared_arrays;
+      max_in_flight = std::max(max_in_flight, ++in_flight_);
+      arrived_.notify_all();
+      arrived_.wait_for(lock, std::chrono::seconds(2), [&] { return in_flight_ >= 2; });
+    }
+    advect::AdvectionStatistics s;
+    {
+      std::lock_guard one(cpu_mutex_);  // the CPU backend and the source: one call at a time
+      s = cpu_->advect(source, particles, t_end, o);
+    }
+    std::lock_guard lock(mutex_);
+    busy_.erase(&particles);
+    --in_flight_;
+    return s;
+  }
+  std::size_t max_in_flight = 0, shared_arrays = 0;  // read after the calls
+
+ private:
+  std::unique_ptr<advect::BatchAdvector> cpu_ = advect::make_cpu_advector();
+  std::mutex mutex_, cpu_mutex_;
+  std::condition_variable arrived_;
+  std::set<const advect::ParticleBatch*> busy_;
+  std::size_t in_flight_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("bulk advection: the flow map lets calls run at once where the backend allows it, each "
+          "with its own particle arrays, and gives the results of calls one at a time",
+          "[spacetime][advect]") {
+  const auto flow = make_unsteady_field("unsteady-abc");
+  const GridGeometry grid = uniform_grid(flow->domain(), 3, 17);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 2, 5));
+  BrickCache cache(series, CacheOptions{});
+  CachedSteps steps(cache);
+  advect::MethodOptions method;
+  method.method = advect::Method::dopri5;
+  auto owned = std::make_unique<OverlappingBackend>();
+  OverlappingBackend& backend = *owned;
+  const BulkFlowMap at_once(steps, std::move(owned), method);
+  const BulkFlowMap in_turn(steps, advect::make_cpu_advector(), method);
+  std::mt19937_64 rng(11);
+  const Box<3> box = flow->domain();
+  std::uniform_real_distribution<double> u(0, 1);
+  constexpr std::size_t kCalls = 2, kParticles = 500;
+  std::array<std::vector<Vec3>, kCalls> x, want;
+  std::array<std::vector<ParticleStatus>, kCalls> status, want_status;
+  for (std::size_t c = 0; c < kCalls; ++c) {
+    for (std::size_t i = 0; i < kParticles; ++i)
+      x[c].push_back(box.lo + (box.hi - box.lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng))));
+    want[c] = x[c];
+    status[c].assign(kParticles, ParticleStatus::moving);
+    want_status[c] = status[c];
+  }
+  const std::vector<double> t0(kParticles, 0.25);
+  for (std::size_t c = 0; c < kCalls; ++c) in_turn.advect_all(want[c], t0, 1.5 + 0.25 * c, want_status[c]);
+  std::vector<std::thread> threads;
+  for (std::size_t c = 0; c < kCalls; ++c)
+    threads.emplace_back([&, c] { at_once.advect_all(x[c], t0, 1.5 + 0.25 * c, status[c]); });
+  for (auto& t : threads) t.join();
+  CHECK(backend.max_in_flight == 2);
+  CHECK(backend.shared_arrays == 0);
+  for (std::size_t c = 0; c < kCalls; ++c)
+    for (std::size_t i = 0; i < kParticles; ++i) {
+      REQUIRE(status[c][i] == want_status[c][i]);
+      REQUIRE(x[c][i] == want[c][i]);
+    }
+  // Both calls' figures are in the totals.
+  CHECK(at_once.statistics().particles == in_turn.statistics().particles);
+  CHECK(at_once.statistics().evaluations == in_turn.statistics().evaluations);
 }
 
 namespace {
