@@ -137,6 +137,9 @@ class Event {
 class Stream {
  public:
   Stream() { check(cudaStreamCreateWithFlags(&s_, cudaStreamNonBlocking), "cudaStreamCreate"); }
+  explicit Stream(int priority) {
+    check(cudaStreamCreateWithPriority(&s_, cudaStreamNonBlocking, priority), "cudaStreamCreateWithPriority");
+  }
   ~Stream() { cudaStreamDestroy(s_); }
   Stream(const Stream&) = delete;
   Stream& operator=(const Stream&) = delete;
@@ -264,8 +267,18 @@ double overlap(double a0, double a1, double b0, double b1) {
 /// pass's small fronts each leave most of the device idle): a stream, the particle arrays and
 /// their pinned staging, the counters, the axis tables, and per step slot an event marking the
 /// last kernel of this lane's current call that read it (an upload into that slot waits for it).
+/// The device's highest stream priority.
+int greatest_priority() {
+  int least = 0, greatest = 0;
+  check(cudaDeviceGetStreamPriorityRange(&least, &greatest), "cudaDeviceGetStreamPriorityRange");
+  return greatest;
+}
+
 struct Lane {
-  Stream compute;
+  // A batch call (small, such as a streak surface's catch-up) runs on the urgent stream: the
+  // device starts its blocks before the waiting blocks of a resident set's move on the normal one.
+  Stream normal, urgent{greatest_priority()};
+  cudaStream_t compute = nullptr;  ///< the stream of the call in flight
   std::array<DeviceArray<double>, 3> px;
   DeviceArray<double> pt, ph, pstop;
   DeviceArray<std::uint32_t> pe;
@@ -306,7 +319,10 @@ class CudaAdvector final : public BatchAdvector {
       stager_.join();
     }
     // Nothing may still read the buffers freed next.
-    for (const auto& lane : lanes_) cudaStreamSynchronize(lane->compute.get());
+    for (const auto& lane : lanes_) {
+      cudaStreamSynchronize(lane->normal.get());
+      cudaStreamSynchronize(lane->urgent.get());
+    }
     cudaStreamSynchronize(upload_.get());
   }
   std::string name() const override { return name_; }
@@ -329,11 +345,11 @@ class CudaAdvector final : public BatchAdvector {
     }
     const std::size_t floats =
         source.geometry().point_count() * static_cast<std::size_t>(source.components());
-    Lane& lane = begin_lane(floats);
+    Lane& lane = begin_lane(floats, true);
     try {
       run(lane, source, particles, plan, t_end, options, stats);
     } catch (...) {
-      cudaStreamSynchronize(lane.compute.get());  // nothing of the call's may still run
+      cudaStreamSynchronize(lane.compute);  // nothing of the call's may still run
       end_lane(lane);
       throw;
     }
@@ -378,7 +394,7 @@ class CudaAdvector final : public BatchAdvector {
                  const SlabPlan& plan, double t_end, const MethodOptions& options,
                  AdvectionStatistics& stats, const Download& download) {
     const std::vector<double>& times = source.times();
-    const cudaStream_t stream = lane.compute.get();
+    const cudaStream_t stream = lane.compute;
     const GridTables tables(source.geometry(), source.components(), source.zero_is_no_data());
     const GridView grid = device_grid(lane, tables);
     check(cudaMemsetAsync(lane.counters.get(), 0, 2 * sizeof(unsigned long long), stream),
@@ -686,7 +702,9 @@ class CudaAdvector final : public BatchAdvector {
 
   /// A free lane (made when every lane is busy), after the slots are laid out for steps of
   /// `floats` floats: a new step size waits until no call is in flight, then drops the slots.
-  Lane& begin_lane(std::size_t floats) {
+  /// `urgent`: the call runs on the lane's high-priority stream (batch calls; a resident set's
+  /// move, long, on the normal one).
+  Lane& begin_lane(std::size_t floats, bool urgent) {
     if (floats == 0) throw Error("CUDA: a step of the source has no samples");
     std::unique_lock lock(mutex_);
     lane_free_.wait(lock, [&] {
@@ -701,6 +719,7 @@ class CudaAdvector final : public BatchAdvector {
       lanes_.push_back(std::make_unique<Lane>());
       lane = lanes_.back().get();
     }
+    lane->compute = urgent ? lane->urgent.get() : lane->normal.get();
     lane->used_event.resize(slots_.size());
     lane->used.assign(slots_.size(), 0);
     lane->mine.reserve(3);
@@ -767,7 +786,7 @@ class CudaAdvector final : public BatchAdvector {
   // filled from `particles` on the lane's stream (kernels follow in order).
   static DeviceParticles upload_particles(Lane& lane, const ParticleBatch& particles) {
     const std::size_t n = particles.size();
-    const cudaStream_t s = lane.compute.get();
+    const cudaStream_t s = lane.compute;
     if (n > lane.capacity) {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");
       const std::size_t c = std::max(n, lane.capacity + lane.capacity / 2);
@@ -813,7 +832,7 @@ class CudaAdvector final : public BatchAdvector {
   // Returns the bytes enqueued.
   static std::size_t enqueue_download(Lane& lane, std::size_t n) {
     const Staged h = staged(lane);
-    const cudaStream_t s = lane.compute.get();
+    const cudaStream_t s = lane.compute;
     std::size_t bytes = 0;
     const auto down = [&](auto* host, const auto* device) {
       check(cudaMemcpyAsync(host, device, n * sizeof(*host), cudaMemcpyDeviceToHost, s),
@@ -830,7 +849,7 @@ class CudaAdvector final : public BatchAdvector {
 
   // The counters come down behind everything the lane's stream has; waits for all of it.
   static void finish_call(Lane& lane) {
-    const cudaStream_t s = lane.compute.get();
+    const cudaStream_t s = lane.compute;
     check(cudaMemcpyAsync(lane.counts.get(), lane.counters.get(), 2 * sizeof(unsigned long long),
                           cudaMemcpyDeviceToHost, s),
           "counter download");
@@ -888,7 +907,8 @@ class CudaAdvector final : public BatchAdvector {
   std::vector<std::unique_ptr<Lane>> lanes_;
   std::vector<Lane*> free_lanes_;
   std::size_t in_flight_ = 0;
-  std::size_t staging_ahead_ = 0;  ///< the stager is filling a slot (under mutex_)
+  std::size_t staging_ahead_ = 0;
+  ///< the stager is filling a slot (under mutex_)
 
   // The stager (stage_ahead): one request waiting at most, taken under ahead_mutex_.
   struct AheadRequest {
@@ -935,9 +955,9 @@ class CudaResident final : public ResidentParticles {
     const SlabPlan plan = plan_resident(source.times(), t_begin, t_end);
     const std::size_t floats =
         source.geometry().point_count() * static_cast<std::size_t>(source.components());
-    Lane& lane = owner_.begin_lane(floats);
+    Lane& lane = owner_.begin_lane(floats, false);
     try {
-      const cudaStream_t s = lane.compute.get();
+      const cudaStream_t s = lane.compute;
       const auto host = std::chrono::steady_clock::now();
       upload_changes(s);
       stats.host_seconds += seconds_since(host);
@@ -976,7 +996,7 @@ class CudaResident final : public ResidentParticles {
         CudaAdvector::finish_call(lane);
       }
     } catch (...) {
-      cudaStreamSynchronize(lane.compute.get());
+      cudaStreamSynchronize(lane.compute);
       owner_.end_lane(lane);
       throw;
     }
