@@ -15,6 +15,7 @@
 #include <cstring>
 #include <type_traits>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "orthofront/advect/advect_call.h"
@@ -615,7 +616,13 @@ class CudaAdvector final : public BatchAdvector {
   /// the step reads it again and reports the error).
   void stage_ahead(StepSource& source, std::size_t step) {
     std::lock_guard lock(ahead_mutex_);
-    if (!stager_.joinable()) stager_ = std::thread([this] { stager_loop(); });
+    if (!stager_.joinable()) {
+      try {
+        stager_ = std::thread([this] { stager_loop(); });
+      } catch (const std::system_error&) {
+        return;  // no thread to spare: calls read their steps themselves
+      }
+    }
     ahead_request_ = AheadRequest{&source, step};
     ahead_cv_.notify_all();
   }
