@@ -251,7 +251,10 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"backend_calls", b.total_seconds},
           {"uploads", b.upload_seconds},
           {"host_staging", b.host_seconds},
-          {"downloads", b.download_seconds}}},
+          {"downloads", b.download_seconds},
+          {"batch_calls", r.bulk_batch.total_seconds},
+          {"batch_kernels", r.bulk_batch.compute_seconds},
+          {"batch_downloads", r.bulk_batch.download_seconds}}},
         {"bytes_uploaded", b.bytes_uploaded},
         {"bytes_downloaded", b.bytes_downloaded},
         {"steps_uploaded", b.steps_loaded},
@@ -294,6 +297,10 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                   r.catch_up_particles, r.catch_up_call_seconds);
     std::printf("%-44s %10.3f\n", "    taking the positions into the rows", r.take_seconds);
     std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
+    if (r.catch_up_calls > 0)
+      std::printf("%-44s %10.3f  (%s %.3f s, downloads %.3f s)\n", "      of which batch calls (catch-ups)",
+                  r.bulk_batch.total_seconds, cuda ? "kernels" : "loops", r.bulk_batch.compute_seconds,
+                  r.bulk_batch.download_seconds);
     std::printf("%-44s %10.3f\n", "  refinement", r.refine_seconds);
     std::printf("%-44s %10.3f\n", "    of which coarsening", r.coarsen_seconds);
     std::printf("%-44s %10.3f\n", a->frames_in_line ? "  frames (finished in line)"

@@ -148,9 +148,20 @@ TEST_CASE("bulk advection: the flow map lets calls run at once where the backend
       REQUIRE(status[c][i] == want_status[c][i]);
       REQUIRE(x[c][i] == want[c][i]);
     }
-  // Both calls' figures are in the totals.
+  // Both calls' figures are in the totals, and in the batch calls' own.
   CHECK(at_once.statistics().particles == in_turn.statistics().particles);
   CHECK(at_once.statistics().evaluations == in_turn.statistics().evaluations);
+  CHECK(at_once.batch_statistics().evaluations == at_once.statistics().evaluations);
+  // A resident set's advance counts in the totals only.
+  const auto set = in_turn.make_resident();
+  const std::uint32_t slot = 0;
+  const std::array<double, 3> p{x[0][0].x(), x[0][0].y(), x[0][0].z()};
+  set->place(std::span<const std::uint32_t>(&slot, 1), std::span<const std::array<double, 3>>(&p, 1));
+  const std::size_t batch_evaluations = in_turn.batch_statistics().evaluations;
+  const std::size_t moved = in_turn.advance(*set, 0.25, 0.5);
+  CHECK(moved > 0);
+  CHECK(in_turn.batch_statistics().evaluations == batch_evaluations);
+  CHECK(in_turn.statistics().evaluations == batch_evaluations + moved);
 }
 
 namespace {

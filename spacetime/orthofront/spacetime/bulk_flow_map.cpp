@@ -153,6 +153,7 @@ std::size_t BulkFlowMap::advect_all(std::span<Vec3> x, std::span<const double> t
   });
   std::lock_guard lock(mutex_);
   total_ += s;
+  batch_total_ += s;
   return s.evaluations;
 }
 
@@ -172,6 +173,11 @@ std::size_t BulkFlowMap::advance(advect::ResidentParticles& particles, double t0
 advect::AdvectionStatistics BulkFlowMap::statistics() const {
   std::lock_guard lock(mutex_);
   return total_;
+}
+
+advect::AdvectionStatistics BulkFlowMap::batch_statistics() const {
+  std::lock_guard lock(mutex_);
+  return batch_total_;
 }
 
 }  // namespace orthofront::spacetime

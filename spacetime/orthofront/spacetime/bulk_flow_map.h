@@ -62,6 +62,9 @@ class BulkFlowMap final : public FlowMap {
   std::size_t advance(advect::ResidentParticles& particles, double t0, double t1) const;
   /// What the backend did, summed over calls.
   advect::AdvectionStatistics statistics() const;
+  /// Of those, the advect_all calls (a streak surface's catch-ups and single particles), without
+  /// resident sets' advances.
+  advect::AdvectionStatistics batch_statistics() const;
 
  private:
   advect::StepSource& steps_;
@@ -75,7 +78,7 @@ class BulkFlowMap final : public FlowMap {
   // Particle arrays of calls in flight, kept between calls (a streak surface makes one call per
   // interval): each call takes one out and puts it back.
   mutable std::vector<std::unique_ptr<advect::ParticleBatch>> batches_;
-  mutable advect::AdvectionStatistics total_;
+  mutable advect::AdvectionStatistics total_, batch_total_;
 };
 
 }  // namespace orthofront::spacetime

@@ -1377,6 +1377,7 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
   if (bulk) {
     report.device = bulk->backend_name();
     report.bulk = bulk->statistics();
+    report.bulk_batch = bulk->batch_statistics();
   }
   report.streamed = true;
   report.cache = cache.statistics();

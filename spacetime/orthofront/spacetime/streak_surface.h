@@ -140,6 +140,7 @@ struct StreakReport {
   double wait_seconds = 0, io_seconds = 0, decode_seconds = 0;  ///< streamed only
   std::string device;               ///< bulk advection backend ("" when not used)
   advect::AdvectionStatistics bulk; ///< what it did
+  advect::AdvectionStatistics bulk_batch;  ///< of which batch calls (catch-ups), not the set's moves
 };
 
 /// Called with each frame once it is built (e.g. to write it), from a thread of its own while the
