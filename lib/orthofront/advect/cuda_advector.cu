@@ -462,10 +462,7 @@ class CudaAdvector final : public BatchAdvector {
       // (lanes_in_use() keeps one free for a waiting call).
       int victim = -1;
       for (;;) {
-        for (int s = 0; s < slot_count; ++s) {
-          if (s == keep0 || s == keep1 || slots_[s]->pins > 0) continue;
-          if (victim < 0 || slots_[s]->last_use < slots_[victim]->last_use) victim = s;
-        }
+        victim = least_recent_unpinned(keep0, keep1);
         if (victim >= 0) break;
         slot_freed_.wait(lock);
       }
@@ -658,33 +655,41 @@ class CudaAdvector final : public BatchAdvector {
     std::unique_lock lock(mutex_);
     const std::size_t floats = source.geometry().point_count() * static_cast<std::size_t>(source.components());
     if (floats != slot_floats_) return;
-    int victim = -1;
-    for (int s = 0; s < static_cast<int>(slots_.size()); ++s) {
-      const Slot& slot = *slots_[s];
-      if (slot.source == source.identity() && slot.step == step) return;  // there or coming
-      if (slot.pins > 0) continue;
-      if (victim < 0 || slot.last_use < slots_[victim]->last_use) victim = s;
-    }
+    for (const auto& slot : slots_)
+      if (slot->source == source.identity() && slot->step == step) return;  // there or coming
+    const int victim = least_recent_unpinned(-1, -1);
     if (victim < 0) return;
     Slot& slot = *slots_[victim];
     ++slot.pins;
     slot.last_use = ++clock_;
     ++staging_ahead_;
+    // (Under the lock again, whether the fill ended or threw.)
+    const auto release = [&] {
+      --slot.pins;
+      --staging_ahead_;
+      slot_freed_.notify_all();
+      lane_free_.notify_all();
+    };
     try {
       const double host = fill_slot(lock, victim, source, step, [] {}, [] {});
       slot.ahead = true;
       slot.ahead_seconds = host;
     } catch (...) {
-      --slot.pins;
-      --staging_ahead_;
-      slot_freed_.notify_all();
-      lane_free_.notify_all();
+      release();
       throw;
     }
-    --slot.pins;
-    --staging_ahead_;
-    slot_freed_.notify_all();
-    lane_free_.notify_all();
+    release();
+  }
+
+  /// The least recently used slot that no call pins, other than keep0 and keep1; -1 if there is
+  /// none (under mutex_).
+  int least_recent_unpinned(int keep0, int keep1) const {
+    int victim = -1;
+    for (int s = 0; s < static_cast<int>(slots_.size()); ++s) {
+      if (s == keep0 || s == keep1 || slots_[s]->pins > 0) continue;
+      if (victim < 0 || slots_[s]->last_use < slots_[victim]->last_use) victim = s;
+    }
+    return victim;
   }
 
   /// Calls that may be in flight at once: each pins up to three slots and waits for a third
