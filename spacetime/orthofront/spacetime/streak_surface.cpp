@@ -930,6 +930,18 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, d
   if (gap <= long_edge) return std::nullopt;
   Row row;
   row.tau = 0.5 * (a.tau + b.tau);
+  row.p.reserve(std::max(a.p.size(), b.p.size()));
+  // The rows around, for cubic interpolation: the s asked for only grows along the walk, so a
+  // cursor into each finds what a binary search would, without a search per particle (the rows
+  // a stretching surface inserts hold thousands).
+  const std::vector<Particle>* before = r >= 1 ? &rows_[r - 1].p : nullptr;
+  const std::vector<Particle>* after = r + 2 < rows_.size() ? &rows_[r + 2].p : nullptr;
+  std::size_t at_before = 0, at_after = 0;
+  const auto find = [](const std::vector<Particle>* ps, std::size_t& at, double s) -> const Particle* {
+    if (!ps) return nullptr;
+    while (at < ps->size() && (*ps)[at].s < s) ++at;
+    return at < ps->size() && (*ps)[at].s == s && (*ps)[at].alive() ? &(*ps)[at] : nullptr;
+  };
   std::size_t i = 0, k = 0;
   while (i < a.p.size() || k < b.p.size()) {
     const bool take_a = k == b.p.size() || (i < a.p.size() && a.p[i].s <= b.p[k].s);
@@ -941,19 +953,11 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, d
       row.p.push_back(q);
     } else if (common) {
       // Cubic across rows where the rows around carry this s too, linear otherwise.
-      const auto find = [&](std::ptrdiff_t rr) -> const Particle* {
-        if (rr < 0 || rr >= static_cast<std::ptrdiff_t>(rows_.size())) return nullptr;
-        const auto& ps = rows_[static_cast<std::size_t>(rr)].p;
-        const auto it = std::lower_bound(ps.begin(), ps.end(), q.s,
-                                         [](const Particle& x, double s) { return x.s < s; });
-        return it != ps.end() && it->s == q.s && it->alive() ? &*it : nullptr;
-      };
       const Particle& pa = a.p[i];
       const Particle& pb = b.p[k];
       if (pa.alive() && pb.alive()) {
-        const auto rr = static_cast<std::ptrdiff_t>(r);
-        const Particle* p0 = find(rr - 1);
-        const Particle* p3 = find(rr + 2);
+        const Particle* p0 = find(before, at_before, q.s);
+        const Particle* p3 = find(after, at_after, q.s);
         q.x = (p0 && p3) ? cubic_middle(p0->x, pa.x, pb.x, p3->x) : 0.5 * (pa.x + pb.x);
       } else {
         q.status = ParticleStatus::left_domain;
