@@ -51,11 +51,8 @@ template <class T>
 class DeviceArray {
  public:
   DeviceArray() = default;
-  explicit DeviceArray(std::size_t n) : n_(n) {
-    if (n) check(cudaMalloc(&data_, n * sizeof(T)), "cudaMalloc");
-  }
-  DeviceArray(std::size_t n, cudaStream_t stream)
-      : n_(n), stream_(stream_ordered_memory() ? stream : nullptr) {
+  explicit DeviceArray(std::size_t n, cudaStream_t stream = nullptr)
+      : n_(n), stream_(stream && stream_ordered_memory() ? stream : nullptr) {
     if (!n) return;
     if (stream_)
       check(cudaMallocAsync(reinterpret_cast<void**>(&data_), n * sizeof(T), stream_), "cudaMallocAsync");
