@@ -606,6 +606,7 @@ class BatchRun {
       o.split = s.split;
       o.merge = s.merge;
       o.release_step = s.release_step;
+      o.releases_per_break = s.releases_per_break;
       o.seed_count = s.seed_count;
       o.insertion = s.insertion == "interpolate" ? spacetime::ParticleInsertion::interpolate
                                                  : spacetime::ParticleInsertion::exact;

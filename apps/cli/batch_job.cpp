@@ -198,7 +198,7 @@ const std::set<std::string>& surface_keys() {
       "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
       "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
       "tolerance", "integrator", "insertion", "format",  "release", "frames", "split",
-      "merge",    "release_step"};
+      "merge",    "release_step", "releases_per_break"};
   return keys;
 }
 
@@ -289,6 +289,10 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
     } else if (key == "release_step") {
       spec.release_step = number(d, v, at);
       if (spec.release_step < 0) d.fail(at, "must be >= 0 (0: derived), got " + v.dump());
+    } else if (key == "releases_per_break") {
+      const double k = number(d, v, at);
+      if (!(k >= 1 && k <= 1e6 && k == std::floor(k))) d.fail(at, "must be a whole number >= 1, got " + v.dump());
+      else spec.releases_per_break = static_cast<int>(k);
     } else if (key == "format") {
       spec.format = text(d, v, at);
       if (spec.format != "vtp" && spec.format != "ply" && spec.format != "obj")
@@ -493,6 +497,8 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
                         o.tolerance, static_cast<int>(o.integrator), static_cast<int>(o.insertion),
                         s.format, s.release, s.frames, s.split, s.merge, s.release_step,
                         s.insertion});
+    // Added to jobs later: in the digest only where set, so earlier checkpoints still resume.
+    if (s.releases_per_break != 1) expanded.back().push_back(s.releases_per_break);
   }
   job.digest = fnv1a(expanded.dump() + "|" + job.cache_budget);
   return job;

@@ -30,6 +30,7 @@ struct SurfaceSpec {
   std::string release;              ///< "T0:T1"
   std::string frames;               ///< "START:END:COUNT" or "t1,t2,..."
   double split = 1.5, merge = 0.5, release_step = 0;
+  int releases_per_break = 1;
   std::string insertion;            ///< as given (stream/path: streamline|cubic|linear; streak: exact|interpolate)
   bool steps_given = false;
   bool seed_count_given = false;    ///< else 20 (stream, path) or derived from ℓ (streak), as the commands

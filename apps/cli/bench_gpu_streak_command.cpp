@@ -37,7 +37,7 @@ struct BenchGpuStreakArgs {
   std::string field = "unsteady-abc";
   int resolution = 192;
   int steps = 41;               // over t in [0, 4]
-  double edge = 0.004;
+  double edge = 0.0037;  // over 10 million particles at four releases a break
   std::string seed = "1,2,3:5,2,3";
   double release_end = 1.5;
   int frames = 3;               // evenly up to t = 3
@@ -49,6 +49,7 @@ struct BenchGpuStreakArgs {
   bool frames_in_line = false;  // the baseline: finish frames before the particles move on
   bool per_call = false;        // the baseline: every particle up and down each interval
   bool in_turn = false;         // the baseline: refinement waits for the particles' move
+  int releases_per_break = 4;  // 1: the baseline, a refinement at every release
 };
 
 }  // namespace
@@ -66,6 +67,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
   c->add_option("--seed", a->seed, "Seed segment x0,y0,z0:x1,y1,z1")->capture_default_str();
   c->add_option("--release-end", a->release_end, "Release from t = 0 to this")->capture_default_str();
   c->add_option("--frames", a->frames, "Observation times, evenly up to t = 3")->capture_default_str();
+  c->add_option("--releases-per-break", a->releases_per_break,
+                "Rows released per refinement (those between move to the next break in one call)")
+      ->capture_default_str();
   c->add_option("--cache-budget", a->host_budget, "Host cache budget")->capture_default_str();
   c->add_option("--data-over-device", a->data_over_device,
                 "Series bytes over the bytes of steps the device may keep")->capture_default_str();
@@ -150,6 +154,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     o.finish_frames_aside = !a->frames_in_line;
     o.resident_particles = !a->per_call;
     o.overlap_advection = !a->in_turn;
+    o.releases_per_break = a->releases_per_break;
     const double last = o.frames.back();
     // Where the time goes along the run: six spans of simulated time (the release, then the
     // particles moving on), from the progress calls after each interval.
@@ -235,12 +240,23 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         {"last_frame_vertices", last_vertices},
         {"particle_steps", r.particle_steps},
         {"intervals", r.intervals},
+        {"releases_per_break", a->releases_per_break},
+        {"last_frame",
+         r.frames.empty() ? nlohmann::json()
+                          : nlohmann::json{{"rows", r.frames.back().rows},
+                                           {"quad_share", r.frames.back().quality.quad_share},
+                                           {"max_edge_over_edge", r.frames.back().max_edge / a->edge},
+                                           {"triangle_min_angle_median",
+                                            r.frames.back().quality.triangle_min_angle_median},
+                                           {"folds", r.frames.back().quality.folds},
+                                           {"degenerate_faces", r.frames.back().quality.degenerate_faces}}},
         {"seconds",
          {{"total", r.total_seconds},
           {"advect", r.advect_seconds},
           {"catch_up", r.catch_up_seconds},
           {"catch_up_calls", r.catch_up_call_seconds},
           {"take", r.take_seconds},
+          {"release_calls", r.release_call_seconds},
           {"refine", r.refine_seconds},
           {"coarsen", r.coarsen_seconds},
           {"frames", r.frame_seconds},
@@ -296,6 +312,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                   "    waiting for the catch-up, placing it", r.catch_up_seconds, r.catch_up_calls,
                   r.catch_up_particles, r.catch_up_call_seconds);
     std::printf("%-44s %10.3f\n", "    taking the positions into the rows", r.take_seconds);
+    if (r.release_calls > 0)
+      std::printf("%-44s %10.3f  (%zu calls, %zu rows)\n", "    moving rows released between breaks",
+                  r.release_call_seconds, r.release_calls, r.rows_released_between);
     std::printf("%-44s %10.3f  (%zu intervals)\n", "    in the backend (staging, transfers, kernels)", b.total_seconds, r.intervals);
     if (r.catch_up_calls > 0)
       std::printf("%-44s %10.3f  (%s %.3f s, downloads %.3f s)\n", "      of which batch calls (catch-ups)",
@@ -322,6 +341,15 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 "host work in the backend (staging, changes)", b.host_seconds, b.steps_read_ahead, b.steps_loaded);
     std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
                 r.total_seconds / floor);
+    if (!r.frames.empty()) {
+      const spacetime::StreakFrameRecord& f = r.frames.back();
+      std::printf("\nlast frame: %zu rows, %.1f %% quads, longest edge %.2f edge lengths, median "
+                  "smallest triangle angle %.1f deg, %zu folds, %zu degenerate faces; %d release%s "
+                  "per break\n",
+                  f.rows, 100 * f.quality.quad_share, f.max_edge / a->edge,
+                  f.quality.triangle_min_angle_median, f.quality.folds, f.quality.degenerate_faces,
+                  a->releases_per_break, a->releases_per_break == 1 ? "" : "s");
+    }
     std::printf("\nalong the run (seconds; frames: built in line, waits)\n%-12s %9s %12s %9s %9s %9s %9s\n",
                 "t", "intervals", "particles", "total", "advect", "refine", "frames");
     for (int k = 0; k < kSpans; ++k) {

@@ -14,7 +14,7 @@ namespace orthofront::cli {
 struct StreakArgs {
   std::string field, seed, release, frames, out, report, budget, insertion = "exact";
   std::string route = "direct", point, device, device_memory;
-  int seed_count = 0;
+  int seed_count = 0, releases_per_break = 1;
   double edge = 0.05, split = 1.5, merge = 0.5, release_step = 0;
   std::size_t max_vertices = 0;
   bool quiet = false;

@@ -138,6 +138,7 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
         {"end", r.release_end},
         {"step", r.release_step},
         {"rows", r.rows_released},
+        {"rows_between_breaks", r.rows_released_between},
         {"seed_count", r.seed_count}}},
       {"time_reached", r.time_reached},
       {"particle_steps", r.particle_steps},
@@ -358,6 +359,11 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
                   "Time between released rows (0: edge / median speed on the seed)")
       ->capture_default_str();
   command
+      .add_option("--releases-per-break", args.releases_per_break,
+                  "Rows released per refinement: the rows released between move from their "
+                  "release times to the next break in one call")
+      ->capture_default_str();
+  command
       .add_option("--seed-count", args.seed_count,
                   "Particles per row at release (0: seed length / edge + 1)")
       ->capture_default_str();
@@ -396,6 +402,7 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.split = args.split;
   o.merge = args.merge;
   o.release_step = args.release_step;
+  o.releases_per_break = args.releases_per_break;
   o.seed_count = args.seed_count;
   o.insertion = args.insertion == "exact" ? spacetime::ParticleInsertion::exact
                                           : spacetime::ParticleInsertion::interpolate;

@@ -390,32 +390,45 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
 TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte for byte",
           "[batch]") {
   TempDir dir("batch-streak");
-  write_text(dir / "job.toml",
+  // As `streak` defaults, and with three releases a break (`--releases-per-break 3`).
+  for (const int k : {1, 3}) {
+    INFO(k << " releases per break");
+    const std::string tag = std::to_string(k);
+    write_text(dir / ("job" + tag + ".toml"),
+               "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
+               "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"
+               "edge = 0.03\n" + (k == 1 ? std::string() : "releases_per_break = " + tag + "\n"));
+    const fs::path out = dir / ("out" + tag), alone = dir / ("alone" + tag);
+    const auto r = run("batch " + quoted(dir / ("job" + tag + ".toml")) + " --out " + quoted(out) + " --quiet");
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+    fs::create_directories(alone);
+    const auto a = run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
+                       "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --releases-per-break " + tag + " --out " +
+                       quoted(alone / "dye.pvd"));
+    INFO(a.output);
+    REQUIRE(a.status == 0);
+    CHECK(read_text(out / "dye.pvd") == read_text(alone / "dye.pvd"));
+    std::size_t frames = 0;
+    for (const auto& entry : fs::directory_iterator(alone / "dye")) {
+      INFO(entry.path());
+      CHECK(read_text(out / "dye" / entry.path().filename()) == read_text(entry.path()));
+      ++frames;
+    }
+    CHECK(frames == 4);
+    const nlohmann::json s = summary(out);
+    CHECK(s["surfaces"][0]["status"] == "done");
+    CHECK(s["surfaces"][0]["frames"] == 4);
+  }
+  CHECK(read_text(dir / "out1" / "dye" / "dye_0003.vtp") != read_text(dir / "out3" / "dye" / "dye_0003.vtp"));
+  write_text(dir / "zero.toml",
              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
              "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"
-             "edge = 0.03\n");
-  const auto r =
-      run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out") + " --quiet");
-  INFO(r.output);
-  REQUIRE(r.status == 0);
-  fs::create_directories(dir / "alone");
-  const auto alone =
-      run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
-          "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --out " +
-          quoted(dir / "alone" / "dye.pvd"));
-  INFO(alone.output);
-  REQUIRE(alone.status == 0);
-  CHECK(read_text(dir / "out" / "dye.pvd") == read_text(dir / "alone" / "dye.pvd"));
-  std::size_t frames = 0;
-  for (const auto& entry : fs::directory_iterator(dir / "alone" / "dye")) {
-    INFO(entry.path());
-    CHECK(read_text(dir / "out" / "dye" / entry.path().filename()) == read_text(entry.path()));
-    ++frames;
-  }
-  CHECK(frames == 4);
-  const nlohmann::json s = summary(dir / "out");
-  CHECK(s["surfaces"][0]["status"] == "done");
-  CHECK(s["surfaces"][0]["frames"] == 4);
+             "releases_per_break = 0\n");
+  const auto zero = run("batch " + quoted(dir / "zero.toml") + " --out " + quoted(dir / "zero"));
+  CHECK(zero.status == 2);
+  CHECK(zero.output.find("zero.toml:9: surface[0].releases_per_break: must be a whole number >= 1, got 0") !=
+        std::string::npos);
 }
 
 TEST_CASE("batch --device: the surfaces of a pass share one bulk backend and give the meshes of "

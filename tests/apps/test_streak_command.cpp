@@ -308,6 +308,19 @@ TEST_CASE(
       CHECK(read_text(dir.path() / "big" / (std::string("big") + frame)) ==
             read_text(dir.path() / "cuda" / (std::string("cuda") + frame)));
   }
+  // Rows released between breaks (four releases a break) go there in a call of their own: the
+  // same on both backends too.
+  const auto cpu4 = streak("cpu4", "--device cpu --releases-per-break 4");
+  INFO(cpu4.output);
+  REQUIRE(cpu4.status == 0);
+  CHECK(read_text(dir.path() / "cpu4" / "cpu4_0002.vtp") != read_text(dir.path() / "big" / "big_0002.vtp"));
+  if (cuda.status == 0) {
+    const auto cuda4 = streak("cuda4", "--device cuda --releases-per-break 4");
+    REQUIRE(cuda4.status == 0);
+    for (const char* frame : {"_0000.vtp", "_0001.vtp", "_0002.vtp"})
+      CHECK(read_text(dir.path() / "cpu4" / (std::string("cpu4") + frame)) ==
+            read_text(dir.path() / "cuda4" / (std::string("cuda4") + frame)));
+  }
 }
 
 TEST_CASE(

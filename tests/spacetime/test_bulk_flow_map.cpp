@@ -196,10 +196,15 @@ TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path 
     bool resident;
     bool overlap = true;
   };
+  // Also with rows released between breaks (every third release stops the particles; 0.25 is
+  // not a step time of the series, 0.5 is): they go to the next break in a call of their own.
+  for (const int per_break : {1, 3})
   for (const auto insertion : {ParticleInsertion::exact, ParticleInsertion::interpolate}) {
-  INFO(to_string(insertion) << " insertion");
+  INFO(to_string(insertion) << " insertion, " << per_break << " releases per break");
   StreakOptions o = gyre_options(insertion);
   o.merge = 0.75;  // particles and rows removed where the flow compresses the surface
+  o.releases_per_break = per_break;
+  if (per_break > 1) o.release_step = 0.25;
   std::vector<std::vector<StreakFrame>> runs;
   for (const Run run : {Run{std::size_t{1} << 30, true}, Run{std::size_t{8} << 20, true},
                         Run{std::size_t{1} << 30, false}, Run{std::size_t{1} << 30, true, false},

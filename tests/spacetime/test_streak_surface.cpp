@@ -8,6 +8,7 @@
 #include <thread>
 #include <limits>
 #include <map>
+#include <set>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -159,6 +160,52 @@ TEST_CASE("streak surface: positions match the moving spiral's closed-form path 
   CHECK(worst <= 1e-6);
   // Every edge is refined to at most split·ℓ along rows; strip diagonals stay below 2·split·ℓ.
   CHECK(frames.back().quality.quad_share > 0.8);
+}
+
+TEST_CASE("streak surface: rows released between breaks lie on the path lines of their own "
+          "release and are the rows of one release per break", "[spacetime][streak]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  StreakOptions o = gyre_options();
+  o.release_step = 0.125;  // 25 rows
+  std::array<StreakReport, 2> reports;
+  std::array<std::vector<StreakFrame>, 2> runs;
+  for (const int k : {1, 4}) {
+    o.releases_per_break = k;
+    const std::size_t run = k == 1 ? 0 : 1;
+    runs[run] = collect(*flow, seed, o, &reports[run]);
+    REQUIRE(reports[run].complete);
+    REQUIRE(runs[run].size() == 3);
+  }
+  // The same rows released at a quarter of the breaks (25 releases over [0, 3], then t = 4.5).
+  CHECK(reports[1].rows_released == reports[0].rows_released);
+  CHECK(reports[0].intervals == 25);
+  CHECK(reports[1].intervals == 7);
+  double worst = 0;
+  std::size_t checked = 0;
+  for (const StreakFrame& f : runs[1]) {
+    require_valid(f);
+    const auto [edge, gap] = longest_row_edge_and_gap(f.mesh);
+    CHECK(edge <= o.split * o.edge);
+    CHECK(gap <= o.split * o.edge);
+    // Rows of every release time, those released between breaks among them.
+    std::set<double> taus(f.mesh.release_time.begin(), f.mesh.release_time.end());
+    for (double tau = 0; tau <= std::min(f.time, o.release_end); tau += 0.125) CHECK(taus.count(tau) == 1);
+    for (std::size_t i = 0; i < f.mesh.vertex_count(); i += 3) {
+      const Vec3 ref = reference_path(*flow, seed.point(f.mesh.s[i]), f.mesh.release_time[i], f.time);
+      worst = std::max(worst, (f.mesh.positions[i] - ref).norm() / std::max(1.0, ref.norm()));
+      ++checked;
+    }
+  }
+  INFO(checked << " vertices, worst relative residual " << worst);
+  CHECK(worst <= 1e-6);
+  // Refined less often, the surface keeps its resolution: vertex counts within a tenth.
+  const double ratio = static_cast<double>(runs[1].back().mesh.vertex_count()) /
+                       static_cast<double>(runs[0].back().mesh.vertex_count());
+  CHECK(ratio > 0.9);
+  CHECK(ratio < 1.1);
+  o.releases_per_break = 0;
+  CHECK_THROWS_WITH(collect(*flow, seed, o), Catch::Contains("releases per break must be at least 1, got 0"));
 }
 
 TEST_CASE("streak surface: refinement leaves no edge and no row distance above split·ℓ, with "

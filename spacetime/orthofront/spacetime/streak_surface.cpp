@@ -134,7 +134,11 @@ class StreakBuilder {
  private:
   void validate();
   double seed_speed_median(const std::vector<double>& params) const;
+  // The row released at tau from the seed (positions on it; the s of the newest row).
+  Row seed_row(double tau);
   void release(double tau);
+  // Releases the rows of `taus` (before t_, increasing) and moves them to t_ in one call.
+  bool release_before(const std::vector<double>& taus);
   // New moving particles take slots of the resident set, in order (freed slots last first, then
   // new ones), and go there (while a move is in flight: they catch up and go there when it
   // lands); one leaving the rows gives its slot back (no-ops without a resident set).
@@ -310,6 +314,8 @@ void StreakBuilder::validate() {
         number(range.end) + "]");
   if (!(o_.release_step >= 0 && std::isfinite(o_.release_step)))
     bad("release step must be finite and >= 0, got " + number(o_.release_step));
+  if (o_.releases_per_break < 1)
+    bad("releases per break must be at least 1, got " + std::to_string(o_.releases_per_break));
   if (o_.seed_count < 0 || o_.seed_count == 1)
     bad("seed count must be at least 2 (or 0 for automatic), got " + std::to_string(o_.seed_count));
 }
@@ -329,7 +335,17 @@ double StreakBuilder::seed_speed_median(const std::vector<double>& params) const
   return speeds[speeds.size() / 2];
 }
 
-void StreakBuilder::release(double tau) {
+namespace {
+
+// Counts a particle's stop: [0] left the domain, [1] no data.
+void count_stop(ParticleStatus status, std::array<std::size_t, 2>& stopped) {
+  if (status == ParticleStatus::left_domain) ++stopped[0];
+  if (status == ParticleStatus::no_data) ++stopped[1];
+}
+
+}  // namespace
+
+Row StreakBuilder::seed_row(double tau) {
   Row row;
   row.tau = tau;
   // A new row takes the s of the newest one, so the strip between them is all quads.
@@ -351,11 +367,58 @@ void StreakBuilder::release(double tau) {
                                             : ParticleStatus::no_data;
     row.p.push_back(p);
   }
+  return row;
+}
+
+void StreakBuilder::release(double tau) {
+  Row row = seed_row(tau);
   std::vector<Particle*> entering(row.p.size());
   for (std::size_t i = 0; i < row.p.size(); ++i) entering[i] = &row.p[i];
   enter(entering);
   rows_.push_back(std::move(row));
   ++report_.rows_released;
+}
+
+bool StreakBuilder::release_before(const std::vector<double>& taus) {
+  const auto t0 = Clock::now();
+  const std::size_t first = rows_.size();
+  for (const double tau : taus) {
+    rows_.push_back(seed_row(tau));  // the next takes its s
+    ++report_.rows_released;
+    ++report_.rows_released_between;
+  }
+  ++report_.release_calls;
+  std::vector<Particle*> entering, moving;
+  for (std::size_t r = first; r < rows_.size(); ++r)
+    for (Particle& p : rows_[r].p) {
+      entering.push_back(&p);
+      if (p.alive()) moving.push_back(&p);
+    }
+  std::vector<Vec3> x(moving.size());
+  std::vector<double> from(moving.size());
+  std::vector<ParticleStatus> status(moving.size());
+  std::size_t k = 0;
+  for (std::size_t r = first; r < rows_.size(); ++r)
+    for (const Particle& p : rows_[r].p)
+      if (p.alive()) {
+        x[k] = p.x;
+        from[k++] = rows_[r].tau;
+      }
+  report_.evaluations += map_.advect_all(x, from, t_, status);
+  std::array<std::size_t, 2> stopped{0, 0};
+  for (std::size_t i = 0; i < moving.size(); ++i) {
+    moving[i]->x = x[i];
+    moving[i]->status = status[i];
+    count_stop(status[i], stopped);
+    report_.particle_time += t_ - from[i];
+  }
+  report_.left_domain += stopped[0];
+  report_.no_data += stopped[1];
+  report_.particle_steps += moving.size();
+  enter(entering);
+  report_.release_call_seconds += seconds_since(t0);
+  report_.advect_seconds += seconds_since(t0);
+  return !access_.read_error || no_error(access_.read_error());
 }
 
 bool StreakBuilder::advance(double t_to) {
@@ -381,16 +444,6 @@ void StreakBuilder::count_interval(std::size_t moved, double t_to,
   t_ = t_to;
   report_.time_reached = t_;
 }
-
-namespace {
-
-// Counts a particle's stop: [0] left the domain, [1] no data.
-void count_stop(ParticleStatus status, std::array<std::size_t, 2>& stopped) {
-  if (status == ParticleStatus::left_domain) ++stopped[0];
-  if (status == ParticleStatus::no_data) ++stopped[1];
-}
-
-}  // namespace
 
 std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::size_t, 2>>& stopped) {
   // The moving particles, row after row (millions: each row finds its own, in parallel, at an
@@ -1262,7 +1315,12 @@ StreakReport StreakBuilder::run() {
   std::sort(releases.begin(), releases.end());
   releases.erase(std::unique(releases.begin(), releases.end()), releases.end());
   const double t_last = o_.frames.back();
-  std::vector<double> breaks = releases;
+  // Every k-th release stops the particles (and the last; the frames and steps below do too);
+  // the rows released between go from their release times to the next stop in one call.
+  std::vector<double> breaks;
+  const auto per_break = static_cast<std::size_t>(o_.releases_per_break);
+  for (std::size_t j = 0; j < releases.size(); ++j)
+    if (j % per_break == 0 || j + 1 == releases.size()) breaks.push_back(releases[j]);
   breaks.insert(breaks.end(), o_.frames.begin(), o_.frames.end());
   for (const double t : access_.step_times)
     if (t > o_.release_begin && t < t_last) breaks.push_back(t);
@@ -1286,6 +1344,10 @@ StreakReport StreakBuilder::run() {
     } else if (b > t_) {
       if (!advance(b)) break;
     }
+    std::vector<double> before;  // released since the last stop
+    while (next_release < releases.size() && releases[next_release] < b)
+      before.push_back(releases[next_release++]);
+    if (!before.empty() && !release_before(before)) break;
     if (next_release < releases.size() && releases[next_release] == b) {
       release(b);
       ++next_release;

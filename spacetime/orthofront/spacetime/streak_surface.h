@@ -48,6 +48,12 @@ struct StreakOptions {
   double split = 1.5;               ///< an edge longer than split·ℓ gets a particle inserted
   double merge = 0.5;               ///< a particle whose edges are both below merge·ℓ goes
   double release_step = 0;          ///< time between rows at release; 0: ℓ / median seed speed
+  /// Rows released per stop of the particles: with k > 1 only every k-th release (and the last,
+  /// the frames and a series' steps) stops every particle to be refined; the rows released
+  /// between are moved from their release times to the next stop in one call. Each stop moves,
+  /// takes and looks at every particle, and a long release has hundreds: fewer stops at a
+  /// slightly longer interval between refinements.
+  int releases_per_break = 1;
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
   ParticleInsertion insertion = ParticleInsertion::exact;
   Tolerance tolerance{1e-10, 1e-10};
@@ -132,6 +138,10 @@ struct StreakReport {
   double catch_up_seconds = 0;      ///< of advect_seconds
   double catch_up_call_seconds = 0; ///< the catch-up calls on their thread (waiting for the move included)
   double take_seconds = 0;          ///< of advect_seconds: the set's positions taken into the rows
+  /// releases_per_break > 1: rows released between breaks, the calls that moved them to the next
+  /// break, and the driver's seconds on those calls (of advect_seconds).
+  std::size_t rows_released_between = 0, release_calls = 0;
+  double release_call_seconds = 0;
   double coarsen_seconds = 0;       ///< of refine_seconds
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
