@@ -125,6 +125,7 @@ class StreakBuilder {
     if (finisher_.joinable()) finisher_.join();
     if (flight_.joinable()) flight_.join();
     if (catch_up_.joinable()) catch_up_.join();
+    if (release_thread_.joinable()) release_thread_.join();
   }
   StreakBuilder(const StreakBuilder&) = delete;
   StreakBuilder& operator=(const StreakBuilder&) = delete;
@@ -134,11 +135,31 @@ class StreakBuilder {
  private:
   void validate();
   double seed_speed_median(const std::vector<double>& params) const;
-  // The row released at tau from the seed (positions on it; the s of the newest row).
-  Row seed_row(double tau);
+  // The s of the newest row (the seed's before the first): a new row takes them, so the strip
+  // between them is all quads.
+  std::vector<double> newest_params() const;
+  // The row released at tau with these s, on the seed (ids not given yet).
+  Row seed_row(double tau, const std::vector<double>& params) const;
   void release(double tau);
-  // Releases the rows of `taus` (before t_, increasing) and moves them to t_ in one call.
+  // Rows released between breaks (releases_per_break > 1), moved from their release times to
+  // the next break in one call, with what the call counted.
+  struct Released {
+    std::vector<Row> rows;
+    std::size_t evaluations = 0, moved = 0;
+    std::array<std::size_t, 2> stopped{0, 0};  // left the domain, no data
+    double particle_time = 0;
+  };
+  Released release_and_move(const std::vector<double>& taus, const std::vector<double>& params,
+                            double to) const;
+  // Gives the released rows their ids and counts, appends them and enters their particles.
+  void admit(Released released);
+  // Releases the rows of `taus` (before t_, increasing) and moves them to t_ (in turn).
   bool release_before(const std::vector<double>& taus);
+  // Overlapped: the rows of `taus` (between t_ and the move's end) are released and moved there
+  // on a thread of their own, beside the move, the frame and the next break's landing;
+  // take_released() admits them once the move has landed.
+  void start_release(const std::vector<double>& taus);
+  bool take_released();
   // New moving particles take slots of the resident set, in order (freed slots last first, then
   // new ones), and go there (while a move is in flight: they catch up and go there when it
   // lands); one leaving the rows gives its slot back (no-ops without a resident set).
@@ -273,6 +294,9 @@ class StreakBuilder {
   std::size_t catch_up_evaluations_ = 0;
   double catch_up_call_seconds_ = 0;
   std::exception_ptr catch_up_error_;
+  std::thread release_thread_;               // start_release()'s, joined by take_released()
+  Released released_;
+  std::exception_ptr release_error_;
   std::vector<std::uint32_t> flight_parks_;  // left while in flight: parked when it lands
   std::vector<std::uint32_t> flight_freed_;  // given back while in flight: free once it lands
   std::vector<Vec3> x_;
@@ -345,21 +369,23 @@ void count_stop(ParticleStatus status, std::array<std::size_t, 2>& stopped) {
 
 }  // namespace
 
-Row StreakBuilder::seed_row(double tau) {
+std::vector<double> StreakBuilder::newest_params() const {
+  if (rows_.empty()) return seed_params_;
+  std::vector<double> s;
+  s.reserve(rows_.back().p.size());
+  for (const Particle& p : rows_.back().p) s.push_back(p.s);
+  return s;
+}
+
+// (Reads only the field: it may run beside the driver.)
+Row StreakBuilder::seed_row(double tau, const std::vector<double>& params) const {
   Row row;
   row.tau = tau;
-  // A new row takes the s of the newest one, so the strip between them is all quads.
-  const std::vector<double> params = [&] {
-    if (rows_.empty()) return seed_params_;
-    std::vector<double> s;
-    for (const Particle& p : rows_.back().p) s.push_back(p.s);
-    return s;
-  }();
+  row.p.reserve(params.size());
   for (const double s : params) {
     Particle p;
     p.s = s;
     p.x = seed_point(s);
-    p.id = next_id_++;
     Vec3 v;
     const FieldStatus st = flow_.velocity(p.x, tau, v);
     p.status = st == FieldStatus::inside ? ParticleStatus::moving
@@ -371,7 +397,9 @@ Row StreakBuilder::seed_row(double tau) {
 }
 
 void StreakBuilder::release(double tau) {
-  Row row = seed_row(tau);
+  // A new row takes the s of the newest one, so the strip between them is all quads.
+  Row row = seed_row(tau, newest_params());
+  for (Particle& p : row.p) p.id = next_id_++;
   std::vector<Particle*> entering(row.p.size());
   for (std::size_t i = 0; i < row.p.size(); ++i) entering[i] = &row.p[i];
   enter(entering);
@@ -379,43 +407,77 @@ void StreakBuilder::release(double tau) {
   ++report_.rows_released;
 }
 
-bool StreakBuilder::release_before(const std::vector<double>& taus) {
-  const auto t0 = Clock::now();
-  const std::size_t first = rows_.size();
-  for (const double tau : taus) {
-    rows_.push_back(seed_row(tau));  // the next takes its s
+StreakBuilder::Released StreakBuilder::release_and_move(const std::vector<double>& taus,
+                                                        const std::vector<double>& params,
+                                                        double to) const {
+  Released out;
+  for (const double tau : taus) out.rows.push_back(seed_row(tau, params));
+  std::vector<Vec3> x;
+  std::vector<double> from;
+  for (const Row& row : out.rows)
+    for (const Particle& p : row.p)
+      if (p.alive()) {
+        x.push_back(p.x);
+        from.push_back(row.tau);
+      }
+  std::vector<ParticleStatus> status(x.size());
+  out.evaluations = map_.advect_all(x, from, to, status);
+  std::size_t k = 0;
+  for (Row& row : out.rows)
+    for (Particle& p : row.p)
+      if (p.alive()) {
+        p.x = x[k];
+        p.status = status[k];
+        count_stop(p.status, out.stopped);
+        out.particle_time += to - from[k++];
+      }
+  out.moved = x.size();
+  return out;
+}
+
+void StreakBuilder::admit(Released released) {
+  report_.evaluations += released.evaluations;
+  report_.particle_steps += released.moved;
+  report_.particle_time += released.particle_time;
+  report_.left_domain += released.stopped[0];
+  report_.no_data += released.stopped[1];
+  ++report_.release_calls;
+  std::vector<Particle*> entering;
+  for (Row& row : released.rows) {
     ++report_.rows_released;
     ++report_.rows_released_between;
+    for (Particle& p : row.p) p.id = next_id_++;
+    rows_.push_back(std::move(row));  // the particles stay where they are: pointers hold
+    for (Particle& p : rows_.back().p) entering.push_back(&p);
   }
-  ++report_.release_calls;
-  std::vector<Particle*> entering, moving;
-  for (std::size_t r = first; r < rows_.size(); ++r)
-    for (Particle& p : rows_[r].p) {
-      entering.push_back(&p);
-      if (p.alive()) moving.push_back(&p);
-    }
-  std::vector<Vec3> x(moving.size());
-  std::vector<double> from(moving.size());
-  std::vector<ParticleStatus> status(moving.size());
-  std::size_t k = 0;
-  for (std::size_t r = first; r < rows_.size(); ++r)
-    for (const Particle& p : rows_[r].p)
-      if (p.alive()) {
-        x[k] = p.x;
-        from[k++] = rows_[r].tau;
-      }
-  report_.evaluations += map_.advect_all(x, from, t_, status);
-  std::array<std::size_t, 2> stopped{0, 0};
-  for (std::size_t i = 0; i < moving.size(); ++i) {
-    moving[i]->x = x[i];
-    moving[i]->status = status[i];
-    count_stop(status[i], stopped);
-    report_.particle_time += t_ - from[i];
-  }
-  report_.left_domain += stopped[0];
-  report_.no_data += stopped[1];
-  report_.particle_steps += moving.size();
   enter(entering);
+}
+
+bool StreakBuilder::release_before(const std::vector<double>& taus) {
+  const auto t0 = Clock::now();
+  admit(release_and_move(taus, newest_params(), t_));
+  report_.release_call_seconds += seconds_since(t0);
+  report_.advect_seconds += seconds_since(t0);
+  return !access_.read_error || no_error(access_.read_error());
+}
+
+void StreakBuilder::start_release(const std::vector<double>& taus) {
+  release_error_ = nullptr;
+  release_thread_ = std::thread([this, taus, params = newest_params(), to = flight_to_] {
+    try {
+      released_ = release_and_move(taus, params, to);
+    } catch (...) {
+      release_error_ = std::current_exception();
+    }
+  });
+}
+
+bool StreakBuilder::take_released() {
+  if (!release_thread_.joinable()) return true;
+  const auto t0 = Clock::now();
+  release_thread_.join();
+  if (release_error_) std::rethrow_exception(std::exchange(release_error_, nullptr));
+  admit(std::exchange(released_, Released{}));
   report_.release_call_seconds += seconds_since(t0);
   report_.advect_seconds += seconds_since(t0);
   return !access_.read_error || no_error(access_.read_error());
@@ -1344,7 +1406,8 @@ StreakReport StreakBuilder::run() {
     } else if (b > t_) {
       if (!advance(b)) break;
     }
-    std::vector<double> before;  // released since the last stop
+    if (!take_released()) break;
+    std::vector<double> before;  // released since the last stop (in turn)
     while (next_release < releases.size() && releases[next_release] < b)
       before.push_back(releases[next_release++]);
     if (!before.empty() && !release_before(before)) break;
@@ -1355,6 +1418,14 @@ StreakReport StreakBuilder::run() {
     if (overlap && i + 1 < breaks.size() && !launch(breaks[i + 1])) break;
     adapt();
     if (!report_.complete) break;  // a read error while inserting
+    if (in_flight_) {
+      // The rows released before the move lands go there beside it (their s are the newest
+      // row's now: nothing changes them before it lands).
+      std::vector<double> ahead;
+      while (next_release < releases.size() && releases[next_release] < flight_to_)
+        ahead.push_back(releases[next_release++]);
+      if (!ahead.empty()) start_release(ahead);
+    }
     report_.max_particles = std::max(report_.max_particles, particle_count());
     if (particle_count() > o_.max_vertices) {
       stop("stopped at t = " + number(t_) + ": " + std::to_string(particle_count()) +
@@ -1386,6 +1457,7 @@ StreakReport StreakBuilder::run() {
     }
   }
   wait_flight();  // a run stopped early: that move's positions are not taken
+  if (release_thread_.joinable()) release_thread_.join();  // nor the rows released before it
   const auto t_join = Clock::now();
   join_finisher();
   report_.frame_seconds += seconds_since(t_join);
