@@ -151,8 +151,9 @@ class StreakBuilder {
   };
   Released release_and_move(const std::vector<double>& taus, const std::vector<double>& params,
                             double to) const;
-  // Gives the released rows their ids and counts, appends them and enters their particles.
-  void admit(Released released);
+  // Gives the released rows their ids and counts, appends them and enters their particles;
+  // the driver's time on them is counted from `since`. Returns whether there was no read error.
+  bool admit(Released released, Clock::time_point since);
   // Releases the rows of `taus` (before t_, increasing) and moves them to t_ (in turn).
   bool release_before(const std::vector<double>& taus);
   // Overlapped: the rows of `taus` (between t_ and the move's end) are released and moved there
@@ -435,7 +436,7 @@ StreakBuilder::Released StreakBuilder::release_and_move(const std::vector<double
   return out;
 }
 
-void StreakBuilder::admit(Released released) {
+bool StreakBuilder::admit(Released released, Clock::time_point since) {
   report_.evaluations += released.evaluations;
   report_.particle_steps += released.moved;
   report_.particle_time += released.particle_time;
@@ -451,14 +452,14 @@ void StreakBuilder::admit(Released released) {
     for (Particle& p : rows_.back().p) entering.push_back(&p);
   }
   enter(entering);
+  report_.release_call_seconds += seconds_since(since);
+  report_.advect_seconds += seconds_since(since);
+  return !access_.read_error || no_error(access_.read_error());
 }
 
 bool StreakBuilder::release_before(const std::vector<double>& taus) {
   const auto t0 = Clock::now();
-  admit(release_and_move(taus, newest_params(), t_));
-  report_.release_call_seconds += seconds_since(t0);
-  report_.advect_seconds += seconds_since(t0);
-  return !access_.read_error || no_error(access_.read_error());
+  return admit(release_and_move(taus, newest_params(), t_), t0);
 }
 
 void StreakBuilder::start_release(const std::vector<double>& taus) {
@@ -477,10 +478,7 @@ bool StreakBuilder::take_released() {
   const auto t0 = Clock::now();
   release_thread_.join();
   if (release_error_) std::rethrow_exception(std::exchange(release_error_, nullptr));
-  admit(std::exchange(released_, Released{}));
-  report_.release_call_seconds += seconds_since(t0);
-  report_.advect_seconds += seconds_since(t0);
-  return !access_.read_error || no_error(access_.read_error());
+  return admit(std::exchange(released_, Released{}), t0);
 }
 
 bool StreakBuilder::advance(double t_to) {
@@ -1392,6 +1390,13 @@ StreakReport StreakBuilder::run() {
 
   t_ = o_.release_begin;
   std::size_t next_release = 0, next_frame = 0;
+  // The releases not made yet before time t (taken: they are made by the caller).
+  const auto releases_before = [&](double t) {
+    std::vector<double> taus;
+    while (next_release < releases.size() && releases[next_release] < t)
+      taus.push_back(releases[next_release++]);
+    return taus;
+  };
   const auto stop = [&](const std::string& why) {
     report_.complete = false;
     report_.message = why;
@@ -1407,9 +1412,7 @@ StreakReport StreakBuilder::run() {
       if (!advance(b)) break;
     }
     if (!take_released()) break;
-    std::vector<double> before;  // released since the last stop (in turn)
-    while (next_release < releases.size() && releases[next_release] < b)
-      before.push_back(releases[next_release++]);
+    const std::vector<double> before = releases_before(b);  // since the last stop (in turn)
     if (!before.empty() && !release_before(before)) break;
     if (next_release < releases.size() && releases[next_release] == b) {
       release(b);
@@ -1421,9 +1424,7 @@ StreakReport StreakBuilder::run() {
     if (in_flight_) {
       // The rows released before the move lands go there beside it (their s are the newest
       // row's now: nothing changes them before it lands).
-      std::vector<double> ahead;
-      while (next_release < releases.size() && releases[next_release] < flight_to_)
-        ahead.push_back(releases[next_release++]);
+      const std::vector<double> ahead = releases_before(flight_to_);
       if (!ahead.empty()) start_release(ahead);
     }
     report_.max_particles = std::max(report_.max_particles, particle_count());
