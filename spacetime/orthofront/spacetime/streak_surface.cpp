@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/huge_pages.h"
 #include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -53,6 +54,18 @@ void for_each_row(std::size_t n, const F& f, bool parallel = true) {
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t r = range.begin(); r != range.end(); ++r) f(r);
                     });
+}
+
+// Resizes a frame's array to n elements. One that must grow is first emptied (nothing of it is
+// kept: every element is written anew) and reserved on huge pages, so that a frame several times
+// larger than the last is not copied over and faults in 2 MiB at a time.
+template <class T>
+void grow(std::vector<T>& values, std::size_t n) {
+  if (values.capacity() < n) {
+    std::vector<T>().swap(values);
+    reserve_huge_pages(values, n + n / 4);  // room for the next frame to grow a little
+  }
+  values.resize(n);
 }
 
 // Fewer particles than this are handled in turn: waking the threads costs more.
@@ -227,8 +240,10 @@ class StreakBuilder {
   std::optional<Row> row_between(std::size_t r, double long_edge, double& gap) const;
   // The distance of rows r and r + 1 after particles were added to them (`gap`: before).
   double grown_gap(std::size_t r, double gap, const RowChange& a, const RowChange& b) const;
-  std::vector<Face> strip(std::size_t r, const std::vector<std::int32_t>& va,
-                          const std::vector<std::int32_t>& vb) const;
+  // Hands the faces between rows r and r + 1 to `face`, in order (see the definition).
+  template <class F>
+  void for_each_strip_face(std::size_t r, const std::vector<std::int32_t>& va,
+                           const std::vector<std::int32_t>& vb, const F& face) const;
   bool release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
                           std::vector<ParticleStatus>& status);
   void coarsen(std::vector<double>& gap);
@@ -1211,9 +1226,9 @@ void StreakBuilder::emit(int index) {
   }
   const std::size_t nv = first[nr];
   // Side by side: a frame larger than the last one fills its new elements with zeros.
-  tbb::parallel_invoke([&] { mesh.positions.resize(nv); }, [&] { mesh.s.resize(nv); },
-                       [&] { mesh.release_time.resize(nv); }, [&] { mesh.age.resize(nv); },
-                       [&] { mesh.speed.resize(nv); }, [&] { mesh.particle_id.resize(nv); });
+  tbb::parallel_invoke([&] { grow(mesh.positions, nv); }, [&] { grow(mesh.s, nv); },
+                       [&] { grow(mesh.release_time, nv); }, [&] { grow(mesh.age, nv); },
+                       [&] { grow(mesh.speed, nv); }, [&] { grow(mesh.particle_id, nv); });
   std::vector<std::vector<std::int32_t>> vertex(nr);
   for_each_row(nr, [&](std::size_t r) {
     const Row& row = rows_[r];
@@ -1235,15 +1250,20 @@ void StreakBuilder::emit(int index) {
       ++v;
     }
   });
-  // Strips between neighbouring rows, each into its own list, joined in row order.
-  std::vector<std::vector<Face>> strips(nr > 0 ? nr - 1 : 0);
-  for_each_row(strips.size(), [&](std::size_t r) { strips[r] = strip(r, vertex[r], vertex[r + 1]); });
-  std::vector<std::size_t> first_face(strips.size() + 1, 0);
-  for (std::size_t r = 0; r < strips.size(); ++r) first_face[r + 1] = first_face[r] + strips[r].size();
-  mesh.faces.resize(first_face.back());
-  for_each_row(strips.size(), [&](std::size_t r) {
-    std::copy(strips[r].begin(), strips[r].end(),
-              mesh.faces.begin() + static_cast<std::ptrdiff_t>(first_face[r]));
+  // Strips between neighbouring rows in row order: each strip's faces are counted, then
+  // written in place (no list per strip to copy from).
+  const std::size_t strips = nr > 0 ? nr - 1 : 0;
+  std::vector<std::size_t> first_face(strips + 1, 0);
+  for_each_row(strips, [&](std::size_t r) {
+    std::size_t n = 0;
+    for_each_strip_face(r, vertex[r], vertex[r + 1], [&n](const Face&) { ++n; });
+    first_face[r + 1] = n;
+  });
+  for (std::size_t r = 0; r < strips; ++r) first_face[r + 1] += first_face[r];
+  grow(mesh.faces, first_face.back());
+  for_each_row(strips, [&](std::size_t r) {
+    Face* out = mesh.faces.data() + first_face[r];
+    for_each_strip_face(r, vertex[r], vertex[r + 1], [&out](const Face& f) { *out++ = f; });
   });
   StreakFrameRecord rec;
   rec.index = index;
@@ -1292,15 +1312,16 @@ void StreakBuilder::finish_frame(double built) {
     frame_failed_ = true;
   }
   finishing_seconds_ = seconds_since(t1);
+  finishing_record_.build_seconds = built;
   finishing_record_.seconds = built + finishing_seconds_;
 }
 
 // The faces between rows r and r + 1 (`va`, `vb`: their particles' vertices, -1 for stopped
 // ones): walk both rows in s; a shared s closes a quad, otherwise the row whose next s comes
 // first gives a triangle. Faces with a stopped particle are left out.
-std::vector<Face> StreakBuilder::strip(std::size_t r, const std::vector<std::int32_t>& va,
-                                       const std::vector<std::int32_t>& vb) const {
-  std::vector<Face> faces;
+template <class F>
+void StreakBuilder::for_each_strip_face(std::size_t r, const std::vector<std::int32_t>& va,
+                                        const std::vector<std::int32_t>& vb, const F& face) const {
   const bool closed = seed_.closed();
   const auto& A = rows_[r].p;
   const auto& B = rows_[r + 1].p;
@@ -1315,19 +1336,18 @@ std::vector<Face> StreakBuilder::strip(std::size_t r, const std::vector<std::int
     const bool step_b = k < eb && (i == ea || sb(k + 1) <= sa(i + 1));
     if (step_a && step_b) {
       const std::int32_t a1 = va[(i + 1) % na], b1 = vb[(k + 1) % nb];
-      if (a0 >= 0 && a1 >= 0 && b1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, a1, b1, b0}, 4});
+      if (a0 >= 0 && a1 >= 0 && b1 >= 0 && b0 >= 0) face(Face{{a0, a1, b1, b0}, 4});
       ++i, ++k;
     } else if (step_a) {
       const std::int32_t a1 = va[(i + 1) % na];
-      if (a0 >= 0 && a1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, a1, b0, -1}, 3});
+      if (a0 >= 0 && a1 >= 0 && b0 >= 0) face(Face{{a0, a1, b0, -1}, 3});
       ++i;
     } else {
       const std::int32_t b1 = vb[(k + 1) % nb];
-      if (a0 >= 0 && b1 >= 0 && b0 >= 0) faces.push_back(Face{{a0, b1, b0, -1}, 3});
+      if (a0 >= 0 && b1 >= 0 && b0 >= 0) face(Face{{a0, b1, b0, -1}, 3});
       ++k;
     }
   }
-  return faces;
 }
 
 StreakReport StreakBuilder::run() {

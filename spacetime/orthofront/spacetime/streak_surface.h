@@ -101,6 +101,7 @@ struct StreakFrameRecord {
   QualityReport quality;
   double max_edge = 0;              ///< longest mesh edge
   double seconds = 0;               ///< building and handing over the frame (both parts)
+  double build_seconds = 0;         ///< its vertices and faces (the particles wait for these)
 };
 
 struct StreakReport {
