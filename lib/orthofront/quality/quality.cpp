@@ -505,139 +505,145 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   r.triangles = mesh.faces.size() - r.quads;
   r.quad_share = r.faces ? static_cast<double>(r.quads) / static_cast<double>(r.faces) : 0.0;
 
-  // Unit normals, zero where the face is degenerate (which keeps it out of folds).
+  // The edges' figures and the shapes' side by side: each has serial stretches (sums, joins,
+  // selections) where the other's loops keep the threads busy.
   const std::size_t nf = mesh.faces.size();
-  Buffer<Vec3> normals = untouched<Vec3>(nf);
-  for_each_index(nf, [&](std::size_t f) {
-    const Face& face = mesh.faces[f];
-    normals[f].setZero();
-    if (has_repeated_index(face)) return;
-    double longest_sq = 0;
-    for (int i = 0; i < face.size; ++i)
-      longest_sq = std::max(longest_sq, (p[face.v[(i + 1) % face.size]] - p[face.v[i]]).squaredNorm());
-    const Vec3 area = area_vector(mesh, face);
-    const double norm = area.norm();
-    if (!(norm > options.degenerate_area * longest_sq) || norm == 0) return;
-    normals[f] = area / norm;
-  });
-  r.degenerate_faces = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, nf, 65536), std::size_t{0},
-      [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
-        for (std::size_t f = range.begin(); f < range.end(); ++f) n += normals[f].squaredNorm() == 0;
-        return n;
-      },
-      [](std::size_t x, std::size_t y) { return x + y; });
-
-  const EdgeFigures edges = scan_edges(mesh, normals, options.fold_cos);
-  r.non_manifold_edges = edges.non_manifold;
-  r.inconsistent_edges = edges.inconsistent;
-  r.folds = edges.folds;
-  r.boundary_edges = edges.boundary.size();
-  r.t_junctions = count_t_junctions(mesh, edges.boundary);
-
-  // Shape statistics; faces with a zero-length edge have no defined angles and are skipped.
-  // Fixed blocks of faces are measured in parallel, each into its own histograms and lists; the
-  // lists are joined in face order, so every figure (sums included) is the serial one.
-  struct Shapes {
-    Histogram quad_angles, edge_ratio, triangle_min_angle;
-    std::span<double> angle_dev, spread, tri_min;  // the block's values, in face order
-    double angle_dev_sum = 0, spread_sum = 0;
-    std::size_t measured_quads = 0, measured_triangles = 0, within_10 = 0, below_10 = 0;
-  };
-  constexpr std::size_t kShapeBlock = 16384;
-  std::vector<Shapes> blocks((nf + kShapeBlock - 1) / kShapeBlock);
-  // Each block writes its values into its own stretch of one buffer for all (four a quad, one a
-  // triangle at most): hundreds of megabytes for a frame of millions of faces, faulted in by the
-  // blocks in 2 MiB pages, with no allocation per block.
-  Buffer<double> angle_dev_values = untouched<double>(4 * nf), spread_values = untouched<double>(4 * nf),
-                 tri_min_values = untouched<double>(nf);
-  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
-    Shapes& out = blocks[b];
-    out.quad_angles = make_histogram(0, 180, options.angle_bins);
-    out.edge_ratio = make_histogram(-1, 1, options.edge_bins);
-    out.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
-    const std::size_t end = std::min(nf, (b + 1) * kShapeBlock);
-    double* const dev = angle_dev_values.data() + 4 * b * kShapeBlock;
-    double* const spread = spread_values.data() + 4 * b * kShapeBlock;
-    double* const tri_min = tri_min_values.data() + b * kShapeBlock;
-    std::size_t n_angles = 0, n_triangles = 0;
-    for (std::size_t f = b * kShapeBlock; f < end; ++f) {
+  const auto edge_figures = [&] {
+    // Unit normals, zero where the face is degenerate (which keeps it out of folds).
+    Buffer<Vec3> normals = untouched<Vec3>(nf);
+    for_each_index(nf, [&](std::size_t f) {
       const Face& face = mesh.faces[f];
-      const int n = face.size;
-      std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
-      std::array<double, 4> length{};
-      bool measurable = true;
-      for (int i = 0; i < n; ++i) {
-        e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
-        length[i] = e[i].norm();
-        measurable = measurable && length[i] > 0;
-      }
-      if (!measurable) continue;
-      if (face.is_quad()) {
-        ++out.measured_quads;
-        const double avg = 0.25 * (length[0] + length[1] + length[2] + length[3]);
-        for (int i = 0; i < 4; ++i) {
-          const double angle = angle_deg(-e[(i + 3) % 4], e[i]);
-          add(out.quad_angles, angle);
-          dev[n_angles] = std::abs(angle - 90);
-          out.angle_dev_sum += dev[n_angles];
-          if (angle >= 80 && angle <= 100) ++out.within_10;
-          const double ratio = 1 - length[i] / avg;
-          add(out.edge_ratio, ratio);
-          spread[n_angles] = std::abs(ratio);
-          out.spread_sum += spread[n_angles];
-          ++n_angles;
-        }
-      } else {
-        ++out.measured_triangles;
-        double smallest = 180;
-        for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
-        add(out.triangle_min_angle, smallest);
-        tri_min[n_triangles++] = smallest;
-        if (smallest < 10) ++out.below_10;
-      }
-    }
-    out.angle_dev = {dev, n_angles};
-    out.spread = {spread, n_angles};
-    out.tri_min = {tri_min, n_triangles};
-  });
-  Parts angle_dev(blocks.size()), spread(blocks.size()), tri_min(blocks.size());
-  std::size_t within_10 = 0, below_10 = 0;
-  double angle_dev_sum = 0, spread_sum = 0;  // block after block: the same for any schedule
-  const auto add_counts = [](Histogram& to, const Histogram& from) {
-    for (std::size_t i = 0; i < to.counts.size(); ++i) to.counts[i] += from.counts[i];
+      normals[f].setZero();
+      if (has_repeated_index(face)) return;
+      double longest_sq = 0;
+      for (int i = 0; i < face.size; ++i)
+        longest_sq = std::max(longest_sq, (p[face.v[(i + 1) % face.size]] - p[face.v[i]]).squaredNorm());
+      const Vec3 area = area_vector(mesh, face);
+      const double norm = area.norm();
+      if (!(norm > options.degenerate_area * longest_sq) || norm == 0) return;
+      normals[f] = area / norm;
+    });
+    r.degenerate_faces = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, nf, 65536), std::size_t{0},
+        [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
+          for (std::size_t f = range.begin(); f < range.end(); ++f) n += normals[f].squaredNorm() == 0;
+          return n;
+        },
+        [](std::size_t x, std::size_t y) { return x + y; });
+
+    const EdgeFigures edges = scan_edges(mesh, normals, options.fold_cos);
+    r.non_manifold_edges = edges.non_manifold;
+    r.inconsistent_edges = edges.inconsistent;
+    r.folds = edges.folds;
+    r.boundary_edges = edges.boundary.size();
+    r.t_junctions = count_t_junctions(mesh, edges.boundary);
   };
-  for (std::size_t b = 0; b < blocks.size(); ++b) {
-    Shapes& block = blocks[b];
-    r.measured_quads += block.measured_quads;
-    r.measured_triangles += block.measured_triangles;
-    within_10 += block.within_10;
-    below_10 += block.below_10;
-    angle_dev_sum += block.angle_dev_sum;
-    spread_sum += block.spread_sum;
-    add_counts(r.quad_angles, block.quad_angles);
-    add_counts(r.edge_ratio, block.edge_ratio);
-    add_counts(r.triangle_min_angle, block.triangle_min_angle);
-    angle_dev[b] = block.angle_dev;
-    spread[b] = block.spread;
-    tri_min[b] = block.tri_min;
-  }
-  const std::size_t angles = total_size(angle_dev), triangles = total_size(tri_min);
-  if (angles > 0) {
-    r.quad_angles_within_10 = static_cast<double>(within_10) / static_cast<double>(angles);
-    r.quad_angle_mean_abs_dev = angle_dev_sum / static_cast<double>(angles);
-    r.edge_spread_mean = spread_sum / static_cast<double>(angles);
-  }
-  // Order statistics side by side.
-  tbb::parallel_invoke([&] { r.quad_angle_abs_dev_p90 = quantile(angle_dev, 0.9); },
-                       [&] {
-                         r.edge_spread_median = quantile(spread, 0.5);
-                         r.edge_spread_p90 = quantile(spread, 0.9);
-                       },
-                       [&] { r.triangle_min_angle_median = quantile(tri_min, 0.5); });
-  if (triangles > 0) {
-    r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(triangles);
-  }
+  const auto shape_figures = [&] {
+    // Shape statistics; faces with a zero-length edge have no defined angles and are skipped.
+    // Fixed blocks of faces are measured in parallel, each into its own histograms and lists; the
+    // lists are joined in face order, so every figure (sums included) is the serial one.
+    struct Shapes {
+      Histogram quad_angles, edge_ratio, triangle_min_angle;
+      std::span<double> angle_dev, spread, tri_min;  // the block's values, in face order
+      double angle_dev_sum = 0, spread_sum = 0;
+      std::size_t measured_quads = 0, measured_triangles = 0, within_10 = 0, below_10 = 0;
+    };
+    constexpr std::size_t kShapeBlock = 16384;
+    std::vector<Shapes> blocks((nf + kShapeBlock - 1) / kShapeBlock);
+    // Each block writes its values into its own stretch of one buffer for all (four a quad, one a
+    // triangle at most): hundreds of megabytes for a frame of millions of faces, faulted in by the
+    // blocks in 2 MiB pages, with no allocation per block.
+    Buffer<double> angle_dev_values = untouched<double>(4 * nf), spread_values = untouched<double>(4 * nf),
+                   tri_min_values = untouched<double>(nf);
+    tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
+      Shapes& out = blocks[b];
+      out.quad_angles = make_histogram(0, 180, options.angle_bins);
+      out.edge_ratio = make_histogram(-1, 1, options.edge_bins);
+      out.triangle_min_angle = make_histogram(0, 90, options.triangle_bins);
+      const std::size_t end = std::min(nf, (b + 1) * kShapeBlock);
+      double* const dev = angle_dev_values.data() + 4 * b * kShapeBlock;
+      double* const spread = spread_values.data() + 4 * b * kShapeBlock;
+      double* const tri_min = tri_min_values.data() + b * kShapeBlock;
+      std::size_t n_angles = 0, n_triangles = 0;
+      for (std::size_t f = b * kShapeBlock; f < end; ++f) {
+        const Face& face = mesh.faces[f];
+        const int n = face.size;
+        std::array<Vec3, 4> e;  // e[i] = p[i+1] - p[i]
+        std::array<double, 4> length{};
+        bool measurable = true;
+        for (int i = 0; i < n; ++i) {
+          e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
+          length[i] = e[i].norm();
+          measurable = measurable && length[i] > 0;
+        }
+        if (!measurable) continue;
+        if (face.is_quad()) {
+          ++out.measured_quads;
+          const double avg = 0.25 * (length[0] + length[1] + length[2] + length[3]);
+          for (int i = 0; i < 4; ++i) {
+            const double angle = angle_deg(-e[(i + 3) % 4], e[i]);
+            add(out.quad_angles, angle);
+            dev[n_angles] = std::abs(angle - 90);
+            out.angle_dev_sum += dev[n_angles];
+            if (angle >= 80 && angle <= 100) ++out.within_10;
+            const double ratio = 1 - length[i] / avg;
+            add(out.edge_ratio, ratio);
+            spread[n_angles] = std::abs(ratio);
+            out.spread_sum += spread[n_angles];
+            ++n_angles;
+          }
+        } else {
+          ++out.measured_triangles;
+          double smallest = 180;
+          for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
+          add(out.triangle_min_angle, smallest);
+          tri_min[n_triangles++] = smallest;
+          if (smallest < 10) ++out.below_10;
+        }
+      }
+      out.angle_dev = {dev, n_angles};
+      out.spread = {spread, n_angles};
+      out.tri_min = {tri_min, n_triangles};
+    });
+    Parts angle_dev(blocks.size()), spread(blocks.size()), tri_min(blocks.size());
+    std::size_t within_10 = 0, below_10 = 0;
+    double angle_dev_sum = 0, spread_sum = 0;  // block after block: the same for any schedule
+    const auto add_counts = [](Histogram& to, const Histogram& from) {
+      for (std::size_t i = 0; i < to.counts.size(); ++i) to.counts[i] += from.counts[i];
+    };
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      Shapes& block = blocks[b];
+      r.measured_quads += block.measured_quads;
+      r.measured_triangles += block.measured_triangles;
+      within_10 += block.within_10;
+      below_10 += block.below_10;
+      angle_dev_sum += block.angle_dev_sum;
+      spread_sum += block.spread_sum;
+      add_counts(r.quad_angles, block.quad_angles);
+      add_counts(r.edge_ratio, block.edge_ratio);
+      add_counts(r.triangle_min_angle, block.triangle_min_angle);
+      angle_dev[b] = block.angle_dev;
+      spread[b] = block.spread;
+      tri_min[b] = block.tri_min;
+    }
+    const std::size_t angles = total_size(angle_dev), triangles = total_size(tri_min);
+    if (angles > 0) {
+      r.quad_angles_within_10 = static_cast<double>(within_10) / static_cast<double>(angles);
+      r.quad_angle_mean_abs_dev = angle_dev_sum / static_cast<double>(angles);
+      r.edge_spread_mean = spread_sum / static_cast<double>(angles);
+    }
+    // Order statistics side by side.
+    tbb::parallel_invoke([&] { r.quad_angle_abs_dev_p90 = quantile(angle_dev, 0.9); },
+                         [&] {
+                           r.edge_spread_median = quantile(spread, 0.5);
+                           r.edge_spread_p90 = quantile(spread, 0.9);
+                         },
+                         [&] { r.triangle_min_angle_median = quantile(tri_min, 0.5); });
+    if (triangles > 0) {
+      r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(triangles);
+    }
+  };
+  tbb::parallel_invoke(edge_figures, shape_figures);
   return r;
 }
 
