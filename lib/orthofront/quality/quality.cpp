@@ -315,7 +315,7 @@ double quantile(const Parts& parts, double q) {
   if (n == 0) return 0;
   const double pos = q * static_cast<double>(n - 1);
   const auto k = static_cast<std::size_t>(pos);
-  constexpr std::size_t kManyValues = std::size_t{1} << 20;
+  constexpr std::size_t kManyValues = std::size_t{1} << 16;  // below, one copy and a selection are quicker
   if (n >= kManyValues) {
     const auto [lo, hi] = kth_smallest_pair(parts, k);
     if (k + 1 >= n) return lo;
