@@ -353,14 +353,15 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     std::printf("\nframes (seconds: vertices and faces, the particles waiting; then quality and "
                 "hand-over%s)\n%-8s %12s %12s %9s %9s\n",
                 a->frames_in_line ? "" : ", aside", "t", "vertices", "faces", "built", "finished");
+    j["frames"] = nlohmann::json::array();
     for (const spacetime::StreakFrameRecord& f : r.frames) {
       std::printf("%-8g %12zu %12zu %9.3f %9.3f\n", f.time, f.vertices, f.faces, f.build_seconds,
-                  f.seconds - f.build_seconds);
+                  f.finish_seconds);
       j["frames"].push_back({{"time", f.time},
                              {"vertices", f.vertices},
                              {"faces", f.faces},
                              {"build_seconds", f.build_seconds},
-                             {"finish_seconds", f.seconds - f.build_seconds}});
+                             {"finish_seconds", f.finish_seconds}});
     }
     std::printf("\nalong the run (seconds; frames: built in line, waits)\n%-12s %9s %12s %9s %9s %9s %9s\n",
                 "t", "intervals", "particles", "total", "advect", "refine", "frames");

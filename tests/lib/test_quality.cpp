@@ -306,6 +306,14 @@ TEST_CASE("quality: degenerate faces", "[quality]") {
   QualityOptions options;
   options.degenerate_area = 1e-6;
   CHECK(measure_quality(thin, options).degenerate_faces == 1);
+
+  // Faces whose area vector is too large to square are whole faces, not degenerate ones (their
+  // normals cannot be measured, so they take no part in folds either).
+  const Mesh huge = grid(3, 3, [](int i, int j) { return Vec3(1e100 * i, 1e100 * j, 0); });
+  const auto rh = measure_quality(huge);
+  CHECK(rh.degenerate_faces == 0);
+  CHECK(rh.folds == 0);
+  CHECK(rh.quads == 9);
 }
 
 TEST_CASE("quality: histogram totals match the measured counts", "[quality]") {

@@ -509,11 +509,14 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   // selections) where the other's loops keep the threads busy.
   const std::size_t nf = mesh.faces.size();
   const auto edge_figures = [&] {
-    // Unit normals, zero where the face is degenerate (which keeps it out of folds).
+    // Unit normals, zero where the face is degenerate (which keeps it out of folds). A zero
+    // normal alone does not mark one: an area too large to square gives zero too.
     Buffer<Vec3> normals = untouched<Vec3>(nf);
+    Buffer<char> degenerate = untouched<char>(nf);
     for_each_index(nf, [&](std::size_t f) {
       const Face& face = mesh.faces[f];
       normals[f].setZero();
+      degenerate[f] = 1;
       if (has_repeated_index(face)) return;
       double longest_sq = 0;
       for (int i = 0; i < face.size; ++i)
@@ -521,12 +524,13 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
       const Vec3 area = area_vector(mesh, face);
       const double norm = area.norm();
       if (!(norm > options.degenerate_area * longest_sq) || norm == 0) return;
+      degenerate[f] = 0;
       normals[f] = area / norm;
     });
     r.degenerate_faces = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, nf, 65536), std::size_t{0},
         [&](const tbb::blocked_range<std::size_t>& range, std::size_t n) {
-          for (std::size_t f = range.begin(); f < range.end(); ++f) n += normals[f].squaredNorm() == 0;
+          for (std::size_t f = range.begin(); f < range.end(); ++f) n += degenerate[f];
           return n;
         },
         [](std::size_t x, std::size_t y) { return x + y; });
@@ -540,8 +544,8 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
   };
   const auto shape_figures = [&] {
     // Shape statistics; faces with a zero-length edge have no defined angles and are skipped.
-    // Fixed blocks of faces are measured in parallel, each into its own histograms and lists; the
-    // lists are joined in face order, so every figure (sums included) is the serial one.
+    // Fixed blocks of faces are measured in parallel, each into its own histograms, sums and
+    // values; blocks are then taken in face order, so no figure depends on the schedule.
     struct Shapes {
       Histogram quad_angles, edge_ratio, triangle_min_angle;
       std::span<double> angle_dev, spread, tri_min;  // the block's values, in face order
@@ -550,8 +554,8 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
     };
     constexpr std::size_t kShapeBlock = 16384;
     std::vector<Shapes> blocks((nf + kShapeBlock - 1) / kShapeBlock);
-    // Each block writes its values into its own stretch of one buffer for all (four a quad, one a
-    // triangle at most): hundreds of megabytes for a frame of millions of faces, faulted in by the
+    // Each block writes its values into its own stretch of a buffer shared by all blocks (four a
+    // quad, one a triangle at most): hundreds of megabytes for a frame of millions of faces, faulted in by the
     // blocks in 2 MiB pages, with no allocation per block.
     Buffer<double> angle_dev_values = untouched<double>(4 * nf), spread_values = untouched<double>(4 * nf),
                    tri_min_values = untouched<double>(nf);

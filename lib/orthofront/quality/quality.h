@@ -49,8 +49,9 @@ struct QualityReport {
 };
 
 /// Quality of a polygon mesh. Quads: four interior angles and, per edge, 1 - l_i / l_avg of its
-/// four edges; triangles: minimum angle. O(V + F) with hash maps for edges. Folds compare normals
-/// after undoing an orientation flip, so a flipped face counts as inconsistent, not as folded.
+/// four edges; triangles: minimum angle. O(V + F): edges are found by a counting sort on their
+/// smaller vertex. Folds compare normals after undoing an orientation flip, so a flipped face
+/// counts as inconsistent, not as folded.
 /// Throws InvalidArgument for a face whose size is not 3 or 4 or whose index is out of range.
 QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options = {});
 

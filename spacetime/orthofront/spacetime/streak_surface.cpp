@@ -1205,6 +1205,7 @@ void StreakBuilder::collect_frame() {
 void StreakBuilder::emit(int index) {
   const auto t0 = Clock::now();
   join_finisher();  // its mesh becomes this frame's
+  const auto t_build = Clock::now();
   StreakFrame frame;
   frame.index = index;
   frame.time = t_;
@@ -1225,7 +1226,7 @@ void StreakBuilder::emit(int index) {
     first[r + 1] += first[r];
   }
   const std::size_t nv = first[nr];
-  // Side by side: a frame larger than the last one fills its new elements with zeros.
+  // Side by side: an array that must grow is zero-filled anew (see grow()), one thread each.
   tbb::parallel_invoke([&] { grow(mesh.positions, nv); }, [&] { grow(mesh.s, nv); },
                        [&] { grow(mesh.release_time, nv); }, [&] { grow(mesh.age, nv); },
                        [&] { grow(mesh.speed, nv); }, [&] { grow(mesh.particle_id, nv); });
@@ -1272,6 +1273,7 @@ void StreakBuilder::emit(int index) {
   rec.faces = mesh.face_count();
   rec.rows = rows_.size();
   rec.dead_particles = dead;
+  rec.build_seconds = seconds_since(t_build);
   const double built = seconds_since(t0);
   report_.frame_seconds += built;
   // The rest needs the mesh only: it runs while the particles move on (its parallel loops share
@@ -1312,7 +1314,7 @@ void StreakBuilder::finish_frame(double built) {
     frame_failed_ = true;
   }
   finishing_seconds_ = seconds_since(t1);
-  finishing_record_.build_seconds = built;
+  finishing_record_.finish_seconds = finishing_seconds_;
   finishing_record_.seconds = built + finishing_seconds_;
 }
 

@@ -101,7 +101,8 @@ struct StreakFrameRecord {
   QualityReport quality;
   double max_edge = 0;              ///< longest mesh edge
   double seconds = 0;               ///< building and handing over the frame (both parts)
-  double build_seconds = 0;         ///< its vertices and faces (the particles wait for these)
+  double build_seconds = 0;         ///< its vertices and faces alone (the particles wait for these)
+  double finish_seconds = 0;        ///< its quality, longest edge and sink
 };
 
 struct StreakReport {
