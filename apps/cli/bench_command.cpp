@@ -1,6 +1,9 @@
 // `orthofront bench`: the paper's Table 1 rows on analytic fields (per-stage times, vertices per
 // second, time outside field integration) with the timeline baseline side by side, and the α
-// solver's time per vertex for growing fronts. Prints a table; --json writes the figures.
+// solver's time per vertex for growing fronts, and what measuring a mesh's quality costs against
+// building it (the rows' meshes, and a grid as large as a streak surface's frame). Prints tables;
+// --json writes the figures.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +14,7 @@
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/io/report_json.h"
+#include "orthofront/quality/quality.h"
 #include "orthofront/seed/seed.h"
 #include "orthofront/solve/alpha_solver.h"
 
@@ -33,6 +37,7 @@ struct BenchArgs {
   int repeats = 5;
   double lorenz_edge = 0.2;
   std::size_t parallel_threshold = StreamSurfaceOptions{}.parallel_threshold;
+  std::size_t quality_grid_faces = 2'000'000;
   std::string json;
 };
 
@@ -83,6 +88,45 @@ void print_row(const char* name, const char* method, const SurfaceReport& r) {
               r.quality.folds);
 }
 
+/// Milliseconds of measure_quality on `mesh`, the fastest of `repeats`.
+double quality_ms(const Mesh& mesh, int repeats) {
+  double best = 0;
+  for (int i = 0; i < repeats; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const QualityReport q = measure_quality(mesh);
+    const double s = seconds_since(t0);
+    if (q.faces != mesh.faces.size()) return -1;  // keeps the call from being optimised away
+    best = i == 0 ? s : std::min(best, s);
+  }
+  return 1e3 * best;
+}
+
+/// A rippled strip of about `faces` faces, rows of 2,000 quads, one in 50 cut into two
+/// triangles: shaped like a streak surface's frame.
+Mesh quality_grid(std::size_t faces) {
+  const std::size_t nx = 2'000, ny = std::max<std::size_t>(1, faces / nx);
+  Mesh m;
+  m.positions.reserve((nx + 1) * (ny + 1));
+  for (std::size_t j = 0; j <= ny; ++j)
+    for (std::size_t i = 0; i <= nx; ++i) {
+      const double x = 0.01 * static_cast<double>(i), y = 0.01 * static_cast<double>(j);
+      m.add_vertex(Vec3(x, y, 0.1 * std::sin(1.3 * x + 0.7 * y)), 0, 0, 0, 0, 0, 0);
+    }
+  const auto id = [nx](std::size_t i, std::size_t j) {
+    return static_cast<std::int32_t>(j * (nx + 1) + i);
+  };
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i) {
+      if ((i + j) % 50 == 0) {
+        m.add_triangle(id(i, j), id(i + 1, j), id(i, j + 1));
+        m.add_triangle(id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+      } else {
+        m.add_quad(id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+      }
+    }
+  return m;
+}
+
 /// Nanoseconds per vertex of AlphaSolver::solve on front-like systems of n vertices.
 double solver_ns_per_vertex(std::size_t n, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(-1, 1);
@@ -121,6 +165,10 @@ void add_bench_command(CLI::App& app) {
   c->add_option("--parallel-threshold", args->parallel_threshold,
                  "Fronts with fewer vertices run their per-vertex stages on one thread")
       ->capture_default_str();
+  c->add_option("--quality-grid-faces", args->quality_grid_faces,
+                 "Faces of the grid whose quality measurement is timed (as a streak frame)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{2'000}, std::size_t{50'000'000}));
   c->add_option("--json", args->json, "Also write the figures as JSON here");
   c->callback([args]() {
     const BenchRow rows[] = {
@@ -138,6 +186,12 @@ void add_bench_command(CLI::App& app) {
                 "method", "vertices", "total", "alpha", "rip", "advance", "adapt", "stitch",
                 "Mv/s", "out%", "quad%", "ang10%", "folds");
     nlohmann::json out = {{"repeats", args->repeats}, {"rows", nlohmann::json::array()}};
+    struct Measured {
+      const char* name;
+      std::size_t faces;
+      double ms, run_ms;
+    };
+    std::vector<Measured> measured;
     for (const BenchRow& row : rows) {
       const auto field = make_analytic_field(row.field);
       const Seed<3> seed = make_seed(row.seed, row.seed_count);
@@ -146,6 +200,8 @@ void add_bench_command(CLI::App& app) {
       o.max_steps = row.steps;
       o.parallel_threshold = args->parallel_threshold;
       const SurfaceResult orthogonal = best_run(*field, seed, o, args->repeats);
+      measured.push_back({row.name, orthogonal.mesh.faces.size(),
+                          quality_ms(orthogonal.mesh, args->repeats), 1e3 * orthogonal.report.times.total});
       // The same engine without the fold guard: what the guard costs (or saves).
       o.fold_guard = false;
       const SurfaceResult unguarded = best_run(*field, seed, o, args->repeats);
@@ -169,6 +225,28 @@ void add_bench_command(CLI::App& app) {
                              {"timeline", row_json(timeline.report)},
                              {"paper", {{"vertices", row.paper_vertices},
                                         {"total_ms", row.paper_ms}}}});
+    }
+    measured.push_back({"grid", args->quality_grid_faces,
+                        quality_ms(quality_grid(args->quality_grid_faces), args->repeats), 0});
+    std::printf("\nQuality measurement (measure_quality: shapes, folds, non-manifold edges, "
+                "T-junctions), fastest of %d; against the row's build (orthogonal)\n%-10s %10s %10s "
+                "%10s %8s\n",
+                args->repeats, "mesh", "faces", "ms", "build ms", "share");
+    out["quality"] = nlohmann::json::array();
+    for (const Measured& m : measured) {
+      const double share = m.run_ms > 0 ? m.ms / (m.ms + m.run_ms) : 0.0;
+      if (m.run_ms > 0)  // a row's mesh
+        std::printf("%-10s %10zu %10.2f %10.2f %7.1f%%\n", m.name, m.faces, m.ms, m.run_ms,
+                    100 * share);
+      else
+        std::printf("%-10s %10zu %10.2f %10s %8s\n", m.name, m.faces, m.ms, "", "");
+      const bool built = m.run_ms > 0;  // the grid is made, not built by the engine
+      out["quality"].push_back({{"mesh", m.name},
+                                {"faces", m.faces},
+                                {"ms", m.ms},
+                                {"build_ms", built ? nlohmann::json(m.run_ms) : nlohmann::json()},
+                                {"share_of_build_and_measurement",
+                                 built ? nlohmann::json(share) : nlohmann::json()}});
     }
     std::printf("\nα solver (Givens QR, O(n)): time per vertex\n%10s %12s\n", "n", "ns/vertex");
     std::mt19937 rng(7);
