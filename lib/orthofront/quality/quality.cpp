@@ -315,7 +315,8 @@ double quantile(const Parts& parts, double q) {
   if (n == 0) return 0;
   const double pos = q * static_cast<double>(n - 1);
   const auto k = static_cast<std::size_t>(pos);
-  constexpr std::size_t kManyValues = std::size_t{1} << 16;  // below, one copy and a selection are quicker
+  // Below this, one copy and a selection are quicker than the histogram.
+  constexpr std::size_t kManyValues = std::size_t{1} << 16;
   if (n >= kManyValues) {
     const auto [lo, hi] = kth_smallest_pair(parts, k);
     if (k + 1 >= n) return lo;
@@ -387,7 +388,8 @@ bool has_repeated_index(const Face& face) {
 /// Boundary vertices lying strictly inside a boundary edge they are not an endpoint of. Edges go
 /// into a uniform grid (cell ~ mean boundary edge length) and each vertex tests only its cell, so
 /// the cost grows with the boundary size, not its square.
-std::size_t count_t_junctions(const Mesh& mesh, const std::vector<std::array<std::int32_t, 2>>& boundary) {
+std::size_t count_t_junctions(const Mesh& mesh,
+                              const std::vector<std::array<std::int32_t, 2>>& boundary) {
   if (boundary.empty()) return 0;
   const auto& p = mesh.positions;
   constexpr double kRel = 1e-6;
@@ -520,7 +522,8 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
       if (has_repeated_index(face)) return;
       double longest_sq = 0;
       for (int i = 0; i < face.size; ++i)
-        longest_sq = std::max(longest_sq, (p[face.v[(i + 1) % face.size]] - p[face.v[i]]).squaredNorm());
+        longest_sq =
+            std::max(longest_sq, (p[face.v[(i + 1) % face.size]] - p[face.v[i]]).squaredNorm());
       const Vec3 area = area_vector(mesh, face);
       const double norm = area.norm();
       if (!(norm > options.degenerate_area * longest_sq) || norm == 0) return;
@@ -555,10 +558,11 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
     constexpr std::size_t kShapeBlock = 16384;
     std::vector<Shapes> blocks((nf + kShapeBlock - 1) / kShapeBlock);
     // Each block writes its values into its own stretch of a buffer shared by all blocks (four a
-    // quad, one a triangle at most): hundreds of megabytes for a frame of millions of faces, faulted in by the
-    // blocks in 2 MiB pages, with no allocation per block.
-    Buffer<double> angle_dev_values = untouched<double>(4 * nf), spread_values = untouched<double>(4 * nf),
-                   tri_min_values = untouched<double>(nf);
+    // quad, one a triangle at most): hundreds of megabytes for a frame of millions of faces,
+    // faulted in by the blocks in 2 MiB pages, with no allocation per block.
+    Buffer<double> angle_dev_values = untouched<double>(4 * nf);
+    Buffer<double> spread_values = untouched<double>(4 * nf);
+    Buffer<double> tri_min_values = untouched<double>(nf);
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t b) {
       Shapes& out = blocks[b];
       out.quad_angles = make_histogram(0, 180, options.angle_bins);
@@ -599,7 +603,8 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
         } else {
           ++out.measured_triangles;
           double smallest = 180;
-          for (int i = 0; i < 3; ++i) smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
+          for (int i = 0; i < 3; ++i)
+            smallest = std::min(smallest, angle_deg(-e[(i + 2) % 3], e[i]));
           add(out.triangle_min_angle, smallest);
           tri_min[n_triangles++] = smallest;
           if (smallest < 10) ++out.below_10;
