@@ -96,19 +96,50 @@ class LengthLimit {
 // A distance between neighbouring rows not measured yet (or changed since).
 constexpr double kUnmeasured = -1;
 
-struct Particle {
+// A particle of a row. Its slot in the resident set and its status share a word: 40 bytes
+// instead of 48, as the passes over the rows of ten million particles are bound by memory.
+class Particle {
+ public:
+  /// Slots are below this (where slots are handed out, more particles are refused).
+  static constexpr std::uint32_t kSlots = (std::uint32_t{1} << 30) - 1;
+
   double s = 0;
   Vec3 x = Vec3::Zero();
   std::int32_t id = 0;
-  std::uint32_t slot = kNoSlot;  ///< in the resident set (moving particles only), if there is one
-  ParticleStatus status = ParticleStatus::moving;
-  bool alive() const { return status == ParticleStatus::moving; }
+
+  ParticleStatus status() const { return static_cast<ParticleStatus>(word_ >> kSlotBits); }
+  void set_status(ParticleStatus status) {
+    word_ = (word_ & kSlots) | (static_cast<std::uint32_t>(status) << kSlotBits);
+  }
+  bool alive() const { return word_ < (std::uint32_t{1} << kSlotBits); }  // status moving
+  /// In the resident set (moving particles only), if there is one; else kNoSlot.
+  std::uint32_t slot() const { return (word_ & kSlots) == kSlots ? kNoSlot : word_ & kSlots; }
+  void set_slot(std::uint32_t slot) {
+    word_ = (word_ & ~kSlots) | (slot == kNoSlot ? kSlots : slot);
+  }
+
+ private:
+  static constexpr int kSlotBits = 30;
+  static_assert(static_cast<unsigned>(ParticleStatus::time_bounds) < 4, "two bits of status");
+  std::uint32_t word_ = kSlots;  // status moving (0) in the top bits, no slot
 };
+static_assert(sizeof(Particle) == 40);
 
 struct Row {
   double tau = 0;  // release time
   std::vector<Particle> p;  // by increasing s
+  // Coarsening's first candidate: no particle before it can go. Found by refinement's first pass
+  // (the row is in cache there), kept as particles are inserted after it; 1 when unknown.
+  std::size_t coarsen_from = 1;
 };
+
+// Whether particle m, between a and b on a row, may go: both its edges are short, and a and b
+// would not be too far apart without it.
+bool removable(const Particle& a, const Particle& m, const Particle& b,
+               const LengthLimit& short_limit, const LengthLimit& long_limit) {
+  return a.alive() && m.alive() && b.alive() && short_limit.shorter(a.x - m.x) &&
+         short_limit.shorter(m.x - b.x) && long_limit.shorter(a.x - b.x);
+}
 
 // What the driver needs from where the data lives: the field, and (streamed) a hook that makes
 // the data of [t_a, t_b] resident before particles are moved across it.
@@ -209,7 +240,7 @@ class StreakBuilder {
     if (flight_.joinable()) flight_.join();
     if (catch_up_.joinable()) catch_up_.join();
   }
-  bool fresh(const Particle& p) const { return p.slot < fresh_.size() && fresh_[p.slot] != 0; }
+  bool fresh(const Particle& p) const { return p.slot() < fresh_.size() && fresh_[p.slot()] != 0; }
   // Counts the moves of one interval of advance() or land().
   void count_interval(std::size_t moved, double t_to,
                       const std::vector<std::array<std::size_t, 2>>& stopped);
@@ -256,6 +287,9 @@ class StreakBuilder {
   // Rethrows what the finished frame's sink threw; files its record; keeps its mesh as spare.
   void collect_frame();
   double row_distance(const Row& a, const Row& b) const;
+  // The first particle of p (a row) that coarsening removes, looking from index `from` (>= 1)
+  // on; p.size() - 1 or more where none does.
+  std::size_t first_removable(const std::vector<Particle>& p, std::size_t from) const;
   Vec3 seed_point(double s) const {
     Vec3 p = seed_.point(s);
     if (flow_.dimension() == 2) p.z() = 0;
@@ -404,9 +438,9 @@ Row StreakBuilder::seed_row(double tau, const std::vector<double>& params) const
     p.x = seed_point(s);
     Vec3 v;
     const FieldStatus st = flow_.velocity(p.x, tau, v);
-    p.status = st == FieldStatus::inside ? ParticleStatus::moving
+    p.set_status(st == FieldStatus::inside ? ParticleStatus::moving
                : st == FieldStatus::outside ? ParticleStatus::left_domain
-                                            : ParticleStatus::no_data;
+                                            : ParticleStatus::no_data);
     row.p.push_back(p);
   }
   return row;
@@ -443,8 +477,8 @@ StreakBuilder::Released StreakBuilder::release_and_move(const std::vector<double
     for (Particle& p : row.p)
       if (p.alive()) {
         p.x = x[k];
-        p.status = status[k];
-        count_stop(p.status, out.stopped);
+        p.set_status(status[k]);
+        count_stop(p.status(), out.stopped);
         out.particle_time += to - from[k++];
       }
   out.moved = x.size();
@@ -548,8 +582,8 @@ std::size_t StreakBuilder::move_all(double t_to, std::vector<std::array<std::siz
     for (Particle& p : rows_[r].p) {
       if (!p.alive()) continue;
       p.x = x_[k];
-      p.status = status_[k++];
-      count_stop(p.status, stopped[r]);
+      p.set_status(status_[k++]);
+      count_stop(p.status(), stopped[r]);
     }
   });
   return n;
@@ -576,17 +610,17 @@ std::size_t StreakBuilder::take_resident(std::vector<std::array<std::size_t, 2>>
         if (fresh_at) (*fresh_at)[r].push_back(static_cast<std::uint32_t>(i));
         continue;
       }
-      if (p.slot >= v.size) {
+      if (p.slot() >= v.size) {
         ++unplaced[r];
         continue;
       }
       ++moved[r];
-      p.x = Vec3(v.x[0][p.slot], v.x[1][p.slot], v.x[2][p.slot]);
-      p.status = v.status[p.slot];
+      p.x = Vec3(v.x[0][p.slot()], v.x[1][p.slot()], v.x[2][p.slot()]);
+      p.set_status(v.status[p.slot()]);
       if (p.alive()) continue;
-      count_stop(p.status, stopped[r]);
-      freed[r].push_back(p.slot);  // stopped there: nothing moves it again
-      p.slot = kNoSlot;
+      count_stop(p.status(), stopped[r]);
+      freed[r].push_back(p.slot());  // stopped there: nothing moves it again
+      p.set_slot(kNoSlot);
     }
   });
   std::size_t n = 0;
@@ -623,6 +657,10 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
   if (moving == 0) return;
   if (in_flight_ && catching_up_) throw Error("streak surface: a particle entered after its catch-up started");
   const std::size_t free = free_slots_.size();
+  if (moving > free && next_slot_ + (moving - free) > Particle::kSlots)
+    throw Error("streak surface: " + std::to_string(next_slot_ + (moving - free)) +
+                " particles moving at once, more than the " + std::to_string(Particle::kSlots) +
+                " a resident set holds");
   const auto slot_of = [&](std::size_t k) {
     return k < free ? free_slots_[free - 1 - k] : next_slot_ + static_cast<std::uint32_t>(k - free);
   };
@@ -644,12 +682,12 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
     for (std::size_t i = lo; i < hi; ++i) {
       Particle& p = *ps[i];
       if (!p.alive()) continue;
-      p.slot = slot_of(k);
+      p.set_slot(slot_of(k));
       if (in_flight_) {
-        fresh_slots_[base + k] = p.slot;
+        fresh_slots_[base + k] = p.slot();
         fresh_x_[base + k] = p.x;
       } else {
-        slots[k] = p.slot;
+        slots[k] = p.slot();
         at[k] = {p.x.x(), p.x.y(), p.x.z()};
       }
       ++k;
@@ -669,21 +707,22 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
 }
 
 void StreakBuilder::leave(Particle& p) {
-  if (p.slot == kNoSlot) return;
+  if (p.slot() == kNoSlot) return;
   if (!in_flight_) {
-    resident_->park(std::span<const std::uint32_t>(&p.slot, 1));
-    free_slots_.push_back(p.slot);
+    const std::uint32_t slot = p.slot();
+    resident_->park(std::span<const std::uint32_t>(&slot, 1));
+    free_slots_.push_back(p.slot());
   } else {
     // The set is moving: a fresh particle was never placed; an old one is parked on landing. The
     // slot is not handed out again before then.
     if (fresh(p)) {
-      fresh_[p.slot] = 0;
+      fresh_[p.slot()] = 0;
     } else {
-      flight_parks_.push_back(p.slot);
+      flight_parks_.push_back(p.slot());
     }
-    flight_freed_.push_back(p.slot);
+    flight_freed_.push_back(p.slot());
   }
-  p.slot = kNoSlot;
+  p.set_slot(kNoSlot);
 }
 
 bool StreakBuilder::launch(double t_to) {
@@ -764,15 +803,15 @@ bool StreakBuilder::land() {
     const auto row = [&](std::size_t r) {
       for (std::size_t j = 0; j < fresh_at[r].size(); ++j) {
         Particle& p = rows_[r].p[fresh_at[r][j]];
-        const std::size_t k = first[r] + j, c = fresh_[p.slot] - 1;
+        const std::size_t k = first[r] + j, c = fresh_[p.slot()] - 1;
         p.x = catch_x_[c];
-        p.status = catch_status_[c];
-        slots[k] = p.slot;
+        p.set_status(catch_status_[c]);
+        slots[k] = p.slot();
         at[k] = {p.x.x(), p.x.y(), p.x.z()};
         moving[k] = p.alive();
         if (p.alive()) continue;
-        count_stop(p.status, stopped[r]);
-        p.slot = kNoSlot;
+        count_stop(p.status(), stopped[r]);
+        p.set_slot(kNoSlot);
       }
     };
     for_each_row(with.size(), [&](std::size_t w) { row(with[w]); }, n >= kParallelParticles);
@@ -797,6 +836,15 @@ bool StreakBuilder::land() {
   count_interval(moved, flight_to_, stopped);
   report_.advect_seconds += seconds_since(t0);
   return !access_.read_error || no_error(access_.read_error());
+}
+
+std::size_t StreakBuilder::first_removable(const std::vector<Particle>& p, std::size_t from) const {
+  const std::size_t n = p.size();
+  if (n <= 3) return n;  // a row keeps three particles
+  const LengthLimit short_limit(o_.merge * o_.edge), long_limit(o_.split * o_.edge);
+  std::size_t i = std::max<std::size_t>(from, 1);
+  while (i + 1 < n && !removable(p[i - 1], p[i], p[i + 1], short_limit, long_limit)) ++i;
+  return i;
 }
 
 // Largest distance between the particles of two rows that share a seed parameter.
@@ -881,9 +929,11 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
   // gathered in row order: the particles, their ids and the mesh are those of a serial scan.
   std::vector<std::vector<Insert>> along(rows_.size());  // per row, by left particle
   std::vector<std::optional<Row>> across(rows_.size());  // [r]: the new row after row r
-  // Row r and the pair (r, r + 1) in one task: row r is still in cache for the pair.
+  // Row r and the pair (r, r + 1) in one task: row r is still in cache for the pair, and for
+  // coarsening's search of a row looked at whole (particles do not move until it runs).
   for_each_row(rows_.size(), [&](std::size_t r) {
     if (change[r].any()) along[r] = inserts_along(r, long_edge, change[r]);
+    if (change[r].whole) rows_[r].coarsen_from = first_removable(rows_[r].p, 1);
     if (r + 1 < rows_.size() && (change[r].any() || change[r + 1].any()))
       across[r] = row_between(r, long_edge, gap[r]);
   });
@@ -927,7 +977,7 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
     if (!release_and_advect(x, from, status)) return false;
     for (std::size_t i = 0; i < fresh.size(); ++i) {
       fresh[i]->x = x[i];
-      fresh[i]->status = status[i];
+      fresh[i]->set_status(status[i]);
     }
     report_.exact_insertions += fresh.size();
   } else {
@@ -955,11 +1005,27 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
     if (ins.empty()) return;
     std::vector<Particle>& p = rows_[r].p;
     const std::size_t old = p.size();
-    p.resize(old + ins.size());
-    std::size_t w = p.size(), k = ins.size();
-    for (std::size_t i = old; i-- > 0 && k > 0;) {
-      if (ins[k - 1].after == i) p[--w] = ins[--k].particle;
-      p[--w] = p[i];
+    // Particles before the first new one keep their neighbours (a row of three may lose one
+    // only once it grows).
+    std::size_t& coarsen_from = rows_[r].coarsen_from;
+    coarsen_from =
+        old <= 3 ? 1 : std::max<std::size_t>(1, std::min(coarsen_from, ins.front().after));
+    if (p.capacity() < old + ins.size()) {
+      // Merged into the new array as it is copied, instead of copied and then moved up.
+      std::vector<Particle> grown;
+      grown.reserve(std::max(2 * old, old + ins.size()));
+      for (std::size_t i = 0, k = 0; i < old; ++i) {
+        grown.push_back(p[i]);
+        if (k < ins.size() && ins[k].after == i) grown.push_back(ins[k++].particle);
+      }
+      p.swap(grown);
+    } else {
+      p.resize(old + ins.size());
+      std::size_t w = p.size(), k = ins.size();
+      for (std::size_t i = old; i-- > 0 && k > 0;) {
+        if (ins[k - 1].after == i) p[--w] = ins[--k].particle;
+        p[--w] = p[i];
+      }
     }
     c.added.resize(ins.size());
     for (std::size_t j = 0; j < ins.size(); ++j) c.added[j] = static_cast<std::uint32_t>(ins[j].after + j + 1);
@@ -1088,7 +1154,7 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, d
         const Particle* p3 = find(after, at_after, q.s);
         q.x = (p0 && p3) ? cubic_middle(p0->x, pa.x, pb.x, p3->x) : 0.5 * (pa.x + pb.x);
       } else {
-        q.status = ParticleStatus::left_domain;
+        q.set_status(ParticleStatus::left_domain);
       }
       row.p.push_back(q);
     }
@@ -1108,22 +1174,19 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
   std::vector<std::vector<Particle>> gone(resident_ ? rows_.size() : 0);  // their slots go back
   for_each_row(rows_.size(), [&](std::size_t r) {
     std::vector<Particle>& p = rows_[r].p;
-    const auto removable = [&](const Particle& a, const Particle& m, const Particle& b) {
-      return a.alive() && m.alive() && b.alive() && short_limit.shorter(a.x - m.x) &&
-             short_limit.shorter(m.x - b.x) && long_limit.shorter(a.x - b.x);
-    };
-    // Most rows lose nothing: find the first particle that goes before moving any. The kept
-    // particles close up in place: p[0, w) are kept, and p[i + 1] is not moved yet.
+    // Most rows lose nothing: find the first particle that goes before moving any (refinement's
+    // first pass has mostly found it). The kept particles close up in place: p[0, w) are kept,
+    // and p[i + 1] is not moved yet.
     const std::size_t n = p.size();
-    std::size_t first = 1;
-    while (first + 1 < n && !(n > 3 && removable(p[first - 1], p[first], p[first + 1]))) ++first;
+    const std::size_t first = first_removable(p, std::exchange(rows_[r].coarsen_from, 1));
     if (first + 1 >= n) return;
     std::size_t w = first;
     for (std::size_t i = first; i < n; ++i) {
       const bool interior = i + 1 < n;
-      if (interior && n - (i - w) > 3 && removable(p[w - 1], p[i], p[i + 1])) {
+      if (interior && n - (i - w) > 3 &&
+          removable(p[w - 1], p[i], p[i + 1], short_limit, long_limit)) {
         ++removed[r];
-        if (p[i].slot != kNoSlot) gone[r].push_back(p[i]);
+        if (p[i].slot() != kNoSlot) gone[r].push_back(p[i]);
         continue;
       }
       p[w++] = p[i];
