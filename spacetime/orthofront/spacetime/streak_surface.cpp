@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -1179,6 +1180,8 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
     // and p[i + 1] is not moved yet.
     const std::size_t n = p.size();
     const std::size_t first = first_removable(p, std::exchange(rows_[r].coarsen_from, 1));
+    // Builds without NDEBUG (the sanitizer build) check the start against a search from 1.
+    assert(first == first_removable(p, 1) && "refinement's coarsening start");
     if (first + 1 >= n) return;
     std::size_t w = first;
     for (std::size_t i = first; i < n; ++i) {
