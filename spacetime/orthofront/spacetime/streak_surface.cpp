@@ -660,8 +660,8 @@ void StreakBuilder::enter(const std::vector<Particle*>& ps) {
   const std::size_t free = free_slots_.size();
   if (moving > free && next_slot_ + (moving - free) > Particle::kSlots)
     throw Error("streak surface: " + std::to_string(next_slot_ + (moving - free)) +
-                " particles moving at once, more than the " + std::to_string(Particle::kSlots) +
-                " a resident set holds");
+                " slots of the resident set in use at once, more than the " +
+                std::to_string(Particle::kSlots) + " it can number");
   const auto slot_of = [&](std::size_t k) {
     return k < free ? free_slots_[free - 1 - k] : next_slot_ + static_cast<std::uint32_t>(k - free);
   };
@@ -1007,7 +1007,8 @@ bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<doub
     std::vector<Particle>& p = rows_[r].p;
     const std::size_t old = p.size();
     // Particles before the first new one keep their neighbours (a row of three may lose one
-    // only once it grows).
+    // only once it grows): `ins` is by increasing `after`, one each, and no particle moves
+    // between refinement and coarsening.
     std::size_t& coarsen_from = rows_[r].coarsen_from;
     coarsen_from =
         old <= 3 ? 1 : std::max<std::size_t>(1, std::min(coarsen_from, ins.front().after));
