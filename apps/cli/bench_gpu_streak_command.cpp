@@ -267,6 +267,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"backend_calls", b.total_seconds},
           {"uploads", b.upload_seconds},
           {"host_staging", b.host_seconds},
+          {"pinned_memory", b.pinned_seconds},
           {"downloads", b.download_seconds},
           {"batch_calls", r.bulk_batch.total_seconds},
           {"batch_kernels", r.bulk_batch.compute_seconds},
@@ -339,6 +340,9 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                   b.download_seconds > 0 ? static_cast<double>(b.bytes_downloaded) / b.download_seconds / 1e9 : 0.0);
     std::printf("%-44s %10.3f  (%zu of %zu steps read ahead, between calls)\n",
                 "host work in the backend (staging, changes)", b.host_seconds, b.steps_read_ahead, b.steps_loaded);
+    if (cuda)
+      std::printf("%-44s %10.3f  (growing particle arrays; freed ones are kept and reused)\n",
+                  "page-locked memory made in the calls", b.pinned_seconds);
     std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
                 r.total_seconds / floor);
     if (!r.frames.empty()) {

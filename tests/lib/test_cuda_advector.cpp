@@ -1,13 +1,14 @@
 // [gpu] The CUDA backend against the CPU backend on the same inputs: random particles in analytic
 // flows sampled on 2D and 3D, uniform and rectilinear grids, crossing cells, leaving the domain
 // and entering cells without data; uploads that overlap the kernels; a resident set on the
-// device. Built only with CUDA; on a machine without a CUDA device each test says so and does
-// nothing.
+// device, and the page-locked memory it gives back reused by the next. Built only with CUDA; on
+// a machine without a CUDA device each test says so and does nothing.
 #include <catch2/catch.hpp>
 
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <thread>
 #include <vector>
@@ -427,4 +428,55 @@ TEST_CASE("cuda advection: a resident set's slot placed and parked again before 
     set->advance(series, 0.1, 0.2, o);
     CHECK(set->view().status[0] == ParticleStatus::moving);
   }
+}
+
+TEST_CASE("cuda advection: page-locked memory a set gave back is reused by the next set on the "
+          "same backend (none made in its calls), with the CPU backend's bits",
+          "[gpu][advect]") {
+  if (skip_without_gpu()) return;
+  const auto cpu = make_cpu_advector();
+  const auto gpu = make_advector(Device::cuda);
+  ResidentSteps series = sampled(3, false, 17, 4, true);
+  MethodOptions o;
+  o.method = Method::dopri5;
+  o.absolute = o.relative = 1e-8;
+  const ParticleBatch start = random_batch(series.geometry(), 5000, 11);
+  std::vector<std::uint32_t> slots(start.size());
+  std::vector<std::array<double, 3>> x(start.size());
+  for (std::size_t i = 0; i < start.size(); ++i) {
+    slots[i] = static_cast<std::uint32_t>(i);
+    x[i] = {start.x[0][i], start.x[1][i], start.x[2][i]};
+  }
+  // Positions and statuses after two intervals, and the seconds spent making page-locked memory.
+  struct Moved {
+    std::vector<double> x[3];
+    std::vector<ParticleStatus> status;
+    double pinned_seconds = 0;
+  };
+  const auto move = [&](BatchAdvector& backend) {
+    const auto set = backend.make_resident();
+    set->place(slots, x);
+    Moved m;
+    m.pinned_seconds += set->advance(series, 0, 0.1, o).pinned_seconds;
+    m.pinned_seconds += set->advance(series, 0.1, 0.25, o).pinned_seconds;
+    // The placed slots (the CPU's set may hold more, parked).
+    const ResidentParticles::View v = set->view();
+    REQUIRE(v.size >= slots.size());
+    for (int d = 0; d < 3; ++d) m.x[d].assign(v.x[d], v.x[d] + slots.size());
+    m.status.assign(v.status, v.status + slots.size());
+    return m;
+  };
+  const Moved reference = move(*cpu);
+  const Moved first = move(*gpu);
+  const Moved second = move(*gpu);
+  CHECK(first.pinned_seconds > 0);    // the first set's mirror and changes were made
+  CHECK(second.pinned_seconds == 0);  // the second took them back
+  for (const Moved* m : {&first, &second}) {
+    CHECK(m->status == reference.status);
+    for (int d = 0; d < 3; ++d)
+      CHECK(std::memcmp(m->x[d].data(), reference.x[d].data(), slots.size() * sizeof(double)) == 0);
+  }
+  std::size_t moving = 0;
+  for (const ParticleStatus s : second.status) moving += s == ParticleStatus::moving;
+  CHECK(moving > 1000);
 }

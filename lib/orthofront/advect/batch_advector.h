@@ -101,6 +101,7 @@ struct AdvectionStatistics {
   double host_seconds = 0;          ///< acquire() and staging copies on the host
   double overlap_seconds = 0;       ///< copies running while a kernel ran (device events)
   double download_seconds = 0;      ///< the particles' way back (device events)
+  double pinned_seconds = 0;        ///< making page-locked host memory (CUDA: growing arrays)
 
   /// Adds another call's figures (totals over calls).
   AdvectionStatistics& operator+=(const AdvectionStatistics& o) {
@@ -118,6 +119,7 @@ struct AdvectionStatistics {
     host_seconds += o.host_seconds;
     overlap_seconds += o.overlap_seconds;
     download_seconds += o.download_seconds;
+    pinned_seconds += o.pinned_seconds;
     return *this;
   }
 };

@@ -94,7 +94,7 @@ class DeviceArray {
 /// Page-locked host memory (asynchronous uploads need it).
 class PinnedBuffer {
  public:
-  explicit PinnedBuffer(std::size_t bytes) {
+  explicit PinnedBuffer(std::size_t bytes) : bytes_(bytes) {
     check(cudaMallocHost(&data_, bytes), "cudaMallocHost");
   }
   ~PinnedBuffer() { cudaFreeHost(data_); }
@@ -103,9 +103,58 @@ class PinnedBuffer {
   float* get() const { return static_cast<float*>(data_); }
   template <class T>
   T* as() const { return static_cast<T*>(data_); }
+  std::size_t bytes() const { return bytes_; }
 
  private:
   void* data_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
+/// Page-locked buffers for arrays that grow (a lane's particles, a resident set's mirror and its
+/// changes), kept for reuse instead of freed: cudaFreeHost waits for all of the device's work, so
+/// a streak surface's catch-up call that grew its staging waited for the resident set's move on
+/// the other stream, and the driver for the catch-up. A buffer given back serves a later take()
+/// of up to four times less; all are freed with the pool, at most about twice what the users
+/// hold as they grow by doubling.
+/// (Making the next size ahead on a thread of its own was measured and not kept: locking memory
+/// beside the refinement slowed it more than the calls gained.)
+class PinnedPool {
+ public:
+  /// A buffer of at least `bytes`: the smallest kept one that fits, or else a new one (its making
+  /// counted in `seconds`).
+  std::unique_ptr<PinnedBuffer> take(std::size_t bytes, double& seconds) {
+    {
+      std::lock_guard lock(mutex_);
+      auto best = kept_.end();
+      for (auto it = kept_.begin(); it != kept_.end(); ++it)
+        if (fits((*it)->bytes(), bytes) && (best == kept_.end() || (*it)->bytes() < (*best)->bytes()))
+          best = it;
+      if (best != kept_.end()) {
+        std::unique_ptr<PinnedBuffer> out = std::move(*best);
+        kept_.erase(best);
+        return out;
+      }
+    }
+    const auto start = std::chrono::steady_clock::now();
+    auto out = std::make_unique<PinnedBuffer>(bytes);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  }
+
+  /// Keeps `buffer` for a later take(). No copy may still read or write it.
+  void give_back(std::unique_ptr<PinnedBuffer> buffer) {
+    if (!buffer) return;
+    std::lock_guard lock(mutex_);
+    kept_.push_back(std::move(buffer));
+  }
+
+ private:
+  /// A buffer of `size` bytes serves a request of `bytes` (not one many times smaller: the
+  /// larger user would then make its own).
+  static bool fits(std::size_t size, std::size_t bytes) { return size >= bytes && size / 4 <= bytes; }
+
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<PinnedBuffer>> kept_;
 };
 
 /// Copies n objects between host arrays in parallel (into or out of pinned staging: one thread
@@ -412,7 +461,7 @@ class CudaAdvector final : public BatchAdvector {
 
   void run(Lane& lane, StepSource& source, ParticleBatch& particles, const SlabPlan& plan,
            double t_end, const MethodOptions& options, AdvectionStatistics& stats) {
-    const DeviceParticles view = upload_particles(lane, particles);
+    const DeviceParticles view = upload_particles(lane, particles, pinned_, stats);
     run_slabs(lane, source, view, particles.size(), plan, t_end, options, stats,
               [&] { return enqueue_download(lane, particles.size()); });
     copy_downloaded(lane, particles);
@@ -825,9 +874,17 @@ class CudaAdvector final : public BatchAdvector {
     return grid;
   }
 
-  // Particle arrays on the device and pinned staging for them on the host (grown, never shrunk),
-  // filled from `particles` on the lane's stream (kernels follow in order).
-  static DeviceParticles upload_particles(Lane& lane, const ParticleBatch& particles) {
+  // The pinned staging of a lane's c particles: x, y, z, t, h, stop (doubles), evaluations,
+  // status.
+  static std::size_t lane_bytes(std::size_t c) {
+    return c * (6 * sizeof(double) + sizeof(std::uint32_t) + sizeof(ParticleStatus));
+  }
+
+  // Particle arrays on the device and pinned staging for them on the host (grown, never shrunk;
+  // the staging from `pinned`), filled from `particles` on the lane's stream (kernels follow in
+  // order).
+  static DeviceParticles upload_particles(Lane& lane, const ParticleBatch& particles,
+                                          PinnedPool& pinned, AdvectionStatistics& stats) {
     const std::size_t n = particles.size();
     const cudaStream_t s = lane.compute;
     if (n > lane.capacity) {
@@ -842,9 +899,8 @@ class CudaAdvector final : public BatchAdvector {
       lane.pe = DeviceArray<std::uint32_t>(c, s);
       lane.ps = DeviceArray<ParticleStatus>(c, s);
       lane.pstop = DeviceArray<double>(c, s);
-      // x, y, z, t, h, stop (doubles), evaluations, status.
-      lane.host = std::make_unique<PinnedBuffer>(
-          c * (6 * sizeof(double) + sizeof(std::uint32_t) + sizeof(ParticleStatus)));
+      pinned.give_back(std::move(lane.host));  // its copies ended with the synchronization
+      lane.host = pinned.take(lane_bytes(c), stats.pinned_seconds);
       lane.capacity = c;
     }
     const bool own_ends = !particles.stop.empty();
@@ -946,6 +1002,8 @@ class CudaAdvector final : public BatchAdvector {
   std::vector<std::unique_ptr<Slot>> slots_;
   std::size_t slot_floats_ = 0;
   std::array<std::unique_ptr<PinnedBuffer>, 2> staging_;
+  /// Page-locked memory of the lanes' particles and the resident sets (its own lock).
+  PinnedPool pinned_;
   std::array<Event, 2> staged_event_;
   bool staged_[2] = {false, false};
   int next_staging_ = 0;
@@ -979,6 +1037,9 @@ class CudaResident final : public ResidentParticles {
     owner_.finish_staging_ahead();  // the source may go once the set has gone
     // Nothing may still use the arrays freed next (an advance that threw synchronized its lane).
     cudaDeviceSynchronize();
+    // A later set (the next surface of a batch) takes them without locking memory again.
+    owner_.pinned_.give_back(std::move(host_));
+    owner_.pinned_.give_back(std::move(staged_));
   }
 
   void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
@@ -1005,7 +1066,7 @@ class CudaResident final : public ResidentParticles {
     try {
       const cudaStream_t s = lane.compute;
       const auto host = std::chrono::steady_clock::now();
-      upload_changes(s);
+      upload_changes(s, stats.pinned_seconds);
       stats.host_seconds += seconds_since(host);
       if (size_ > 0) {
         // Restarted and counted: with none moving, no step is read.
@@ -1086,9 +1147,12 @@ class CudaResident final : public ResidentParticles {
     return changes_[k - 1];
   }
 
+  // The pinned mirror of c slots: x, y, z, status.
+  static std::size_t mirror_bytes(std::size_t c) { return c * (3 * sizeof(double) + sizeof(ParticleStatus)); }
+
   // Grows the arrays to hold every changed slot (keeping what they hold; new slots parked),
   // then uploads the changes and applies them, on stream s.
-  void upload_changes(cudaStream_t s) {
+  void upload_changes(cudaStream_t s, double& pinned_seconds) {
     std::size_t needed = size_;
     for (const SlotChange& c : changes_)
       if (c.place) needed = std::max<std::size_t>(needed, std::size_t{c.slot} + 1);
@@ -1115,7 +1179,8 @@ class CudaResident final : public ResidentParticles {
       fill_kernel<ParticleStatus><<<blocks, threads, 0, s>>>(status_.get() + size_,
                                                             ParticleStatus::time_bounds, c - size_);
       check(cudaGetLastError(), "resident particles: park");
-      host_ = std::make_unique<PinnedBuffer>(c * (3 * sizeof(double) + sizeof(ParticleStatus)));
+      owner_.pinned_.give_back(std::move(host_));  // nothing reads the old mirror any more
+      host_ = owner_.pinned_.take(mirror_bytes(c), pinned_seconds);
       capacity_ = c;
     }
     size_ = needed;
@@ -1124,7 +1189,8 @@ class CudaResident final : public ResidentParticles {
     if (m > staged_capacity_) {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the old buffers' last copy
       staged_capacity_ = std::max(m, staged_capacity_ + staged_capacity_ / 2);
-      staged_ = std::make_unique<PinnedBuffer>(staged_capacity_ * sizeof(SlotChange));
+      owner_.pinned_.give_back(std::move(staged_));
+      staged_ = owner_.pinned_.take(staged_capacity_ * sizeof(SlotChange), pinned_seconds);
       device_changes_ = DeviceArray<SlotChange>(staged_capacity_);
     } else {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the staging's last copy
