@@ -168,6 +168,7 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
                                                     {"steps_loaded", r.bulk.steps_loaded},
                                                     {"steps_read_ahead", r.bulk.steps_read_ahead},
                                                     {"download_seconds", r.bulk.download_seconds},
+                                                    {"pinned_seconds", r.bulk.pinned_seconds},
                                                     {"bytes_downloaded", r.bulk.bytes_downloaded},
                                                     {"overlap_seconds", r.bulk.overlap_seconds},
                                                     {"catch_up_calls", r.catch_up_calls},

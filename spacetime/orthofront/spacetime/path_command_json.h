@@ -24,6 +24,7 @@ inline nlohmann::json device_json(const std::string& backend, std::size_t min_fr
           {"host_seconds", d.host_seconds},
           {"bytes_uploaded", d.bytes_uploaded},
           {"download_seconds", d.download_seconds},
+          {"pinned_seconds", d.pinned_seconds},
           {"bytes_downloaded", d.bytes_downloaded},
           {"overlap_seconds", d.overlap_seconds}};
 }
