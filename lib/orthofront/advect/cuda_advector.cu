@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "orthofront/advect/advect_call.h"
@@ -899,8 +900,9 @@ class CudaAdvector final : public BatchAdvector {
       lane.pe = DeviceArray<std::uint32_t>(c, s);
       lane.ps = DeviceArray<ParticleStatus>(c, s);
       lane.pstop = DeviceArray<double>(c, s);
-      pinned.give_back(std::move(lane.host));  // its copies ended with the synchronization
-      lane.host = pinned.take(lane_bytes(c), stats.pinned_seconds);
+      // (The new staging first: a lane whose growth failed keeps its old one.)
+      std::unique_ptr<PinnedBuffer> bigger = pinned.take(lane_bytes(c), stats.pinned_seconds);
+      pinned.give_back(std::exchange(lane.host, std::move(bigger)));  // its copies ended above
       lane.capacity = c;
     }
     const bool own_ends = !particles.stop.empty();
@@ -1179,8 +1181,8 @@ class CudaResident final : public ResidentParticles {
       fill_kernel<ParticleStatus><<<blocks, threads, 0, s>>>(status_.get() + size_,
                                                             ParticleStatus::time_bounds, c - size_);
       check(cudaGetLastError(), "resident particles: park");
-      owner_.pinned_.give_back(std::move(host_));  // nothing reads the old mirror any more
-      host_ = owner_.pinned_.take(mirror_bytes(c), pinned_seconds);
+      std::unique_ptr<PinnedBuffer> bigger = owner_.pinned_.take(mirror_bytes(c), pinned_seconds);
+      owner_.pinned_.give_back(std::exchange(host_, std::move(bigger)));  // nothing reads it now
       capacity_ = c;
     }
     size_ = needed;
@@ -1188,10 +1190,13 @@ class CudaResident final : public ResidentParticles {
     const std::size_t m = changes_.size();
     if (m > staged_capacity_) {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the old buffers' last copy
-      staged_capacity_ = std::max(m, staged_capacity_ + staged_capacity_ / 2);
-      owner_.pinned_.give_back(std::move(staged_));
-      staged_ = owner_.pinned_.take(staged_capacity_ * sizeof(SlotChange), pinned_seconds);
-      device_changes_ = DeviceArray<SlotChange>(staged_capacity_);
+      // (The capacity changes with its buffers: a growth that failed leaves the old ones.)
+      const std::size_t capacity = std::max(m, staged_capacity_ + staged_capacity_ / 2);
+      std::unique_ptr<PinnedBuffer> bigger = owner_.pinned_.take(capacity * sizeof(SlotChange), pinned_seconds);
+      DeviceArray<SlotChange> device_bigger(capacity);
+      owner_.pinned_.give_back(std::exchange(staged_, std::move(bigger)));
+      device_changes_ = std::move(device_bigger);
+      staged_capacity_ = capacity;
     } else {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");  // the staging's last copy
     }
