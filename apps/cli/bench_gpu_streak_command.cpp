@@ -341,7 +341,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     std::printf("%-44s %10.3f  (%zu of %zu steps read ahead, between calls)\n",
                 "host work in the backend (staging, changes)", b.host_seconds, b.steps_read_ahead, b.steps_loaded);
     if (cuda)
-      std::printf("%-44s %10.3f  (growing particle arrays; freed ones are kept and reused)\n",
+      std::printf("%-44s %10.3f  (growing particle staging and mirrors; kept for reuse)\n",
                   "page-locked memory made in the calls", b.pinned_seconds);
     std::printf("%-44s %10.2f  (goal <= 1.15)\n", "end to end / max(I/O floor, GPU compute)",
                 r.total_seconds / floor);

@@ -440,20 +440,21 @@ TEST_CASE("cuda advection: page-locked memory a set gave back is reused by the n
   MethodOptions o;
   o.method = Method::dopri5;
   o.absolute = o.relative = 1e-8;
-  const ParticleBatch start = random_batch(series.geometry(), 5000, 11);
-  std::vector<std::uint32_t> slots(start.size());
-  std::vector<std::array<double, 3>> x(start.size());
-  for (std::size_t i = 0; i < start.size(); ++i) {
-    slots[i] = static_cast<std::uint32_t>(i);
-    x[i] = {start.x[0][i], start.x[1][i], start.x[2][i]};
-  }
-  // Positions and statuses after two intervals, and the seconds spent making page-locked memory.
+  // Positions and statuses of n particles (drawn with `seed`) after two intervals, and the
+  // seconds the set's calls spent making page-locked memory.
   struct Moved {
     std::vector<double> x[3];
     std::vector<ParticleStatus> status;
     double pinned_seconds = 0;
   };
-  const auto move = [&](BatchAdvector& backend) {
+  const auto move = [&](BatchAdvector& backend, std::size_t n, unsigned seed) {
+    const ParticleBatch start = random_batch(series.geometry(), n, seed);
+    std::vector<std::uint32_t> slots(n);
+    std::vector<std::array<double, 3>> x(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      slots[i] = static_cast<std::uint32_t>(i);
+      x[i] = {start.x[0][i], start.x[1][i], start.x[2][i]};
+    }
     const auto set = backend.make_resident();
     set->place(slots, x);
     Moved m;
@@ -461,21 +462,26 @@ TEST_CASE("cuda advection: page-locked memory a set gave back is reused by the n
     m.pinned_seconds += set->advance(series, 0.1, 0.25, o).pinned_seconds;
     // The placed slots (the CPU's set may hold more, parked).
     const ResidentParticles::View v = set->view();
-    REQUIRE(v.size >= slots.size());
-    for (int d = 0; d < 3; ++d) m.x[d].assign(v.x[d], v.x[d] + slots.size());
-    m.status.assign(v.status, v.status + slots.size());
+    REQUIRE(v.size >= n);
+    for (int d = 0; d < 3; ++d) m.x[d].assign(v.x[d], v.x[d] + n);
+    m.status.assign(v.status, v.status + n);
     return m;
   };
-  const Moved reference = move(*cpu);
-  const Moved first = move(*gpu);
-  const Moved second = move(*gpu);
+  const auto same = [](const Moved& a, const Moved& b) {
+    bool bits = a.status == b.status;
+    for (int d = 0; d < 3; ++d)
+      bits = bits && a.x[d].size() == b.x[d].size() &&
+             std::memcmp(a.x[d].data(), b.x[d].data(), a.x[d].size() * sizeof(double)) == 0;
+    return bits;
+  };
+  // The second set moves other particles, fewer: it takes the first's buffers, larger than it
+  // asks for and holding the first's results, and must write its own.
+  const Moved first = move(*gpu, 5000, 11);
+  const Moved second = move(*gpu, 4000, 12);
   CHECK(first.pinned_seconds > 0);    // the first set's mirror and changes were made
   CHECK(second.pinned_seconds == 0);  // the second took them back
-  for (const Moved* m : {&first, &second}) {
-    CHECK(m->status == reference.status);
-    for (int d = 0; d < 3; ++d)
-      CHECK(std::memcmp(m->x[d].data(), reference.x[d].data(), slots.size() * sizeof(double)) == 0);
-  }
+  CHECK(same(first, move(*cpu, 5000, 11)));
+  CHECK(same(second, move(*cpu, 4000, 12)));
   std::size_t moving = 0;
   for (const ParticleStatus s : second.status) moving += s == ParticleStatus::moving;
   CHECK(moving > 1000);

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <thread>
 #include <memory>
@@ -115,8 +116,9 @@ class PinnedBuffer {
 /// changes), kept for reuse instead of freed: cudaFreeHost waits for all of the device's work, so
 /// a streak surface's catch-up call that grew its staging waited for the resident set's move on
 /// the other stream, and the driver for the catch-up. A buffer given back serves a later take()
-/// of up to four times less; all are freed with the pool, at most about twice what the users
-/// hold as they grow by doubling.
+/// of up to four times less. Kept buffers stay page-locked until the pool goes (about twice the
+/// users' peak, as they grow by doubling), unless making a new one fails: then they are freed
+/// and the making tried once more.
 /// (Making the next size ahead on a thread of its own was measured and not kept: locking memory
 /// beside the refinement slowed it more than the calls gained.)
 class PinnedPool {
@@ -137,16 +139,35 @@ class PinnedPool {
       }
     }
     const auto start = std::chrono::steady_clock::now();
-    auto out = std::make_unique<PinnedBuffer>(bytes);
+    std::unique_ptr<PinnedBuffer> out;
+    try {
+      out = std::make_unique<PinnedBuffer>(bytes);
+    } catch (const Error&) {
+      // The memory the kept buffers lock may be what is missing (their freeing waits for the
+      // device: only here).
+      std::vector<std::unique_ptr<PinnedBuffer>> freed;
+      {
+        std::lock_guard lock(mutex_);
+        freed.swap(kept_);
+      }
+      if (freed.empty()) throw;
+      freed.clear();
+      out = std::make_unique<PinnedBuffer>(bytes);
+    }
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
   }
 
-  /// Keeps `buffer` for a later take(). No copy may still read or write it.
-  void give_back(std::unique_ptr<PinnedBuffer> buffer) {
+  /// Keeps `buffer` for a later take() (or frees it where it cannot be kept). No copy may still
+  /// read or write it.
+  void give_back(std::unique_ptr<PinnedBuffer> buffer) noexcept {
     if (!buffer) return;
     std::lock_guard lock(mutex_);
-    kept_.push_back(std::move(buffer));
+    try {
+      kept_.push_back(std::move(buffer));
+    } catch (const std::bad_alloc&) {
+      // Freed on return instead.
+    }
   }
 
  private:
@@ -902,7 +923,8 @@ class CudaAdvector final : public BatchAdvector {
       lane.pstop = DeviceArray<double>(c, s);
       // (The new staging first: a lane whose growth failed keeps its old one.)
       std::unique_ptr<PinnedBuffer> bigger = pinned.take(lane_bytes(c), stats.pinned_seconds);
-      pinned.give_back(std::exchange(lane.host, std::move(bigger)));  // its copies ended above
+      // (The old staging has no copy in flight: every call on the lane ended synchronized.)
+      pinned.give_back(std::exchange(lane.host, std::move(bigger)));
       lane.capacity = c;
     }
     const bool own_ends = !particles.stop.empty();
@@ -1069,7 +1091,8 @@ class CudaResident final : public ResidentParticles {
       const cudaStream_t s = lane.compute;
       const auto host = std::chrono::steady_clock::now();
       upload_changes(s, stats.pinned_seconds);
-      stats.host_seconds += seconds_since(host);
+      // (Page-locked memory made for growth is counted apart, as for batch calls.)
+      stats.host_seconds += seconds_since(host) - stats.pinned_seconds;
       if (size_ > 0) {
         // Restarted and counted: with none moving, no step is read.
         check(cudaMemsetAsync(lane.counters.get(), 0, sizeof(unsigned long long), s), "cudaMemset");

@@ -96,6 +96,7 @@ AdvectionStatistics share_of(const AdvectionStatistics& all, std::size_t particl
   s.host_seconds = all.host_seconds * f;
   s.overlap_seconds = all.overlap_seconds * f;
   s.download_seconds = all.download_seconds * f;
+  s.pinned_seconds = all.pinned_seconds * f;
   return s;
 }
 
