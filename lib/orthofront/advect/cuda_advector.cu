@@ -119,8 +119,8 @@ class PinnedBuffer {
 /// of up to four times less. Kept buffers stay page-locked until the pool goes (about twice the
 /// users' peak, as they grow by doubling), unless making a new one fails: then they are freed
 /// and the making tried once more.
-/// (Making the next size ahead on a thread of its own was measured and not kept: locking memory
-/// beside the refinement slowed it more than the calls gained.)
+/// (Making the next size ahead on a thread of its own was measured and not kept: with it the
+/// catch-ups of bench-gpu-streak took longer, not shorter.)
 class PinnedPool {
  public:
   /// A buffer of at least `bytes`: the smallest kept one that fits, or else a new one (its making
