@@ -10,7 +10,10 @@ cd "$(dirname "$0")/.."
 build=${1:-build}
 out=${2:-.gpu-carry}
 [[ -f $build/compile_commands.json ]] || { echo "gpu-carry: $build/compile_commands.json missing: configure and build first" >&2; exit 1; }
-[[ -x $build/apps/orthofront ]] || { echo "gpu-carry: $build/apps/orthofront missing: build first" >&2; exit 1; }
+# The libraries are found by ldd on these binaries: OpenVDB's only through the tests that read it.
+for bin in apps/orthofront tests/io_test_vdb tests/io_test_exr_front_image; do
+  [[ -x $build/$bin ]] || { echo "gpu-carry: $build/$bin missing: build everything first (ninja -C $build)" >&2; exit 1; }
+done
 mkdir -p "$out"
 list=$(mktemp)
 trap 'rm -f "$list"' EXIT
@@ -52,7 +55,7 @@ cat "$headers" >>"$list"
 
 # Shared libraries the binaries load (not glibc's or the compiler's), with their .so links.
 for bin in "$build"/apps/orthofront "$build"/tests/io_test_vdb "$build"/tests/io_test_exr_front_image; do
-  if [[ -x $bin ]]; then ldd "$bin" | awk '/=> \//{print $3}'; fi
+  ldd "$bin" | awk '/=> \//{print $3}'
 done | sort -u | grep -v -E '/(libc|libm|libdl|librt|libpthread|libgcc_s|libstdc\+\+|ld-linux[^/]*)\.so' \
   | grep -v "/work/" | while read -r lib; do
     echo "$lib"
