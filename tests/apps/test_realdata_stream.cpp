@@ -54,11 +54,15 @@ Surface stream(const fs::path& field, const std::string& args, const std::string
   for (const auto& [cause, n] : counts["insertion_fallbacks_by_cause"].items())
     fallbacks += n.get<std::size_t>();
   CHECK(clamped == counts["clamped_alpha"].get<std::size_t>());
+  std::size_t triangles = 0;
+  for (const auto& [cause, n] : counts["triangles_by_cause"].items()) triangles += n.get<std::size_t>();
+  CHECK(triangles == s.quality.triangles);
   CHECK(fallbacks == counts["insertion_fallbacks"].get<std::size_t>());
   WARN(name << ": clamped alpha by cause " << counts["clamped_alpha_by_cause"].dump()
             << " of " << counts["vertex_steps"] << " vertex-steps; insertion fallbacks by cause "
             << counts["insertion_fallbacks_by_cause"].dump() << ", "
-            << counts["streamline_insertions"] << " stream-line insertions");
+            << counts["streamline_insertions"] << " stream-line insertions; triangles by cause "
+            << counts["triangles_by_cause"].dump());
   return s;
 }
 

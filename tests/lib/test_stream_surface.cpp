@@ -14,6 +14,7 @@
 #include "orthofront/field/scaled.h"
 #include "orthofront/seed/seed.h"
 #include "lib/surface_checks.h"
+#include "lib/uniform_field.h"
 
 using namespace orthofront;
 using orthofront::test_support::require_valid;
@@ -252,7 +253,45 @@ TEST_CASE("every analytic field gives a valid mesh in the default mode", "[engin
               p.clamped_ahead ==
           p.clamped_alpha);
     CHECK(p.fallback_left_domain + p.fallback_far_from_front == p.insertion_fallbacks);
+    // ... and every triangle of the mesh, counted face by face here.
+    std::size_t triangles = 0;
+    for (const Face& face : r.mesh.faces) triangles += face.is_quad() ? 0 : 1;
+    CHECK(p.triangles_at_row_changes + p.triangles_at_waiting_vertices +
+              p.triangles_closing_gaps ==
+          triangles);
   }
+}
+
+TEST_CASE("triangles by cause: rows of different lengths, waiting vertices, closed gaps",
+          "[engine][validity]") {
+  // saddle3d stretches its front without compressing it: every inserted vertex lengthens a row
+  // by a segment, which a triangle at least must take up.
+  const auto saddle3d = make_analytic_field("saddle3d");
+  const SurfaceResult stretched = run(*saddle3d, line(-1, 2, 0.1, 1, 2, 0.1), 21, 0.1, 200);
+  REQUIRE(stretched.report.splits > 50);
+  REQUIRE(stretched.report.merges == 0);
+  CHECK(stretched.report.triangles_at_row_changes >= stretched.report.splits);
+
+  // A uniform flow across a straight seed: no row changes length and no vertex waits.
+  const test::UniformField uniform;
+  const SurfaceResult plain = run(uniform, line(0, 0, 0, 0, 1, 0), 11, 0.1, 50);
+  REQUIRE(plain.mesh.face_count() == 10 * 50);
+  CHECK(plain.report.triangles_at_row_changes == 0);
+  CHECK(plain.report.triangles_at_waiting_vertices == 0);
+  CHECK(plain.report.triangles == 0);
+
+  // Row skipping leaves a triangle where a waiting vertex meets a moving one; without it no
+  // vertex of the sinus front waits (none has α clamped to 0).
+  const auto sinus = make_analytic_field("sinus");
+  const SurfaceResult skipping = run(*sinus, line(-1, 0, 0, 1, 0, 0), 21, 0.1, 200);
+  CHECK(skipping.report.skipped_vertex_steps > 0);
+  CHECK(skipping.report.triangles_at_waiting_vertices > 0);
+  StreamSurfaceOptions every_row;
+  every_row.row_skip = RowSkip::off;
+  const SurfaceResult moving = run(*sinus, line(-1, 0, 0, 1, 0, 0), 21, 0.1, 200, every_row);
+  CHECK(moving.report.clamped_alpha == 0);
+  CHECK(moving.report.triangles_at_waiting_vertices == 0);
+  CHECK(moving.report.triangles == moving.report.triangles_at_row_changes);
 }
 
 TEST_CASE("damping mode is invariant under changes of time unit, length unit and domain size",

@@ -87,6 +87,9 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::gap_faces,
     &SurfaceReport::gaps_refused,
     &SurfaceReport::seed_shots_skipped,
+    &SurfaceReport::triangles_at_row_changes,
+    &SurfaceReport::triangles_at_waiting_vertices,
+    &SurfaceReport::triangles_closing_gaps,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,

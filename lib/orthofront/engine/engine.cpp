@@ -192,12 +192,16 @@ class Engine {
       // The fold guard kept the boundary as it stitched (the same edges on a manifold mesh): no
       // pass over every face.
       const double distance = opt_.gap_distance * opt_.edge;
+      const std::size_t faces_before = mesh_.face_count();
       const GapReport gaps =
           fold_guard_on() ? close_gaps(mesh_, distance, 2 * opt_.edge, fold_guard_.boundary())
                           : close_gaps(mesh_, distance, 2 * opt_.edge);
       report_.gap_stretches = gaps.stretches;
       report_.gap_faces = gaps.faces;
       report_.gaps_refused = gaps.refused;
+      report_.triangles_closing_gaps += static_cast<std::size_t>(
+          std::count_if(mesh_.faces.begin() + static_cast<std::ptrdiff_t>(faces_before),
+                        mesh_.faces.end(), [](const Face& f) { return !f.is_quad(); }));
     }
     // (Decided by the report, which a saved state keeps: a resumed run ends with the same mesh.)
     if (report_.fold_rips > 0) mesh_.remove_unused_vertices();
@@ -454,6 +458,8 @@ class Engine {
     for (int round = 0;; ++round) {
       const std::size_t vertices = mesh_.vertex_count(), faces = mesh_.face_count();
       const std::size_t skipped = report_.skipped_vertex_steps;
+      const std::size_t row_changes = report_.triangles_at_row_changes;
+      const std::size_t waiting = report_.triangles_at_waiting_vertices;
       std::vector<std::int32_t> folded;
       for (auto& piece : pieces) {
         const std::size_t first_face = mesh_.face_count();
@@ -485,6 +491,8 @@ class Engine {
       // Undo the round and take the folded vertices out of their pieces.
       mesh_.truncate(vertices, faces);
       report_.skipped_vertex_steps = skipped;
+      report_.triangles_at_row_changes = row_changes;
+      report_.triangles_at_waiting_vertices = waiting;
       std::sort(folded.begin(), folded.end());
       std::vector<Front<N>> next;
       for (std::size_t p = 0; p < pieces.size(); ++p) {

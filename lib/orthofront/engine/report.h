@@ -84,6 +84,12 @@ struct SurfaceReport {
   /// faces that took, and stretches left open because a face there would fold or be flat.
   std::size_t gap_stretches = 0, gap_faces = 0, gaps_refused = 0;
   std::size_t skipped_vertex_steps = 0;  ///< vertex-steps that kept their previous mesh vertex
+  /// Where the triangles came from (the three add up to `triangles`): between rows of different
+  /// segment counts (a split's insertions or a merge: one at least per event), a quad with a
+  /// corner on a vertex that kept its mesh vertex while its neighbour moved (row skipping, or
+  /// α clamped to 0: one per such neighbour per step), and the faces that closed gaps.
+  std::size_t triangles_at_row_changes = 0, triangles_at_waiting_vertices = 0,
+              triangles_closing_gaps = 0;
   std::size_t domain_exits = 0, no_data_hits = 0, zero_velocity_cuts = 0;
   std::size_t fronts_created = 0, fronts_dropped_short = 0, fronts_stalled = 0;
   std::size_t infeasible_damping_steps = 0;  ///< steps where no μ reached h = h*

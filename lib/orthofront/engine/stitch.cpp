@@ -141,10 +141,14 @@ void StripStitcher<N>::add_face(std::array<std::int32_t, 4> ids, int count) {
   if (m < 3) return;
   if (published_ && mesh_.faces.size() == mesh_.faces.capacity())
     throw std::logic_error("StripStitcher: more faces than most_faces() allows");
-  if (m == 4)
+  if (m == 4) {
     mesh_.add_quad(u[0], u[1], u[2], u[3]);
-  else
+  } else {
     mesh_.add_triangle(u[0], u[1], u[2]);
+    // zipper's triangles join rows of different lengths; a quad collapses where a corner kept
+    // its mesh vertex.
+    ++(count == 3 ? report_.triangles_at_row_changes : report_.triangles_at_waiting_vertices);
+  }
   // Every 32 faces: a store per face kept the reader's line bouncing between the cores.
   if (published_ && mesh_.faces.size() % 32 == 0)
     published_->store(mesh_.faces.size(), std::memory_order_release);
