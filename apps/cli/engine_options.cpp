@@ -54,6 +54,12 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_option("--skip-fraction", o.skip_fraction,
                "Row skipping: minimum move, as a share of the edge length")
       ->capture_default_str();
+  c.add_option("--join-fraction", o.join_fraction,
+               "Row skipping (run): a waiting vertex beside a moving one moves with it once it "
+               "has gone this share of the minimum move (lower: fewer triangles, more short "
+               "edges)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   c.add_flag("!--no-rip", o.rip, "Never rip the front at saddles");
   c.add_flag("!--no-fold-guard", o.fold_guard,
              "Keep strips whose faces fold over a neighbour instead of ripping the front there");

@@ -25,6 +25,7 @@ nlohmann::json to_json(const StreamSurfaceOptions& o) {
       {"merge_factor", o.merge_factor},
       {"row_skip", to_string(o.row_skip)},
       {"skip_fraction", o.skip_fraction},
+      {"join_fraction", o.join_fraction},
       {"rip", o.rip},
       {"fold_guard", o.fold_guard},
       {"stall_steps", o.stall_steps},

@@ -526,6 +526,9 @@ class Engine {
     if (opt_.max_steps < 0)
       throw InvalidArgument("step count must not be negative, got " +
                             std::to_string(opt_.max_steps));
+    if (!(opt_.join_fraction >= 0 && opt_.join_fraction <= 1))
+      throw InvalidArgument("join fraction must lie in [0, 1], got " +
+                            std::to_string(opt_.join_fraction));
     if (!(opt_.damping > 0 && opt_.damping < 1))
       throw InvalidArgument("damping must lie in (0, 1), got " + std::to_string(opt_.damping));
     if (!std::isfinite(opt_.mu) || opt_.mu < 0)

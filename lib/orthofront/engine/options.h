@@ -67,6 +67,10 @@ struct StreamSurfaceOptions {
   double merge_factor = 1.25;  ///< merge two segments shorter than merge_factor·ℓ together
   RowSkip row_skip = RowSkip::run;
   double skip_fraction = 0.5;  ///< see RowSkip
+  /// RowSkip::run: a waiting vertex beside a moving one moves with it once it has gone this share
+  /// of skip_fraction·ℓ (and so on along the waiting run). Lower: fewer triangles where waiting
+  /// and moving vertices meet, more short edges along the flow (README "Row skipping").
+  double join_fraction = 0.5;
 
   /// Lag bound (path surfaces): a vertex more than max_lag behind the front's lead along
   /// coordinate lag_axis advances with the front's largest α, so the front's spread along that

@@ -8,7 +8,7 @@ template <int N>
 void StripStitcher<N>::smooth_rows(const Front<N>& f, std::vector<char>& fresh) const {
   const std::size_t n = f.v.size();
   const double full = opt_.skip_fraction * opt_.edge;
-  const double low = 0.5 * full;
+  const double low = opt_.join_fraction * full;
   const double high = 0.9 * opt_.edge;
   auto moved = [&](std::size_t i) { return moved_[i]; };
   auto movable = [&](std::size_t i) { return f.v[i].origin >= 0 && moved(i) >= low; };

@@ -50,8 +50,8 @@ class StripStitcher {
 
  private:
   /// Row skipping leaves one triangle wherever a waiting vertex neighbours a moving one. Grow
-  /// moving regions into neighbours that went at least half the way, and let short waiting
-  /// or moving runs join their surroundings, so rows start and end in few places.
+  /// moving regions into neighbours that went at least join_fraction of the way, and let short
+  /// waiting or moving runs join their surroundings, so rows start and end in few places.
   /// moved_[i]: how far vertex i went from its mesh vertex (emit_moved fills it).
   void smooth_rows(const Front<N>& f, std::vector<char>& fresh) const;
 
