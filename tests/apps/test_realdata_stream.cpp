@@ -121,7 +121,7 @@ TEST_CASE("the fold guard on real data: the tornado across its core, the square 
   CHECK(tornado.quality.degenerate_faces == 0);
   CHECK(tornado.report["counts"]["fold_rips"].get<std::size_t>() >= 1);
   CHECK(tornado.report["counts"]["folds_left_by_guard"].get<std::size_t>() == 0);
-  CHECK(tornado.quality.quad_share > 0.9);  // goal 0.95: row skipping leaves 8.5 % triangles
+  CHECK(tornado.quality.quad_share > 0.9);
 
   const Surface by_default = stream(data / "tornado" / "1.vec",
                                     "--seed line:10,24,24:38,24,24 --seed-count 20 --edge 0.5 "
@@ -132,20 +132,22 @@ TEST_CASE("the fold guard on real data: the tornado across its core, the square 
   CHECK(by_default.quality.t_junctions == 0);
   CHECK(by_default.quality.degenerate_faces == 0);
   CHECK(by_default.report["counts"]["stall_cuts"].get<std::size_t>() > 0);
-  // Its triangles are mostly where waiting vertices meet moving ones (1,013 of 1,511; the rest
-  // where rows change length): letting them join at a tenth of the skip distance takes the quad
-  // share past 95 % (edge spread 0.280 -> 0.427, quad angles within 10° 97.2 -> 98.6 %).
+  // Waiting runs of up to 16 vertices beside moving ones move with them once they have gone a
+  // twentieth of the skip distance: 1,013 triangles at waiting vertices -> 549, 92.8 -> 95.4 %.
+  CHECK(by_default.quality.quad_share >= 0.95);
+  // A lower join fraction trades more of them for short edges (README "Row skipping").
   const Surface joined = stream(data / "tornado" / "1.vec",
                                 "--seed line:10,24,24:38,24,24 --seed-count 20 --edge 0.5 "
-                                "--steps 300 --join-fraction 0.1",
+                                "--steps 300 --join-fraction 0.3",
                                 "tornado-across-joined");
   CHECK(joined.quality.folds == 0);
   CHECK(joined.quality.non_manifold_edges == 0);
   CHECK(joined.quality.t_junctions == 0);
   CHECK(joined.quality.degenerate_faces == 0);
-  CHECK(joined.quality.quad_share >= 0.95);
+  CHECK(joined.quality.quad_share > by_default.quality.quad_share);
   CHECK(joined.report["counts"]["triangles_by_cause"]["waiting_vertices"].get<std::size_t>() <
         by_default.report["counts"]["triangles_by_cause"]["waiting_vertices"].get<std::size_t>());
+  CHECK(joined.quality.edge_spread_median > by_default.quality.edge_spread_median);
   CHECK(by_default.report["counts"]["skipped_vertex_steps"].get<std::size_t>() <
         tornado.report["counts"]["skipped_vertex_steps"].get<std::size_t>());
 
