@@ -199,7 +199,7 @@ class Engine {
       report_.gap_stretches = gaps.stretches;
       report_.gap_faces = gaps.faces;
       report_.gaps_refused = gaps.refused;
-      report_.triangles_closing_gaps += static_cast<std::size_t>(
+      report_.triangles_closing_gaps = static_cast<std::size_t>(
           std::count_if(mesh_.faces.begin() + static_cast<std::ptrdiff_t>(faces_before),
                         mesh_.faces.end(), [](const Face& f) { return !f.is_quad(); }));
     }
