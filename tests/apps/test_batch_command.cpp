@@ -245,7 +245,7 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
 }
 
 TEST_CASE(
-    "batch: SIGTERM checkpoints the unfinished surfaces; --resume never rebuilds the finished",
+    "batch: SIGTERM checkpoints the unfinished surfaces, --resume never rebuilds the finished",
     "[batch]") {
   TempDir dir("batch-term");
   // Two stream surfaces in one pass: a quick one, and a slow one still running when the quick

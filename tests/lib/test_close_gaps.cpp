@@ -49,7 +49,7 @@ TEST_CASE("two strips side by side are zipped into one sheet", "[mesh][gaps]") {
   CHECK(after.degenerate_faces == 0);
 }
 
-TEST_CASE("a gap wider than the distance stays open; so does one whose faces would fold",
+TEST_CASE("a gap wider than the distance stays open, so does one whose faces would fold",
           "[mesh][gaps]") {
   const auto flat = [](double) { return 0.0; };
   SECTION("too wide") {

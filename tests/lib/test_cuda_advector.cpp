@@ -196,7 +196,7 @@ TEST_CASE("cuda advection: steps stay on the device between calls on the same so
   CHECK(s.bytes_uploaded == 2 * step_bytes);
 }
 
-TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits; steps within "
+TEST_CASE("cuda advection: own end times and a device budget give the CPU's bits, steps within "
           "the budget are not uploaded again",
           "[gpu][advect]") {
   if (skip_without_gpu()) return;
@@ -327,8 +327,8 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
   }
 }
 
-TEST_CASE("cuda advection: a resident set's next step is read between calls; each step is "
-          "uploaded once and counted by the call that uses it; the CPU backend's bits",
+TEST_CASE("cuda advection: a resident set's next step is read between calls, each step is "
+          "uploaded once and counted by the call that uses it, the CPU backend's bits",
           "[gpu][advect]") {
   if (skip_without_gpu()) return;
   const auto cpu = make_cpu_advector();
@@ -380,7 +380,7 @@ TEST_CASE("cuda advection: a resident set's next step is read between calls; eac
 }
 
 TEST_CASE("cuda advection: a resident set's slot placed and parked again before any advance, at "
-          "the end of its arrays, is never written; a set with nothing moving reads no step",
+          "the end of its arrays, is never written, a set with nothing moving reads no step",
           "[gpu][advect]") {
   if (skip_without_gpu()) return;
   const auto gpu = make_advector(Device::cuda);

@@ -37,7 +37,7 @@ std::vector<std::int32_t> mesh_ids(const Front<3>& f) {
 
 }  // namespace
 
-TEST_CASE("split_front removes vertices and cuts segments; parts keep order and get new ids",
+TEST_CASE("split_front removes vertices and cuts segments, parts keep order and get new ids",
           "[engine][front]") {
   FrontIds ids{100, 0};
   SECTION("nothing to cut: the front itself") {

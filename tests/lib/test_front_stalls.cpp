@@ -65,7 +65,7 @@ TEST_CASE("a front running into a no-slip wall of zero vectors folds nowhere",
   CHECK(r.report.folds_left == 0);
 }
 
-TEST_CASE("vertices that stop advancing leave the front; the surface stays valid",
+TEST_CASE("vertices that stop advancing leave the front, the surface stays valid",
           "[engine][stall]") {
   // The planar saddle (the bench's row): the front halves stall at the stagnation point, where
   // the surface rips.

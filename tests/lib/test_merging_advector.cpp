@@ -234,7 +234,7 @@ TEST_CASE("merged calls: calls queued behind a busy backend run as one, each par
   CHECK(left > 0);
 }
 
-TEST_CASE("merged calls: without merging, calls take turns one at a time; an error reaches its "
+TEST_CASE("merged calls: without merging, calls take turns one at a time, an error reaches its "
           "caller",
           "[advect]") {
   ResidentSteps series = swirl_series();

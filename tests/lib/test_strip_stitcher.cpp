@@ -135,34 +135,61 @@ TEST_CASE("zipper places a row's extra segments as triangles at the shorter diag
   CHECK(quad.v == std::array<std::int32_t, 4>{0, 1, 3, 2});
 }
 
-TEST_CASE("row skipping by runs: a waiting run of one or two vertices between moving ones moves "
-          "once each has gone 0.4 of the skip distance; a longer run waits",
+TEST_CASE("row skipping by runs: a waiting run of up to 16 vertices beside moving ones moves once "
+          "each has gone a twentieth of the skip distance, a longer or slower run waits",
           "[engine][stitch]") {
-  // Vertices 0 .. 6 advance by l except those in [first, first + count), which move `by`.
-  const auto skipped = [](std::size_t first, std::size_t count, double by, int& quads) {
+  constexpr std::size_t n = 40;
+  // Vertices 0 .. n-1 advance by l except those in [first, first + count), which move `by`.
+  const auto skipped = [](std::size_t first, std::size_t count, double by, int& quads,
+                          int& triangles) {
     Mesh mesh;
     SurfaceReport report;
     StreamSurfaceOptions o;
     o.edge = 1;
-    o.row_skip = RowSkip::run;  // skip distance 0.5 l: lone runs move from 0.2 l
+    o.row_skip = RowSkip::run;  // skip distance 0.5 l: short runs move from 0.025 l
     StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
-    const Front<3> old = previous_row(mesh, 7);
+    const Front<3> old = previous_row(mesh, static_cast<int>(n));
     Front<3> f = advanced(old, 1.0);
     for (std::size_t i = first; i < first + count; ++i) f.v[i].x.y() = by;
     stitcher.emit_moved(f, old, 1);
     stitcher.stitch(old, f);
     CHECK(consistently_oriented(mesh));
     quads = count_quads(mesh);
+    triangles = static_cast<int>(mesh.face_count()) - quads;
+    CHECK(report.triangles_at_waiting_vertices == static_cast<std::size_t>(triangles));
     return report.skipped_vertex_steps;
   };
-  int quads = 0;
-  CHECK(skipped(3, 1, 0.22, quads) == 0);  // one vertex: moves, every face a quad
-  CHECK(quads == 6);
-  CHECK(skipped(2, 2, 0.22, quads) == 0);  // two: move
-  CHECK(quads == 6);
-  CHECK(skipped(2, 2, 0.15, quads) == 2);  // not far enough: they wait, a triangle at each end
-  CHECK(quads == 3);
-  CHECK(skipped(2, 3, 0.22, quads) == 3);  // three: a run that waits
+  int quads = 0, triangles = 0;
+  CHECK(skipped(3, 1, 0.03, quads, triangles) == 0);  // one vertex: moves, every face a quad
+  CHECK(quads == 39);
+  CHECK(skipped(10, 16, 0.03, quads, triangles) == 0);  // sixteen: move
+  CHECK(quads == 39);
+  CHECK(skipped(n - 5, 5, 0.03, quads, triangles) == 0);  // at an open end: move
+  CHECK(quads == 39);
+  // Seventeen wait: the faces between two waiting vertices vanish, a triangle at each end.
+  CHECK(skipped(10, 17, 0.03, quads, triangles) == 17);
+  CHECK(quads == 39 - 16 - 2);
+  CHECK(triangles == 2);
+  CHECK(skipped(10, 2, 0.02, quads, triangles) == 2);  // not far enough: they wait
+  CHECK(triangles == 2);
+  CHECK(skipped(0, n, 0.03, quads, triangles) == n);  // a front that waits as a whole
+
+  // On a closed front a run goes on across its last and first vertex: vertices n-2 .. 1 are one
+  // run of four between moving ones.
+  for (const double by : {0.02, 0.03}) {
+    Mesh mesh;
+    SurfaceReport report;
+    StreamSurfaceOptions o;
+    o.edge = 1;
+    StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
+    Front<3> old = previous_row(mesh, static_cast<int>(n));
+    old.closed = true;
+    Front<3> f = advanced(old, 1.0);
+    for (const std::size_t i : {n - 2, n - 1, std::size_t{0}, std::size_t{1}}) f.v[i].x.y() = by;
+    stitcher.emit_moved(f, old, 1);
+    INFO("moved " << by);
+    CHECK(report.skipped_vertex_steps == (by < 0.025 ? 4u : 0u));
+  }
 }
 
 TEST_CASE("stitch beside a reader: counts published, faces bounded, never moved",

@@ -545,7 +545,7 @@ TEST_CASE("bricked series: whole steps gathered from bricks give a slab Streamed
     }
 }
 
-TEST_CASE("a unit the full budget cannot take fails the evaluation once; later misses fail at "
+TEST_CASE("a unit the full budget cannot take fails the evaluation once, later misses fail at "
           "once, not after another wait each",
           "[spacetime][bricks]") {
   const ThreeStepBudget data;
@@ -569,7 +569,7 @@ TEST_CASE("a unit the full budget cannot take fails the evaluation once; later m
   CHECK(field.velocity(Vec3(0.7, 0.3, 0), 5.5, v) == FieldStatus::inside);
 }
 
-TEST_CASE("a streamed field's kinks are its cell faces and time steps; the lifted field "
+TEST_CASE("a streamed field's kinks are its cell faces and time steps, the lifted field "
           "forwards them",
           "[spacetime][bricks][kinks]") {
   TempDir dir("bricks-kinks");

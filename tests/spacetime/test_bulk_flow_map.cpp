@@ -183,7 +183,7 @@ StreakOptions gyre_options(ParticleInsertion insertion) {
 
 }  // namespace
 
-TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines; a small "
+TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines, a small "
           "budget, particles sent up and down each interval instead of kept by the backend, and "
           "moves in turn with refinement instead of beside it give the same frames bit for bit",
           "[spacetime][advect][streak]") {

@@ -96,7 +96,7 @@ TEST_CASE("bulk front advance: every vertex on its path line through the series,
 }
 
 TEST_CASE("bulk front advance: through bricks under a tiny budget, the in-memory surface bit for "
-          "bit; below the minimum front size, the per-vertex surface bit for bit",
+          "bit, below the minimum front size, the per-vertex surface bit for bit",
           "[spacetime][path][advect][bricks]") {
   TempDir dir("bulk-front");
   Case c = gyre_case();
