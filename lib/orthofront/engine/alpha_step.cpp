@@ -56,7 +56,7 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
   r_.resize(segments);
   seg_ok_.assign(segments, 1);
   seg_err_.resize(segments);
-  for_range(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+  segment_loop_.run(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
     Vec<N> vm;
     Mat<N> jm;
     for (std::size_t i = b; i < e; ++i) {

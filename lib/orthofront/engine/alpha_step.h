@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "orthofront/engine/for_range.h"
 #include "orthofront/engine/front.h"
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
@@ -66,6 +67,7 @@ class AlphaStep {
   double ortho_sum_ = 0;
   std::size_t ortho_count_ = 0;
   AlphaSolver solver_;
+  CheapLoop segment_loop_;  ///< v and J at the segments' midpoints
   // Scratch, reused between fronts and steps.
   std::vector<double> p_, q_, r_, aln_, kernel_, seg_err_;
   std::vector<char> seg_ok_;

@@ -290,7 +290,7 @@ class Engine {
     vel_.resize(n);
     speed_.resize(n);
     state_.assign(n, VertexState::ok);
-    for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+    velocity_loop_.run(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const FieldStatus st = field_.velocity(f.v[i].x, vel_[i]);
         state_[i] = st == FieldStatus::inside    ? VertexState::ok
@@ -664,6 +664,7 @@ class Engine {
   std::vector<Vec<N>> vel_;
   std::vector<double> speed_, alpha_;
   std::vector<VertexState> state_;
+  CheapLoop velocity_loop_;  ///< v at the front's vertices
 };
 
 template <int N>
