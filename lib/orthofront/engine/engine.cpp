@@ -6,15 +6,13 @@
 #include <string>
 
 #include "orthofront/engine/adapt.h"
+#include "orthofront/engine/advect.h"
 #include "orthofront/engine/discretization.h"
-#include "orthofront/engine/fold_guard.h"
-#include "orthofront/engine/for_range.h"
 #include "orthofront/engine/rip.h"
-#include "orthofront/engine/stitch.h"
+#include "orthofront/engine/link.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
-#include "orthofront/integrate/runge_kutta.h"
 #include "orthofront/mesh/close_gaps.h"
 #include "orthofront/seed/seed_check.h"
 
@@ -60,14 +58,12 @@ class StageTimer {
   Clock::time_point start_;
 };
 
-enum class VertexState : unsigned char { ok, outside, no_data, zero_speed, interrupted };
-
 }  // namespace
 
-/// The driver (paper Figure 4): each step takes every front through the stall cut → velocity → α
-/// (discretization.h: the orthogonal alpha_step.h or the timeline baseline) → rips (rip.h) →
-/// advance → adapt (adapt.h) → stitch (stitch.h, checked by fold_guard.h); the finished surface's
-/// gaps are closed (mesh/close_gaps.h).
+/// The driver (paper Figure 4): each step takes every front through the stall cut → velocity
+/// (advect.h) → α (discretization.h: the orthogonal alpha_step.h or the timeline baseline) →
+/// rips (rip.h) → advance (advect.h) → adapt (adapt.h) → link (link.h: stitch, checked by the
+/// fold guard); the finished surface's gaps are closed (mesh/close_gaps.h).
 template <int N>
 class Engine {
  public:
@@ -81,7 +77,9 @@ class Engine {
   }
 
   void set_stop_request(StopRequest request) { stop_request_ = std::move(request); }
-  void set_front_integrator(FrontIntegrator<N>* integrator) { front_integrator_ = integrator; }
+  void set_front_integrator(FrontIntegrator<N>* integrator) {
+    advect_.set_front_integrator(integrator);
+  }
 
   /// Lays the seed as the first front.
   void begin() {
@@ -98,7 +96,7 @@ class Engine {
     ids_.next = state.next_front_id;
     elapsed_before_ = state.elapsed_seconds;
     mesh_ = std::move(state.mesh);
-    if (fold_guard_on()) fold_guard_.rebuild(mesh_);
+    linker_.rebuild(mesh_);
     report_ = std::move(state.report);
     report_.options = opt_;
   }
@@ -185,7 +183,7 @@ class Engine {
 
   SurfaceResult finish() {
     adapter_.finish();
-    fold_guard_.wait();  // gap closing and the unused-vertex sweep change faces
+    linker_.wait();  // gap closing and the unused-vertex sweep change faces
     // Only a surface that tore (its front was cut into parts) has gaps to close.
     if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
       StageTimer timer(report_.times.gaps);
@@ -194,7 +192,7 @@ class Engine {
       const double distance = opt_.gap_distance * opt_.edge;
       const std::size_t faces_before = mesh_.face_count();
       const GapReport gaps =
-          fold_guard_on() ? close_gaps(mesh_, distance, 2 * opt_.edge, fold_guard_.boundary())
+          linker_.guarded() ? close_gaps(mesh_, distance, 2 * opt_.edge, linker_.boundary())
                           : close_gaps(mesh_, distance, 2 * opt_.edge);
       report_.gap_stretches = gaps.stretches;
       report_.gap_faces = gaps.faces;
@@ -235,13 +233,14 @@ class Engine {
     if (find_stalled(f, step, keep)) return requeue();
     {
       StageTimer timer(report_.times.alpha);
-      if (!sample_velocities(f, keep)) return requeue();
+      if (!advect_.sample(f, keep, exits_this_step_)) return requeue();
       alpha_.assign(n, 1.0);
-      if (!discretization_->alpha(f, vel_, speed_, alpha_, cut)) return requeue();
+      if (!discretization_->alpha(f, advect_.velocities(), advect_.speeds(), alpha_, cut))
+        return requeue();
     }
     if (discretization_->safeguarded() && opt_.rip) {
       StageTimer timer(report_.times.rip);
-      const std::size_t rips = find_rips(alpha_, speed_, f.closed,
+      const std::size_t rips = find_rips(alpha_, advect_.speeds(), f.closed,
                                          {opt_.rip_sharpness, opt_.rip_speed_fraction}, keep);
       report_.rips += rips;
       if (rips > 0) return requeue();
@@ -251,7 +250,10 @@ class Engine {
       ++report_.fronts_stalled;  // α vanished everywhere: this front cannot advance
       return;
     }
-    Front<N> advanced = advance_vertices(f, h, keep);
+    Front<N> advanced = [&] {
+      StageTimer timer(report_.times.advance);
+      return advect_.advance(f, alpha_, h, keep, exits_this_step_, std::move(spare_vertices_));
+    }();
     // Vertices that left the domain end their stream lines at the last valid point: keep that
     // point in the mesh, but not in the front.
     for (auto& part : split(std::move(advanced), keep, cut)) {
@@ -283,59 +285,11 @@ class Engine {
     return any;
   }
 
-  /// v and |v| at every front vertex; marks (keep[i] = 0) those without usable flow: outside,
-  /// no data, or vanishing speed. Returns false when any was marked.
-  bool sample_velocities(const Front<N>& f, std::vector<char>& keep) {
-    const std::size_t n = f.v.size();
-    vel_.resize(n);
-    speed_.resize(n);
-    state_.assign(n, VertexState::ok);
-    velocity_loop_.run(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const FieldStatus st = field_.velocity(f.v[i].x, vel_[i]);
-        state_[i] = st == FieldStatus::inside    ? VertexState::ok
-                    : st == FieldStatus::outside ? VertexState::outside
-                                                 : VertexState::no_data;
-        speed_[i] = st == FieldStatus::inside ? vel_[i].norm() : 0.0;
-      }
-    });
-    report_.field_evaluations += n;
-    // No speed is below the zero-speed share of the median where none is below that share of
-    // the largest (the median is no larger; a share >= 0 keeps the order): the median, a copy
-    // and a selection, only then.
-    double slowest = std::numeric_limits<double>::infinity(), fastest = 0;
-    bool comparable = true;  // no NaN (which the median's test marks as no flow)
-    for (std::size_t i = 0; i < n; ++i) {
-      comparable = comparable && !std::isnan(speed_[i]);
-      fastest = std::max(fastest, speed_[i]);
-      if (state_[i] == VertexState::ok) slowest = std::min(slowest, speed_[i]);
-    }
-    const bool all_fast = comparable && std::isfinite(fastest) &&
-                          opt_.zero_speed_fraction >= 0 &&
-                          slowest > opt_.zero_speed_fraction * fastest;
-    const double median = all_fast ? 0.0 : median_of(speed_);
-    bool usable = true;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (state_[i] == VertexState::ok && !all_fast &&
-          !(speed_[i] > opt_.zero_speed_fraction * median)) {
-        state_[i] = VertexState::zero_speed;
-        ++report_.zero_velocity_cuts;
-      }
-      if (state_[i] != VertexState::ok) {
-        keep[i] = 0;
-        usable = false;
-        if (state_[i] == VertexState::outside) ++report_.domain_exits, ++exits_this_step_;
-        if (state_[i] == VertexState::no_data) ++report_.no_data_hits;
-      }
-    }
-    return usable;
-  }
-
   /// The front step h in α-time (discretization.h); -1 when no vertex moves. Records α on the
   /// mesh vertices the front stands on.
   double front_step(const Front<N>& f) {
     const std::size_t n = f.v.size();
-    const double h = discretization_->step(f, alpha_, speed_);
+    const double h = discretization_->step(f, alpha_, advect_.speeds());
     if (h < 0) return h;
     step_record_.h_min = std::min(step_record_.h_min, h);
     step_record_.h_max = std::max(step_record_.h_max, h);
@@ -343,73 +297,6 @@ class Engine {
       if (f.v[i].mesh >= 0 && f.v[i].x == f.v[i].anchor)
         mesh_.alpha[static_cast<std::size_t>(f.v[i].mesh)] = alpha_[i];
     return h;
-  }
-
-  /// Every vertex along its stream line by τ_i = α_i h; those whose stream line ended (left the
-  /// domain, met no data, or was stopped) get keep[i] = 0 and stay at its last valid point.
-  Front<N> advance_vertices(const Front<N>& f, double h, std::vector<char>& keep) {
-    StageTimer timer(report_.times.advance);
-    const std::size_t n = f.v.size();
-    Front<N> nf;
-    nf.closed = f.closed;
-    nf.id = f.id;
-    // Every vertex is written below: room kept from an old front saves a pass of zeros over it.
-    nf.v = std::move(spare_vertices_);
-    nf.v.resize(n);
-    std::vector<int> evaluations(n, 0);
-    const auto apply = [&](std::size_t i, FrontVertex<N>& fv, const IntegrationResult<N>& r) {
-      evaluations[i] = r.evaluations;
-      fv.x = r.x;
-      fv.t += r.reached;
-      if (r.status != FieldStatus::inside) keep[i] = 0;
-      state_[i] = r.interrupted                     ? VertexState::interrupted
-                  : r.status == FieldStatus::outside ? VertexState::outside
-                  : r.status == FieldStatus::inside  ? VertexState::ok
-                                                     : VertexState::no_data;
-    };
-    bool bulk = false;
-    if (front_integrator_ && !stopping_.load(std::memory_order_relaxed) &&
-        n >= front_integrator_->min_vertices()) {
-      // The whole front in one call of the bulk backend.
-      batch_x_.resize(n);
-      batch_tau_.resize(n);
-      batch_out_.resize(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        batch_x_[i] = f.v[i].x;
-        batch_tau_[i] = alpha_[i] * h;
-      }
-      bulk = front_integrator_->integrate(batch_x_, batch_tau_, batch_out_);
-    }
-    if (bulk) {
-      for (std::size_t i = 0; i < n; ++i) {
-        FrontVertex<N> fv = f.v[i];
-        fv.origin = static_cast<std::int32_t>(i);
-        if (batch_tau_[i] != 0) apply(i, fv, batch_out_[i]);
-        nf.v[i] = fv;
-      }
-    } else {
-      for_range(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-          const double tau = alpha_[i] * h;
-          FrontVertex<N> fv = f.v[i];
-          fv.origin = static_cast<std::int32_t>(i);
-          if (stopping_.load(std::memory_order_relaxed)) {
-            keep[i] = 0;  // the run stops: this stream line ends at its last mesh vertex
-            state_[i] = VertexState::interrupted;
-          } else if (tau != 0) {
-            apply(i, fv, integrate(fv.x, tau));
-          }
-          nf.v[i] = fv;
-        }
-      });
-    }
-    report_.vertex_steps += n;
-    for (std::size_t i = 0; i < n; ++i) {
-      report_.field_evaluations += static_cast<std::size_t>(evaluations[i]);
-      if (state_[i] == VertexState::outside) ++report_.domain_exits, ++exits_this_step_;
-      if (state_[i] == VertexState::no_data) ++report_.no_data_hits;
-    }
-    return nf;
   }
 
   /// Merge short segments, split long ones, decide which vertices get new mesh vertices, and
@@ -430,92 +317,7 @@ class Engine {
     }
     StageTimer timer(report_.times.stitch);
     if (!old) return parts;
-    if (!fold_guard_on()) {
-      for (auto& part : parts) {
-        stitcher_.emit_moved(part, *old, step);
-        stitcher_.stitch(*old, part);
-      }
-      return parts;
-    }
-    std::vector<Front<N>> pieces;
-    for (auto& part : parts) link_guarded(std::move(part), *old, step, first_inserted, pieces);
-    return pieces;
-  }
-
-  bool fold_guard_on() const { return opt_.fold_guard && discretization_->safeguarded(); }
-
-  /// Emits and stitches one part; where a face of the strip folds over a neighbour (fold_guard.h)
-  /// the strip is undone, the vertices standing on the fold leave the front (a local rip: their
-  /// stream lines end at their previous mesh vertices) and the rest is stitched again, up to
-  /// three times. Folds left after that stay in the mesh, counted in the report. Vertices
-  /// inserted this step (mesh vertices from first_inserted on) may stand on a fold too; one taken
-  /// out leaves a mesh vertex no face uses, which finish() removes when the guard ripped.
-  void link_guarded(Front<N>&& part, const Front<N>& old, int step, std::size_t first_inserted,
-                    std::vector<Front<N>>& out) {
-    constexpr int kRounds = 3;
-    std::vector<Front<N>> pieces;
-    pieces.push_back(std::move(part));
-    for (int round = 0;; ++round) {
-      const std::size_t vertices = mesh_.vertex_count(), faces = mesh_.face_count();
-      const std::size_t skipped = report_.skipped_vertex_steps;
-      const std::size_t row_changes = report_.triangles_at_row_changes;
-      const std::size_t waiting = report_.triangles_at_waiting_vertices;
-      std::vector<std::int32_t> folded;
-      for (auto& piece : pieces) {
-        const std::size_t first_face = mesh_.face_count();
-        // A large strip is checked while it is stitched, by a task that starts while the
-        // vertices are emitted (accepting the previous strip's faces meanwhile).
-        std::vector<std::int32_t> found;
-        if (piece.v.size() >= opt_.parallel_threshold) {
-          found = fold_guard_.folded_vertices_while(
-              mesh_, first_inserted, stitcher_.most_faces(old, piece),
-              [&](std::atomic<std::size_t>& count) {
-                stitcher_.emit_moved(piece, old, step);
-                stitcher_.stitch(old, piece, count);
-              });
-        } else {
-          stitcher_.emit_moved(piece, old, step);
-          stitcher_.stitch(old, piece);
-          found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
-        }
-        folded.insert(folded.end(), found.begin(), found.end());
-      }
-      if (folded.empty() || round + 1 == kRounds) {
-        if (!folded.empty()) report_.folds_left += folded.size();
-        // Accepted when the next strip is checked (beside its emit where that strip is large),
-        // or at the end: the next core is free for the α, advance and insertion loops meanwhile.
-        fold_guard_.accept_later(mesh_, faces);
-        for (auto& piece : pieces) out.push_back(std::move(piece));
-        return;
-      }
-      // Undo the round and take the folded vertices out of their pieces.
-      mesh_.truncate(vertices, faces);
-      report_.skipped_vertex_steps = skipped;
-      report_.triangles_at_row_changes = row_changes;
-      report_.triangles_at_waiting_vertices = waiting;
-      std::sort(folded.begin(), folded.end());
-      std::vector<Front<N>> next;
-      for (std::size_t p = 0; p < pieces.size(); ++p) {
-        Front<N>& linked = pieces[p];
-        std::vector<char> keep(linked.v.size(), 1), cut(linked.v.size(), 0);
-        for (std::size_t i = 0; i < linked.v.size(); ++i) {
-          FrontVertex<N>& fv = linked.v[i];
-          if (std::binary_search(folded.begin(), folded.end(), fv.mesh)) {
-            keep[i] = 0;
-            ++report_.fold_rips;
-          }
-          // A mesh vertex emit_moved gave it this round is gone: it stands for its origin's again
-          // (it was a copy of that vertex before; inserted vertices are older than `vertices`).
-          if (fv.origin >= 0 && fv.mesh >= 0 && static_cast<std::size_t>(fv.mesh) >= vertices) {
-            const FrontVertex<N>& from = old.v[static_cast<std::size_t>(fv.origin)];
-            fv.mesh = from.mesh;
-            fv.anchor = from.anchor;
-          }
-        }
-        for (auto& piece : split(std::move(pieces[p]), keep, cut)) next.push_back(std::move(piece));
-      }
-      pieces = std::move(next);
-    }
+    return linker_.link(std::move(parts), *old, step, first_inserted);
   }
 
   void validate() const {
@@ -609,12 +411,6 @@ class Engine {
     return parts;
   }
 
-  IntegrationResult<N> integrate(const Vec<N>& x, double tau) const {
-    if (opt_.integrator == IntegratorKind::rk4)
-      return integrate_rk4(field_, x, tau, opt_.rk4_substeps);
-    return integrate_dopri5(field_, x, tau, tol_, 0, &integration_stop_);
-  }
-
   /// Whether the caller's stop request or the time budget ends the run inside a step: asked by
   /// long integrations (runge_kutta.h) from worker threads; once true, stays true.
   bool stop_requested() const {
@@ -631,10 +427,6 @@ class Engine {
   StreamSurfaceOptions opt_;
   Tolerance tol_;
   StopRequest stop_request_;
-  FrontIntegrator<N>* front_integrator_ = nullptr;  // not owned; null: per vertex
-  std::vector<Vec<N>> batch_x_;                      // its call's arrays, kept between steps
-  std::vector<double> batch_tau_;
-  std::vector<IntegrationResult<N>> batch_out_;
   StopRequest integration_stop_;  ///< stop_requested(), as the integrators take it
   mutable std::atomic<bool> stopping_{false};
   mutable std::atomic<bool> stopped_by_budget_{false};
@@ -654,17 +446,22 @@ class Engine {
   // The stages (they keep references to the members above).
   std::unique_ptr<Discretization<N>> discretization_ =
       make_discretization(field_, opt_, mesh_, report_, step_record_);
+  FrontAdvect<N> advect_{field_, opt_, tol_, integration_stop_, stopping_, report_};
   FrontAdapter<N> adapter_{field_, seed_, opt_, tol_, integration_stop_, mesh_, report_};
-  // The paper's baseline keeps every row (no row skipping).
-  StripStitcher<N> stitcher_{opt_, discretization_->safeguarded() ? opt_.row_skip : RowSkip::off,
-                             seed_.closed, mesh_, report_};
-  FoldGuard fold_guard_;
+  // The paper's baseline keeps every row (no row skipping) and has no fold guard.
+  StripLinker<N> linker_{opt_,
+                         discretization_->safeguarded() ? opt_.row_skip : RowSkip::off,
+                         opt_.fold_guard && discretization_->safeguarded(),
+                         seed_.closed,
+                         mesh_,
+                         report_,
+                         [this](Front<N>&& f, const std::vector<char>& keep,
+                                const std::vector<char>& cut) {
+                           return split(std::move(f), keep, cut);
+                         }};
   // Per-front scratch, reused between fronts and steps.
   std::vector<FrontVertex<N>> spare_vertices_;  ///< a front's vertices once it has advanced
-  std::vector<Vec<N>> vel_;
-  std::vector<double> speed_, alpha_;
-  std::vector<VertexState> state_;
-  CheapLoop velocity_loop_;  ///< v at the front's vertices
+  std::vector<double> alpha_;
 };
 
 template <int N>

@@ -1,0 +1,117 @@
+#include "orthofront/engine/link.h"
+
+#include <algorithm>
+#include <atomic>
+#include <utility>
+
+namespace orthofront {
+
+template <int N>
+StripLinker<N>::StripLinker(const StreamSurfaceOptions& options, RowSkip row_skip, bool guarded,
+                            bool closed_seed, Mesh& mesh, SurfaceReport& report, Split split)
+    : opt_(options), guarded_(guarded), mesh_(mesh), report_(report), split_(std::move(split)),
+      stitcher_(options, row_skip, closed_seed, mesh, report) {}
+
+template <int N>
+std::vector<Front<N>> StripLinker<N>::link(std::vector<Front<N>>&& parts, const Front<N>& old,
+                                           int step, std::size_t first_inserted) {
+  if (!guarded_) {
+    for (auto& part : parts) {
+      stitcher_.emit_moved(part, old, step);
+      stitcher_.stitch(old, part);
+    }
+    return std::move(parts);
+  }
+  std::vector<Front<N>> pieces;
+  for (auto& part : parts) link_guarded(std::move(part), old, step, first_inserted, pieces);
+  return pieces;
+}
+
+template <int N>
+void StripLinker<N>::rebuild(const Mesh& mesh) {
+  if (guarded_) fold_guard_.rebuild(mesh);
+}
+
+template <int N>
+void StripLinker<N>::wait() {
+  fold_guard_.wait();
+}
+
+template <int N>
+std::vector<BoundaryEdge> StripLinker<N>::boundary() {
+  return fold_guard_.boundary();
+}
+
+template <int N>
+void StripLinker<N>::link_guarded(Front<N>&& part, const Front<N>& old, int step,
+                                  std::size_t first_inserted, std::vector<Front<N>>& out) {
+  constexpr int kRounds = 3;
+  std::vector<Front<N>> pieces;
+  pieces.push_back(std::move(part));
+  for (int round = 0;; ++round) {
+    const std::size_t vertices = mesh_.vertex_count(), faces = mesh_.face_count();
+    const std::size_t skipped = report_.skipped_vertex_steps;
+    const std::size_t row_changes = report_.triangles_at_row_changes;
+    const std::size_t waiting = report_.triangles_at_waiting_vertices;
+    std::vector<std::int32_t> folded;
+    for (auto& piece : pieces) {
+      const std::size_t first_face = mesh_.face_count();
+      // A large strip is checked while it is stitched, by a task that starts while the
+      // vertices are emitted (accepting the previous strip's faces meanwhile).
+      std::vector<std::int32_t> found;
+      if (piece.v.size() >= opt_.parallel_threshold) {
+        found = fold_guard_.folded_vertices_while(
+            mesh_, first_inserted, stitcher_.most_faces(old, piece),
+            [&](std::atomic<std::size_t>& count) {
+              stitcher_.emit_moved(piece, old, step);
+              stitcher_.stitch(old, piece, count);
+            });
+      } else {
+        stitcher_.emit_moved(piece, old, step);
+        stitcher_.stitch(old, piece);
+        found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
+      }
+      folded.insert(folded.end(), found.begin(), found.end());
+    }
+    if (folded.empty() || round + 1 == kRounds) {
+      if (!folded.empty()) report_.folds_left += folded.size();
+      // Accepted when the next strip is checked (beside its emit where that strip is large),
+      // or at the end: the next core is free for the α, advance and insertion loops meanwhile.
+      fold_guard_.accept_later(mesh_, faces);
+      for (auto& piece : pieces) out.push_back(std::move(piece));
+      return;
+    }
+    // Undo the round and take the folded vertices out of their pieces.
+    mesh_.truncate(vertices, faces);
+    report_.skipped_vertex_steps = skipped;
+    report_.triangles_at_row_changes = row_changes;
+    report_.triangles_at_waiting_vertices = waiting;
+    std::sort(folded.begin(), folded.end());
+    std::vector<Front<N>> next;
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+      Front<N>& linked = pieces[p];
+      std::vector<char> keep(linked.v.size(), 1), cut(linked.v.size(), 0);
+      for (std::size_t i = 0; i < linked.v.size(); ++i) {
+        FrontVertex<N>& fv = linked.v[i];
+        if (std::binary_search(folded.begin(), folded.end(), fv.mesh)) {
+          keep[i] = 0;
+          ++report_.fold_rips;
+        }
+        // A mesh vertex emit_moved gave it this round is gone: it stands for its origin's again
+        // (it was a copy of that vertex before; inserted vertices are older than `vertices`).
+        if (fv.origin >= 0 && fv.mesh >= 0 && static_cast<std::size_t>(fv.mesh) >= vertices) {
+          const FrontVertex<N>& from = old.v[static_cast<std::size_t>(fv.origin)];
+          fv.mesh = from.mesh;
+          fv.anchor = from.anchor;
+        }
+      }
+      for (auto& piece : split_(std::move(pieces[p]), keep, cut)) next.push_back(std::move(piece));
+    }
+    pieces = std::move(next);
+  }
+}
+
+template class StripLinker<3>;
+template class StripLinker<4>;
+
+}  // namespace orthofront
