@@ -102,9 +102,8 @@ struct StreamSurfaceOptions {
   double zero_speed_fraction = 1e-9; ///< |v| below this share of the median speed: no flow
 
   /// Insertions from the seed (Insertion::streamline) integrate in two legs, the first to the
-  /// previous front's time; on fronts below parallel_threshold a step starts the legs of the
-  /// next step's likely insertions on TBB's idle worker (engine/seed_shot_legs.h). The mesh is
-  /// the same either way, bit for bit.
+  /// previous front's time; a step starts the legs of the next step's likely insertions on
+  /// TBB's idle worker (engine/seed_shot_legs.h). The mesh is the same either way, bit for bit.
   bool shots_ahead = true;
 
   IntegratorKind integrator = IntegratorKind::dopri5;

@@ -1,10 +1,10 @@
 #pragma once
 /// The first legs of seed shots (adapt.h): the stream line from the seed point of parameter s,
 /// integrated for t1, the previous front's time between an insertion's ends. An insertion
-/// integrates from the seed over the surface's whole age, and a step on a small front leaves a
-/// core idle (its loops run on one thread below the parallel threshold). So a step starts the
-/// legs of the insertions the next step will likely make, as TBB tasks, and split_long finds
-/// them done. The engine's own waits are isolated (for_range, the fold guard): they never run a
+/// integrates from the seed over the surface's whole age, and a step leaves a core idle through
+/// its serial stretches (sampling, α, rips, merges; all of it on a front below the parallel
+/// threshold). So a step starts the legs of the insertions the next step will likely make, as
+/// TBB tasks, and split_long finds them done. The engine's own waits are isolated (for_range, the fold guard): they never run a
 /// leg meanwhile. A leg is a function of (s, t1) alone: one taken ahead and one integrated in
 /// place are the same bits, and the mesh never depends on whether, where or when a leg ran.
 #include <tbb/task_group.h>
