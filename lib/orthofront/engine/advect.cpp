@@ -84,7 +84,7 @@ Front<N> FrontAdvect<N>::advance(const Front<N>& f, const std::vector<double>& a
     fv.x = r.x;
     fv.t += r.reached;
     if (r.status != FieldStatus::inside) keep[i] = 0;
-    state_[i] = r.interrupted                     ? VertexState::interrupted
+    state_[i] = r.interrupted                      ? VertexState::interrupted
                 : r.status == FieldStatus::outside ? VertexState::outside
                 : r.status == FieldStatus::inside  ? VertexState::ok
                                                    : VertexState::no_data;

@@ -8,8 +8,8 @@
 #include "orthofront/engine/adapt.h"
 #include "orthofront/engine/advect.h"
 #include "orthofront/engine/discretization.h"
-#include "orthofront/engine/rip.h"
 #include "orthofront/engine/link.h"
+#include "orthofront/engine/rip.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
@@ -191,9 +191,9 @@ class Engine {
       // pass over every face.
       const double distance = opt_.gap_distance * opt_.edge;
       const std::size_t faces_before = mesh_.face_count();
-      const GapReport gaps =
-          linker_.guarded() ? close_gaps(mesh_, distance, 2 * opt_.edge, linker_.boundary())
-                          : close_gaps(mesh_, distance, 2 * opt_.edge);
+      const GapReport gaps = linker_.guarded()
+                                 ? close_gaps(mesh_, distance, 2 * opt_.edge, linker_.boundary())
+                                 : close_gaps(mesh_, distance, 2 * opt_.edge);
       report_.gap_stretches = gaps.stretches;
       report_.gap_faces = gaps.faces;
       report_.gaps_refused = gaps.refused;
@@ -449,16 +449,16 @@ class Engine {
   FrontAdvect<N> advect_{field_, opt_, tol_, integration_stop_, stopping_, report_};
   FrontAdapter<N> adapter_{field_, seed_, opt_, tol_, integration_stop_, mesh_, report_};
   // The paper's baseline keeps every row (no row skipping) and has no fold guard.
-  StripLinker<N> linker_{opt_,
-                         discretization_->safeguarded() ? opt_.row_skip : RowSkip::off,
-                         opt_.fold_guard && discretization_->safeguarded(),
-                         seed_.closed,
-                         mesh_,
-                         report_,
-                         [this](Front<N>&& f, const std::vector<char>& keep,
-                                const std::vector<char>& cut) {
-                           return split(std::move(f), keep, cut);
-                         }};
+  StripLinker<N> linker_{
+      opt_,
+      discretization_->safeguarded() ? opt_.row_skip : RowSkip::off,
+      opt_.fold_guard && discretization_->safeguarded(),
+      seed_.closed,
+      mesh_,
+      report_,
+      [this](Front<N>&& f, const std::vector<char>& keep, const std::vector<char>& cut) {
+        return split(std::move(f), keep, cut);
+      }};
   // Per-front scratch, reused between fronts and steps.
   std::vector<FrontVertex<N>> spare_vertices_;  ///< a front's vertices once it has advanced
   std::vector<double> alpha_;
