@@ -3,6 +3,7 @@
 // again without the vertices on the fold.
 #include <catch2/catch.hpp>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "orthofront/engine/link.h"
@@ -62,9 +63,7 @@ TEST_CASE("linking stitches quads between rows that advance together", "[engine]
     StreamSurfaceOptions o;
     o.edge = 1;
     Counted counted;
-    StripLinker<3> linker(o, o.row_skip, guarded, false, mesh, report,
-                          [&](Front<3>&& f, const std::vector<char>& k,
-                              const std::vector<char>& c) { return counted(std::move(f), k, c); });
+    StripLinker<3> linker(o, o.row_skip, guarded, false, mesh, report, std::ref(counted));
     const Front<3> old = row(mesh, 5, 0, 0);
     std::vector<Front<3>> parts;
     parts.push_back(advanced(old, [](int i) { return Vec3(i, 1, 0); }));
@@ -90,9 +89,6 @@ TEST_CASE("a strip that folds back over the surface is stitched without the fold
   StreamSurfaceOptions o;
   o.edge = 1;
   Counted counted;
-  const auto split = [&](Front<3>&& f, const std::vector<char>& k, const std::vector<char>& c) {
-    return counted(std::move(f), k, c);
-  };
   row(mesh, 7, -1, 0);
   const Front<3> old = row(mesh, 7, 0, 1);
   for (std::int32_t i = 0; i + 1 < 7; ++i) mesh.add_quad(i, i + 1, i + 8, i + 7);
@@ -101,7 +97,7 @@ TEST_CASE("a strip that folds back over the surface is stitched without the fold
   };
 
   SECTION("without the guard the fold stays") {
-    StripLinker<3> linker(o, o.row_skip, false, false, mesh, report, split);
+    StripLinker<3> linker(o, o.row_skip, false, false, mesh, report, std::ref(counted));
     std::vector<Front<3>> parts;
     parts.push_back(advanced(old, turned_back));
     const auto pieces = linker.link(std::move(parts), old, 2, mesh.vertex_count());
@@ -109,7 +105,7 @@ TEST_CASE("a strip that folds back over the surface is stitched without the fold
     CHECK(measure_quality(mesh).folds > 0);
   }
   SECTION("with the guard the folded vertices leave the front") {
-    StripLinker<3> linker(o, o.row_skip, true, false, mesh, report, split);
+    StripLinker<3> linker(o, o.row_skip, true, false, mesh, report, std::ref(counted));
     linker.rebuild(mesh);
     std::vector<Front<3>> parts;
     parts.push_back(advanced(old, turned_back));
