@@ -14,8 +14,8 @@ namespace {
 
 // 2: the report stores clamped-α and insertion-fallback counts by cause; 3: stall cuts, gaps
 // closed and the gap-closing time; 4: front vertices beside a missed seed shot, and the shots
-// skipped; 5: triangles by cause.
-constexpr std::uint32_t kFormat = 5;
+// skipped; 5: triangles by cause; 6: the seed-shot time limit and the shots over budget.
+constexpr std::uint32_t kFormat = 6;
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 
 std::string read_file(const std::filesystem::path& path) {

@@ -75,6 +75,12 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_flag("!--no-shots-ahead", o.shots_ahead,
              "Integrate seed shots only when an insertion needs them, not a step ahead on an "
              "idle thread (the same surface, for timing)");
+  c.add_option("--shot-evaluations", o.shot_evaluations,
+               "The most field evaluations an insertion's stream line from the seed may cost; "
+               "from the first that runs out, insertions on longer ones start from the previous "
+               "row (one step's integration); 0: no limit")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},
                                            {"rk4", IntegratorKind::rk4}}));

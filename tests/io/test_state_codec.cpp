@@ -39,6 +39,7 @@ TEST_CASE("state codec: a surface continued from its encoded state equals the un
     double edge;
     int steps;
     std::vector<int> stops;
+    int shot_evaluations = StreamSurfaceOptions{}.shot_evaluations;
   };
   // Lorenz: seed shots miss the chaotic front and the vertices beside them count the misses
   // (FrontVertex::seed_misses), which the state must carry.
@@ -46,6 +47,8 @@ TEST_CASE("state codec: a surface continued from its encoded state equals the un
       {"sinus", SeedCurve::line(Vec3(-8, 0, 0), Vec3(8, 0, 0)), 21, 0.2, 80, {0, 1, 17, 79}},
       {"lorenz:reverse=1", SeedCurve::circle(Vec3::Zero(), Vec3(1.283, 1, 0), 1), 10, 0.2, 300,
        {150, 299}},
+      // Sinus with seed shots on a small budget: the time limit they set must be carried.
+      {"sinus", SeedCurve::line(Vec3(-8, 0, 0), Vec3(8, 0, 0)), 21, 0.2, 80, {30, 79}, 60},
   };
   for (const Case& c : cases) {
     const auto field = make_analytic_field(c.field);
@@ -53,6 +56,7 @@ TEST_CASE("state codec: a surface continued from its encoded state equals the un
     StreamSurfaceOptions o;
     o.edge = c.edge;
     o.max_steps = c.steps;
+    o.shot_evaluations = c.shot_evaluations;
     const SurfaceResult reference = uninterrupted(*field, seed, o);
     REQUIRE(reference.mesh.vertex_count() > 500);
     for (const int stop : c.stops) {
@@ -70,8 +74,15 @@ TEST_CASE("state codec: a surface continued from its encoded state equals the un
       CHECK(resumed.report.steps == reference.report.steps);
       CHECK(resumed.report.splits == reference.report.splits);
       CHECK(resumed.report.seed_shots_skipped == reference.report.seed_shots_skipped);
+      CHECK(resumed.report.seed_shots_over_budget == reference.report.seed_shots_over_budget);
+      CHECK(resumed.report.seed_shot_time_limit == reference.report.seed_shot_time_limit);
       CHECK(resumed.report.field_evaluations == reference.report.field_evaluations);
       CHECK(resumed.report.per_step.size() == reference.report.per_step.size());
+    }
+    if (c.shot_evaluations < StreamSurfaceOptions{}.shot_evaluations) {
+      INFO(c.field << ": " << reference.report.seed_shots_over_budget << " shots over budget");
+      CHECK(reference.report.seed_shots_over_budget > 0);
+      CHECK(reference.report.seed_shot_time_limit < 80 * 0.2);
     }
     if (c.steps == 300) {
       INFO(c.field << ": " << reference.report.seed_shots_skipped << " seed shots skipped");

@@ -1,7 +1,9 @@
 // Insertion on hand-made fronts in a uniform flow: a vertex goes on the stream line from the
 // seed where that meets the front, from the previous row where it missed; the vertices beside
-// count the misses in a row, and where they kept missing later insertions skip the seed's shot.
+// count the misses in a row, and where they kept missing later insertions skip the seed's shot;
+// a shot that costs more than its budget sets the leg length from which shots are skipped.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <vector>
 
 #include "lib/uniform_field.h"
@@ -106,6 +108,54 @@ TEST_CASE("insertion: where seed shots kept missing, the seed's shot is skipped"
   s.split();
   CHECK(s.report.streamline_insertions == 3);
   CHECK(s.report.seed_shots_skipped == 0);
+}
+
+TEST_CASE("insertion: a seed shot that costs too much sets the time from which insertions start "
+          "from the previous row",
+          "[engine][adapt]") {
+  // A leg gives up past one evaluation: each insertion goes on from the previous row (the same
+  // points here, the flow being uniform), and the leg's length (0.9) becomes the limit.
+  Setup s(0.0);
+  s.options.shot_evaluations = 1;
+  s.split();
+  CHECK(s.report.streamline_insertions == 0);
+  CHECK(s.report.previous_row_insertions == 3);
+  CHECK(s.report.insertion_fallbacks == 0);
+  CHECK(s.report.seed_shots_over_budget == 3);
+  CHECK(s.report.seed_shots_skipped == 0);
+  CHECK(s.report.seed_shot_time_limit == 0.9);
+  for (std::size_t i = 0; i < 5; ++i) {
+    INFO("vertex " << i);
+    CHECK(s.front.v[i].x.isApprox(Vec3(1, 0.5 * static_cast<double>(i), 0), 1e-9));
+    CHECK(s.front.v[i].seed_misses == 0);  // too costly is no miss
+  }
+  // With that limit a later surface step tries no shot whose leg is as long: the evaluations
+  // are the three row shots' alone (a step's integration each), whatever the budget now.
+  for (const double limit : {0.9, 0.5}) {
+    Setup later(0.0);
+    later.report.seed_shot_time_limit = limit;
+    later.split();
+    INFO("limit " << limit);
+    CHECK(later.report.streamline_insertions == 0);
+    CHECK(later.report.previous_row_insertions == 3);
+    CHECK(later.report.seed_shots_over_budget == 3);
+    CHECK(later.report.seed_shot_time_limit == limit);
+  }
+  // A limit beyond the leg: the shots from the seed are tried, and hit.
+  Setup shorter(0.0);
+  shorter.report.seed_shot_time_limit = 0.95;
+  shorter.split();
+  CHECK(shorter.report.streamline_insertions == 3);
+  CHECK(shorter.report.seed_shots_over_budget == 0);
+  // No limit (0) and the default budget: every shot is tried.
+  for (const int budget : {0, StreamSurfaceOptions{}.shot_evaluations}) {
+    Setup unlimited(0.0);
+    unlimited.options.shot_evaluations = budget;
+    unlimited.split();
+    CHECK(unlimited.report.streamline_insertions == 3);
+    CHECK(unlimited.report.seed_shots_over_budget == 0);
+    CHECK(std::isinf(unlimited.report.seed_shot_time_limit));
+  }
 }
 
 TEST_CASE("insertion: in previous-row mode nothing counts as a skipped seed shot",

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <stdexcept>
@@ -25,7 +26,7 @@ namespace {
 bool same_result(const IntegrationResult<3>& a, const IntegrationResult<3>& b) {
   return std::memcmp(a.x.data(), b.x.data(), sizeof(Vec3)) == 0 && a.status == b.status &&
          a.evaluations == b.evaluations && a.reached == b.reached &&
-         a.interrupted == b.interrupted;
+         a.interrupted == b.interrupted && a.exhausted == b.exhausted;
 }
 
 struct Setup {
@@ -113,6 +114,44 @@ TEST_CASE("legs ahead: only the last step's are found, and none outlives its own
   one.execute([&] {
     SeedShotLegs<3> legs(*setup.field, setup.seed, setup.tolerance, setup.stop);
     CHECK_FALSE(legs.can_run_ahead());
+  });
+}
+
+TEST_CASE("legs give up after their evaluations, ahead as in place",
+          "[engine][adapt][threads]") {
+  Setup setup;
+  const auto keys = Setup::keys();
+  constexpr int cap = 400;
+  const auto capped = [&](double s, double t1) {
+    return integrate_dopri5(*setup.field, setup.seed.point(s), t1, setup.tolerance, 0,
+                            &setup.stop, cap);
+  };
+  std::size_t exhausted = 0;
+  for (const auto& [s, t1] : keys) {
+    const IntegrationResult<3> r = capped(s, t1);
+    const IntegrationResult<3> full = setup.in_place(s, t1);
+    INFO("leg " << t1 << " long: " << full.evaluations << " evaluations in full");
+    CHECK(r.exhausted == (full.evaluations > cap));
+    CHECK_FALSE(full.exhausted);
+    if (!r.exhausted) {
+      CHECK(same_result(r, full));
+      continue;
+    }
+    ++exhausted;
+    CHECK(r.status == FieldStatus::no_data);
+    CHECK_FALSE(r.interrupted);
+    CHECK(r.evaluations <= cap + 6);  // the step that went over
+    CHECK(std::abs(r.reached) < std::abs(t1));
+  }
+  CHECK(exhausted > 0);
+  CHECK(exhausted < keys.size());
+  tbb::task_arena arena(2);
+  arena.execute([&] {
+    SeedShotLegs<3> legs(*setup.field, setup.seed, setup.tolerance, setup.stop, cap);
+    legs.start_ahead(keys);
+    legs.begin_step();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    for (const auto& [s, t1] : keys) CHECK(same_result(legs.leg(s, t1), capped(s, t1)));
   });
 }
 

@@ -1,5 +1,7 @@
 #include "orthofront/io/report_json.h"
 
+#include <cmath>
+
 #include "orthofront/io/atomic_file.h"
 
 namespace orthofront::io {
@@ -34,6 +36,7 @@ nlohmann::json to_json(const StreamSurfaceOptions& o) {
       {"rip_sharpness", o.rip_sharpness},
       {"rip_speed_fraction", o.rip_speed_fraction},
       {"shots_ahead", o.shots_ahead},
+      {"shot_evaluations", o.shot_evaluations},
       {"integrator", to_string(o.integrator)},
       {"tolerance", o.tolerance},
       {"timeline_step", o.timeline_step},
@@ -105,6 +108,12 @@ nlohmann::json to_json(const SurfaceReport& r) {
         {"streamline_insertions", r.streamline_insertions},
         {"previous_row_insertions", r.previous_row_insertions},
         {"seed_shots_skipped", r.seed_shots_skipped},
+        {"seed_shots_over_budget", r.seed_shots_over_budget},
+        // Flow time from the seed beyond which insertions start from the previous row (none:
+        // null).
+        {"seed_shot_time_limit", std::isfinite(r.seed_shot_time_limit)
+                                     ? nlohmann::json(r.seed_shot_time_limit)
+                                     : nlohmann::json(nullptr)},
         {"seed_legs_ahead", {{"started", r.legs_started_ahead}, {"used", r.legs_used_ahead}}},
         {"insertion_fallbacks", r.insertion_fallbacks},
         {"insertion_fallbacks_by_cause",

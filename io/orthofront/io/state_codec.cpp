@@ -90,6 +90,7 @@ constexpr std::size_t SurfaceReport::*kReportCounts[] = {
     &SurfaceReport::triangles_at_row_changes,
     &SurfaceReport::triangles_at_waiting_vertices,
     &SurfaceReport::triangles_closing_gaps,
+    &SurfaceReport::seed_shots_over_budget,
 };
 constexpr double StageTimes::*kStageTimes[] = {
     &StageTimes::alpha,  &StageTimes::rip,     &StageTimes::advance, &StageTimes::adapt,
@@ -106,6 +107,7 @@ void write_report(ByteWriter& out, const SurfaceReport& r) {
   out.u8(r.closed_seed);
   out.u8(r.closed_front_opened);
   out.f64(r.closed_log_product);
+  out.f64(r.seed_shot_time_limit);
   out.u64(r.per_step.size());
   for (const StepRecord& s : r.per_step) {
     out.i32(s.step);
@@ -130,6 +132,7 @@ SurfaceReport read_report(ByteReader& in) {
   r.closed_seed = in.u8() != 0;
   r.closed_front_opened = in.u8() != 0;
   r.closed_log_product = in.f64();
+  r.seed_shot_time_limit = in.f64();
   const std::uint64_t steps = in.count(4 + 2 * 8 + 4 * 8);
   r.per_step.resize(steps);
   for (StepRecord& s : r.per_step) {

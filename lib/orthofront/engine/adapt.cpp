@@ -47,7 +47,9 @@ FrontAdapter<N>::FrontAdapter(const Field<N>& field, const Seed<N>& seed,
                               const StreamSurfaceOptions& options, const Tolerance& tolerance,
                               const StopRequest& stop, Mesh& mesh, SurfaceReport& report)
     : field_(field), seed_(seed), opt_(options), tol_(tolerance), stop_(stop), mesh_(mesh),
-      report_(report), legs_(field, seed, tolerance, stop) {}
+      report_(report),
+      legs_(field, seed, tolerance, stop,
+            options.shot_evaluations > 0 ? options.shot_evaluations : kMaxEvaluations) {}
 
 template <int N>
 void FrontAdapter<N>::merge_short(Front<N>& f) {
@@ -204,6 +206,9 @@ bool FrontAdapter<N>::split_long(Front<N>& f, const Front<N>* old, int step,
         ++report_.previous_row_insertions;
         if (job.seed_shot_skipped) ++report_.seed_shots_skipped;
       }
+      if (job.over_budget) ++report_.seed_shots_over_budget;
+      if (job.exhausted_leg > 0)
+        report_.seed_shot_time_limit = std::min(report_.seed_shot_time_limit, job.exhausted_leg);
       if (job.outcome == InsertionJob::Outcome::fallback && !job.interrupted) {
         ++report_.insertion_fallbacks;
         ++(job.left_domain ? report_.fallback_left_domain : report_.fallback_far_from_front);
@@ -260,7 +265,8 @@ void FrontAdapter<N>::start_likely_shots(const Front<N>& f, const Front<N>& old)
     for (int k = 1; k < pieces; ++k) {
       const double lambda = static_cast<double>(k) / pieces;
       const double t1 = between(a.t, b.t, lambda);
-      if (t1 > 0) likely_legs_.emplace_back(between(a.s, s_next, lambda), t1);
+      if (t1 > 0 && t1 < report_.seed_shot_time_limit)
+        likely_legs_.emplace_back(between(a.s, s_next, lambda), t1);
     }
   }
   legs_.start_ahead(likely_legs_);
@@ -335,13 +341,18 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     // Where seed shots kept missing the front beside the segment, streamline starts from the
     // previous row too: there the seed's stream lines (chaotic flow, or a front that drifted
     // from its exact place) would cost the surface's whole age in integration to miss again.
+    // And where the shot's first leg is at least as long as one that ran out of evaluations.
     const bool missed_before = shots_kept_missing(f.v[i], f.v[j]);
+    const bool too_long = row_start && row_start->t1 >= report_.seed_shot_time_limit;
     const bool row_first =
-        row_start && (opt_.insertion == Insertion::previous_row || missed_before);
-    job.seed_shot_skipped = row_first && opt_.insertion == Insertion::streamline;
+        row_start && (opt_.insertion == Insertion::previous_row || missed_before || too_long);
+    job.seed_shot_skipped =
+        row_first && opt_.insertion == Insertion::streamline && missed_before;
+    job.over_budget = row_first && opt_.insertion == Insertion::streamline && !missed_before;
     for (int attempt = 0; attempt < 2; ++attempt) {
       const bool from_row = (attempt == 0) == row_first;
       if (from_row && !row_start) break;
+      if (!from_row && too_long) break;  // its leg would run out
       bool hit = false;
       if (from_row) {
         hit = shoot(f, i, j, guess, row_start->x, row_start->left, job, status);
@@ -352,6 +363,12 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
         job.evaluations += first.evaluations;
         job.interrupted = job.interrupted || first.interrupted;
         status = first.status;
+        if (first.exhausted && !first.interrupted && opt_.shot_evaluations > 0) {
+          // Too costly rather than a miss: this shot and longer ones start from the row.
+          job.over_budget = true;
+          job.exhausted_leg = row_start->t1;
+          continue;
+        }
         hit = first.status == FieldStatus::inside &&
               shoot(f, i, j, guess, first.x, row_start->left, job, status);
       } else {

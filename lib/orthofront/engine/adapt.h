@@ -86,6 +86,8 @@ class FrontAdapter {
     bool seed_shot_hit = false;      ///< its stream line from the seed met the front
     bool seed_shot_missed = false;   ///< its stream line from the seed missed the front
     bool seed_shot_skipped = false;  ///< started from the previous row after an earlier miss
+    bool over_budget = false;  ///< started from the previous row: a shot would cost too much
+    double exhausted_leg = 0;  ///< > 0: its leg of this length ran out of evaluations
   };
 
   /// Whether segment (i, j) runs along one stream line: its ends' seed parameters (the end's

@@ -328,6 +328,9 @@ class Engine {
     if (opt_.max_steps < 0)
       throw InvalidArgument("step count must not be negative, got " +
                             std::to_string(opt_.max_steps));
+    if (opt_.shot_evaluations < 0)
+      throw InvalidArgument("seed shot evaluations must not be negative, got " +
+                            std::to_string(opt_.shot_evaluations));
     if (!(opt_.join_fraction >= 0 && opt_.join_fraction <= 1))
       throw InvalidArgument("join fraction must lie in [0, 1], got " +
                             std::to_string(opt_.join_fraction));

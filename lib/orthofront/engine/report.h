@@ -1,6 +1,7 @@
 #pragma once
 /// What a stream-surface run did: counts, times per stage, why it stopped, per-step figures.
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,13 @@ struct SurfaceReport {
   /// Insertions that started from the previous row because the stream lines from the seed
   /// beside them had missed the front several times in a row (FrontVertex::seed_misses).
   std::size_t seed_shots_skipped = 0;
+  /// Insertions that started from the previous row because a stream line from the seed would
+  /// cost more than StreamSurfaceOptions::shot_evaluations: its leg ran out, or it was at least
+  /// as long as seed_shot_time_limit.
+  std::size_t seed_shots_over_budget = 0;
+  /// The shortest first leg (flow time from the seed) that ran out of evaluations so far:
+  /// insertions whose leg is as long or longer start from the previous row. Infinite: none.
+  double seed_shot_time_limit = std::numeric_limits<double>::infinity();
   /// First legs of seed shots integrated ahead on an idle thread (seed_shot_legs.h), and those
   /// an insertion then used. This process's run only: a saved state does not keep them.
   std::size_t legs_started_ahead = 0, legs_used_ahead = 0;

@@ -40,8 +40,9 @@ struct SeedShotLegs<N>::Batch {
 
 template <int N>
 SeedShotLegs<N>::SeedShotLegs(const Field<N>& field, const Seed<N>& seed,
-                              const Tolerance& tolerance, const StopRequest& stop)
-    : field_(field), seed_(seed), tol_(tolerance), stop_(stop),
+                              const Tolerance& tolerance, const StopRequest& stop,
+                              int max_evaluations)
+    : field_(field), seed_(seed), tol_(tolerance), stop_(stop), max_evaluations_(max_evaluations),
       current_(std::make_shared<Batch>()), next_(std::make_shared<Batch>()) {}
 
 template <int N>
@@ -58,7 +59,7 @@ template <int N>
 IntegrationResult<N> SeedShotLegs<N>::integrate(double s, double t1,
                                                 const StopRequest& stop) const {
   const Vec<N> start = seed_.point(seed_.closed ? s - std::floor(s) : s);
-  return integrate_dopri5(field_, start, t1, tol_, 0, &stop);
+  return integrate_dopri5(field_, start, t1, tol_, 0, &stop, max_evaluations_);
 }
 
 template <int N>

@@ -27,8 +27,9 @@ template <int N>
 class SeedShotLegs {
  public:
   /// All are owned by the engine and outlive this; the destructor waits for legs in flight.
+  /// A leg gives up after max_evaluations field evaluations (IntegrationResult::exhausted).
   SeedShotLegs(const Field<N>& field, const Seed<N>& seed, const Tolerance& tolerance,
-               const StopRequest& stop);
+               const StopRequest& stop, int max_evaluations = kMaxEvaluations);
   ~SeedShotLegs();
   SeedShotLegs(const SeedShotLegs&) = delete;
   SeedShotLegs& operator=(const SeedShotLegs&) = delete;
@@ -66,6 +67,7 @@ class SeedShotLegs {
   const Seed<N>& seed_;
   const Tolerance& tol_;
   const StopRequest& stop_;
+  const int max_evaluations_;
   std::shared_ptr<Batch> current_;   ///< started during the last step: leg() looks here
   std::shared_ptr<Batch> next_;      ///< started during this step
   std::size_t started_ = 0;

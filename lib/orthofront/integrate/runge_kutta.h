@@ -18,6 +18,7 @@ struct IntegrationResult {
   double reached = 0;                          ///< signed time actually integrated
   int evaluations = 0;
   bool interrupted = false;  ///< a stop request ended it (status no_data)
+  bool exhausted = false;    ///< it ran out of field evaluations (status no_data)
 };
 
 /// Field evaluations after which one DOPRI5 integration gives up (status no_data).
@@ -65,7 +66,8 @@ IntegrationResult<N> integrate_rk4(const Field<N>& field, const Vec<N>& x0, doub
 template <int N>
 IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, double tau,
                                       const Tolerance& tol, double first_step = 0,
-                                      const StopRequest* stop = nullptr) {
+                                      const StopRequest* stop = nullptr,
+                                      int max_evaluations = kMaxEvaluations) {
   // Butcher tableau of Dormand & Prince (1980).
   constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
   constexpr double a21 = 1.0 / 5;
@@ -143,9 +145,11 @@ IntegrationResult<N> integrate_dopri5(const Field<N>& field, const Vec<N>& x0, d
       st = field.velocity(y, k7);
     }
     out.evaluations += 6;
-    if (out.evaluations > kMaxEvaluations) {
-      // A stream line that needs this many steps is caught near a critical point: stop it.
+    if (out.evaluations > max_evaluations) {
+      // A stream line that needs this many steps is caught near a critical point (or costs
+      // more than its caller would pay): stop it.
       out.status = FieldStatus::no_data;
+      out.exhausted = true;
       out.reached = dir * done;
       return out;
     }
