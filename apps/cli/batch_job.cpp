@@ -198,7 +198,7 @@ const std::set<std::string>& surface_keys() {
       "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
       "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
       "tolerance", "integrator", "insertion", "format",  "release", "frames", "split",
-      "merge",    "release_step", "releases_per_break"};
+      "merge",    "release_step", "releases_per_break", "shot_evaluations"};
   return keys;
 }
 
@@ -261,6 +261,8 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       if (!(o.damping > 0 && o.damping < 1)) d.fail(at, "must lie in (0, 1), got " + v.dump());
     } else if (key == "tolerance") {
       o.tolerance = positive(d, v, at);
+    } else if (key == "shot_evaluations") {
+      o.shot_evaluations = static_cast<int>(integer(d, v, at, 0, 1'000'000'000));
     } else if (key == "integrator") {
       const std::string k = text(d, v, at);
       if (k == "dopri5") o.integrator = IntegratorKind::dopri5;

@@ -2,6 +2,7 @@
 
 #include "cli/process_memory.h"
 
+#include <limits>
 #include <map>
 #include <string>
 
@@ -71,7 +72,7 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_option("--stall-steps", o.stall_steps,
                "A front vertex that kept its mesh vertex more than this many steps (it stopped "
                "advancing) leaves the front; 0: never")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   c.add_flag("!--no-shots-ahead", o.shots_ahead,
              "Integrate seed shots only when an insertion needs them, not a step ahead on an "
              "idle thread (the same surface, for timing)");
@@ -80,7 +81,7 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
                "from the first that runs out, insertions on longer ones start from the previous "
                "row (one step's integration); 0: no limit")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   c.add_option("--integrator", o.integrator, "dopri5 (adaptive, default) or rk4")
       ->transform(choices<IntegratorKind>({{"dopri5", IntegratorKind::dopri5},
                                            {"rk4", IntegratorKind::rk4}}));

@@ -376,6 +376,11 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
               "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [\n  {\"name\": \"a\", "
               "\"seed\": \"line:0,0,0:1,0,0\"},\n  {\"name\": \"b\",\n   \"edge\": -1}]}");
   CHECK(m.find("range.json:5: surface[1].edge: must be a number > 0") != std::string::npos);
+  m = refused("budget.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\n"
+              "seed = \"line:0,0,0:1,0,0\"\nshot_evaluations = -5\n");
+  CHECK(m.find("budget.toml:6: surface[0].shot_evaluations: must lie in [0, 1000000000]") !=
+        std::string::npos);
   m = refused("bad.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": }]}");
   CHECK(m.find("bad.json:2: not valid JSON") != std::string::npos);
   m = refused("twice.toml",
@@ -385,6 +390,31 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   CHECK(m.find("two surfaces are named 'a'") != std::string::npos);
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
+}
+
+TEST_CASE("batch: a surface's seed-shot budget is the one `stream --shot-evaluations` takes",
+          "[batch]") {
+  // Sinus across its waves makes insertions from the seed; a budget of one evaluation sends
+  // them to the previous row, which moves the vertices inserted.
+  TempDir dir("batch-shots");
+  const std::string args =
+      "stream --field sinus --seed line:-1,0,0:1,0,0 --seed-count 21 --edge 0.1 --steps 200 "
+      "--quiet";
+  REQUIRE(run(args + " --shot-evaluations 1 --out " + quoted(dir / "one.vtp")).status == 0);
+  REQUIRE(run(args + " --out " + quoted(dir / "default.vtp")).status == 0);
+  write_text(dir / "job.toml",
+             "[job]\nfield = \"sinus\"\n[[surface]]\nname = \"s\"\nkind = \"stream\"\n"
+             "seed = \"line:-1,0,0:1,0,0\"\nseed_count = 21\nedge = 0.1\nsteps = 200\n"
+             "shot_evaluations = 1\n");
+  const auto r = run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK(read_text(dir / "out" / "s.vtp") == read_text(dir / "one.vtp"));
+  CHECK(read_text(dir / "one.vtp") != read_text(dir / "default.vtp"));
+  const auto report = nlohmann::json::parse(read_text(dir / "out" / "s.json"));
+  CHECK(report["parameters"]["shot_evaluations"] == 1);
+  CHECK(report["counts"]["seed_shots_over_budget"].get<int>() > 0);
+  CHECK(report["counts"]["seed_shot_time_limit"].is_number());
 }
 
 TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte for byte",

@@ -104,6 +104,9 @@ TEST_CASE("stream rejects bad input naming the value, with no output file", "[cl
       {"more seeds than the vertex budget",
        "stream --field saddle3d --seed-count 100000000" + good_seed + out,
        "--seed-count 100000000 exceeds the vertex budget"},
+      {"a negative seed-shot budget",
+       "stream --field saddle3d --shot-evaluations -3" + good_seed + out,
+       "--shot-evaluations: Value -3 not in range 0 to 2147483647"},
       {"an edge that would refine the seed past the vertex budget",
        "stream --field saddle3d --edge 1e-9" + good_seed + out, "raise --edge"},
   };
