@@ -184,3 +184,30 @@ TEST_CASE("the gap behind the square cylinder closes where its sides come within
   check_valid(closed);
   CHECK(closed.quality.inconsistent_edges == 0);
 }
+
+TEST_CASE("seed shots on a budget: the square cylinder's recirculation stops integrating its age",
+          "[apps][stream][realdata][shots]") {
+  const fs::path cylinder =
+      fs::path(ORTHOFRONT_DATASETS_DIR) / "square-cylinder-2d" / "sqflow2D-1608.nrrd";
+  if (!fs::exists(cylinder)) {
+    WARN("skipped: " << cylinder.string() << " not found");
+    return;
+  }
+  // A front circling the recirculation bubble for 700-1,100 steps: every insertion from the
+  // seed integrates its whole age (up to 8,500 evaluations each without a budget).
+  const std::string seed =
+      "--seed line:0.8,-0.6,0:0.8,0.6,0 --seed-count 20 --edge 0.02 --steps 3000";
+  const Surface unlimited = stream(cylinder, seed + " --shot-evaluations 0", "shots-unlimited");
+  const Surface budget = stream(cylinder, seed, "shots-budget");
+  const nlohmann::json& u = unlimited.report["counts"];
+  const nlohmann::json& b = budget.report["counts"];
+  CHECK(u["seed_shots_over_budget"].get<std::size_t>() == 0);
+  CHECK(u["seed_shot_time_limit"].is_null());
+  CHECK(b["seed_shots_over_budget"].get<std::size_t>() > 0);
+  CHECK(b["seed_shot_time_limit"].get<double>() > 0);
+  // 1.26 M field evaluations -> 0.19 M; no insertion falls back to the cubic point.
+  CHECK(3 * b["field_evaluations"].get<std::size_t>() < u["field_evaluations"].get<std::size_t>());
+  CHECK(b["insertion_fallbacks"].get<std::size_t>() == 0);
+  check_valid(budget);
+  check_valid(unlimited);
+}
