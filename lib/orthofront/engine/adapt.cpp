@@ -341,7 +341,8 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     // Where seed shots kept missing the front beside the segment, streamline starts from the
     // previous row too: there the seed's stream lines (chaotic flow, or a front that drifted
     // from its exact place) would cost the surface's whole age in integration to miss again.
-    // And where the shot's first leg is at least as long as one that ran out of evaluations.
+    // And where the shot's first leg is at least as long as one that ran out of evaluations
+    // (the seed's shot, on its budget, is then tried only where the row's fails).
     const bool missed_before = shots_kept_missing(f.v[i], f.v[j]);
     const bool too_long = row_start && row_start->t1 >= report_.seed_shot_time_limit;
     const bool row_first =
@@ -352,7 +353,6 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     for (int attempt = 0; attempt < 2; ++attempt) {
       const bool from_row = (attempt == 0) == row_first;
       if (from_row && !row_start) break;
-      if (!from_row && too_long) break;  // its leg would run out
       bool hit = false;
       if (from_row) {
         hit = shoot(f, i, j, guess, row_start->x, row_start->left, job, status);
