@@ -129,8 +129,8 @@ TEST_CASE("insertion: a seed shot that costs too much sets the time from which i
     CHECK(s.front.v[i].x.isApprox(Vec3(1, 0.5 * static_cast<double>(i), 0), 1e-9));
     CHECK(s.front.v[i].seed_misses == 0);  // too costly is no miss
   }
-  // With that limit a later surface step tries no shot whose leg is as long: the evaluations
-  // are the three row shots' alone (a step's integration each), whatever the budget now.
+  // With that limit a later surface step tries no shot whose leg is as long, whatever the
+  // budget now: all three insertions start from the previous row, counted as over budget.
   for (const double limit : {0.9, 0.5}) {
     Setup later(0.0);
     later.report.seed_shot_time_limit = limit;

@@ -347,9 +347,9 @@ void FrontAdapter<N>::insertion_point(const Front<N>& f, const Front<N>* old,
     const bool too_long = row_start && row_start->t1 >= report_.seed_shot_time_limit;
     const bool row_first =
         row_start && (opt_.insertion == Insertion::previous_row || missed_before || too_long);
-    job.seed_shot_skipped =
-        row_first && opt_.insertion == Insertion::streamline && missed_before;
-    job.over_budget = row_first && opt_.insertion == Insertion::streamline && !missed_before;
+    const bool streamline = opt_.insertion == Insertion::streamline;
+    job.seed_shot_skipped = streamline && row_start && missed_before;
+    job.over_budget = streamline && too_long && !missed_before;
     for (int attempt = 0; attempt < 2; ++attempt) {
       const bool from_row = (attempt == 0) == row_first;
       if (from_row && !row_start) break;
