@@ -259,7 +259,7 @@ void add_bench_streak_command(CLI::App& app) {
       streak_line_values += w.derived_evaluations;
       streak_line_folds += w.report.quality.folds;
       const Mesh& d = direct_frames[frame];
-      std::vector<Vec3> lifted = d.positions;
+      std::vector<Vec3> lifted(d.positions.begin(), d.positions.end());
       for (std::size_t i = 0; i < lifted.size(); ++i) lifted[i].z() = d.age[i];
       const auto direct_triangles = triangles_of(lifted, d.faces);
       for (const Vec3& p : w.lifted)

@@ -237,7 +237,7 @@ void add_path_command(CLI::App& app) {
     }
     Mesh& mesh = result.mesh;
     if (args->spacetime_out && !result.spacetime_positions.empty())
-      mesh.positions = result.spacetime_positions;
+      mesh.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
     // The mesh and its report are replaced together: both are written in full to temporaries
     // before either is renamed (a failure replaces neither), and a concurrent run of the same
     // outputs cannot interleave its files with these.

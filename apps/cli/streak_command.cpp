@@ -271,7 +271,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
       break;
     }
     // The surface the engine built, in (x, y, age); its projection is the planar streak surface.
-    w.mesh.positions = w.lifted;
+    w.mesh.positions.assign(w.lifted.begin(), w.lifted.end());
     last_frame = writer.add_frame(w.mesh, t);
     derived += w.derived_evaluations;
     evaluations += w.flow_evaluations;

@@ -179,7 +179,8 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   }
   interrupt.rethrow_if_raised();
   if (args.spacetime_out && !result.spacetime_positions.empty())
-    result.mesh.positions = result.spacetime_positions;
+    result.mesh.positions.assign(result.spacetime_positions.begin(),
+                                 result.spacetime_positions.end());
   nlohmann::json report = io::to_json(result.report);
   report["field"] = args.field;
   report["seed"] = args.seed;
@@ -192,7 +193,7 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   py::dict out = surface_dict(result.mesh, report);
   if (!result.spacetime_positions.empty()) {
     Mesh lifted;
-    lifted.positions = result.spacetime_positions;
+    lifted.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
     out["spacetime_vertices"] = mesh_to_dict(lifted)["vertices"];
   }
   return out;

@@ -105,8 +105,8 @@ bool same_bits(double a, double b) {
 
 /// Bit-for-bit equality of two value lists (or just equal values: -0 == 0), reporting the
 /// first difference.
-template <typename T>
-void require_identical(const std::vector<T>& actual, const std::vector<T>& expected,
+template <typename T, typename A, typename B>
+void require_identical(const std::vector<T, A>& actual, const std::vector<T, B>& expected,
                        const std::string& what, bool bitwise = true) {
   INFO(what);
   REQUIRE(actual.size() == expected.size());

@@ -226,7 +226,7 @@ TEST_CASE("stitch beside a reader: counts published, faces bounded, never moved"
   CHECK(most <= old2.v.size() + f2.v.size());
   std::atomic<std::size_t> count{0};
   // No room reserved: the first face would move the array, so it is refused.
-  std::vector<Face>().swap(mesh.faces);
+  Mesh::Array<Face>().swap(mesh.faces);
   REQUIRE(mesh.faces.capacity() == 0);
   CHECK_THROWS_AS(stitcher.stitch(old2, f2, count), std::logic_error);
   mesh.faces.clear();

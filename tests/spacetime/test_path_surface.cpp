@@ -256,7 +256,7 @@ TEST_CASE("path surface: streamed through a narrow band under a budget", "[space
   CHECK(worst < 0.02);
   // Folds are a property of the surface in space-time; its projection onto the plane overlaps.
   Mesh spacetime = r.mesh;
-  spacetime.positions = r.spacetime_positions;
+  spacetime.positions.assign(r.spacetime_positions.begin(), r.spacetime_positions.end());
   const QualityReport q = measure_quality(spacetime);
   CHECK(q.folds == 0);
   CHECK(q.non_manifold_edges == 0);
@@ -286,7 +286,7 @@ TEST_CASE("path surface: a corrupt step mid-run keeps the surface built so far",
   CHECK(r.path.time_reached < 3.0 + 1e-9);
   CHECK(r.path.time_reached > 2.0);
   Mesh spacetime = r.mesh;
-  spacetime.positions = r.spacetime_positions;
+  spacetime.positions.assign(r.spacetime_positions.begin(), r.spacetime_positions.end());
   CHECK(measure_quality(spacetime).folds == 0);
 }
 

@@ -123,7 +123,7 @@ TEST_CASE(
     d.edge = edge / 2;
     Mesh direct;
     build_streak_surface(*flow, seed, d, [&](const StreakFrame& f) { direct = f.mesh; });
-    std::vector<Vec3> lifted = direct.positions;
+    std::vector<Vec3> lifted(direct.positions.begin(), direct.positions.end());
     for (std::size_t i = 0; i < lifted.size(); ++i) lifted[i].z() = direct.age[i];
     const auto triangles = triangles_of(lifted, direct.faces);
     double farthest = 0;

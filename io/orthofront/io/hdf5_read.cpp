@@ -16,7 +16,7 @@
 #include <optional>
 
 #include "orthofront/error.h"
-#include "orthofront/field/huge_pages.h"
+#include "orthofront/huge_pages.h"
 #include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_detail.h"

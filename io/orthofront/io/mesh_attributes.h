@@ -10,12 +10,12 @@ namespace orthofront::io::detail {
 
 struct RealAttribute {
   const char* name;
-  std::vector<double> Mesh::*values;
+  Mesh::Array<double> Mesh::*values;
 };
 
 struct IntAttribute {
   const char* name;
-  std::vector<std::int32_t> Mesh::*values;
+  Mesh::Array<std::int32_t> Mesh::*values;
 };
 
 inline constexpr std::array<RealAttribute, 7> kRealAttributes{{
@@ -36,7 +36,7 @@ inline constexpr std::array<IntAttribute, 3> kIntAttributes{{
 
 /// An attribute is stored when it has one value per vertex; an empty array means "not recorded".
 template <typename T>
-bool is_recorded(const Mesh& mesh, const std::vector<T>& values) {
+bool is_recorded(const Mesh& mesh, const Mesh::Array<T>& values) {
   return !values.empty() && values.size() == mesh.positions.size();
 }
 

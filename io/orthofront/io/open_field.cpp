@@ -5,7 +5,7 @@
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/grid_field.h"
-#include "orthofront/field/huge_pages.h"
+#include "orthofront/huge_pages.h"
 #include "orthofront/io/data_file.h"
 #include "orthofront/io/grid_data_file.h"
 #include "orthofront/io/grid_series.h"

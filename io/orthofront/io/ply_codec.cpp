@@ -198,8 +198,8 @@ std::string plural(const std::string& element) {
 /// Where a vertex property goes in the mesh.
 struct VertexTarget {
   int coordinate = -1;                           // 0..2 for x, y, z
-  std::vector<double>* real = nullptr;           // a real attribute
-  std::vector<std::int32_t>* integer = nullptr;  // an integer attribute
+  Mesh::Array<double>* real = nullptr;          // a real attribute
+  Mesh::Array<std::int32_t>* integer = nullptr;// an integer attribute
 };
 
 template <class Source>
@@ -395,8 +395,8 @@ void write_ply(const Mesh& mesh, std::ostream& out) {
       "ply\nformat binary_little_endian 1.0\ncomment orthofront mesh\nelement vertex " +
       std::to_string(mesh.positions.size()) +
       "\nproperty double x\nproperty double y\nproperty double z\n";
-  std::vector<const std::vector<double>*> reals;
-  std::vector<const std::vector<std::int32_t>*> integers;
+  std::vector<const Mesh::Array<double>*> reals;
+  std::vector<const Mesh::Array<std::int32_t>*> integers;
   for (const RealAttribute& attribute : kRealAttributes) {
     if (!is_recorded(mesh, mesh.*attribute.values)) continue;
     header += std::string("property double ") + attribute.name + "\n";

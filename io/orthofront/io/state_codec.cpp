@@ -34,18 +34,19 @@ std::string ByteReader::text() {
 
 namespace {
 
-void write_vec3s(ByteWriter& out, const std::vector<Vec3>& values) {
+template <typename Allocator>
+void write_vec3s(ByteWriter& out, const std::vector<Vec3, Allocator>& values) {
   out.u64(values.size());
   for (const Vec3& p : values)
     for (int a = 0; a < 3; ++a) out.f64(p[a]);
 }
 
-std::vector<Vec3> read_vec3s(ByteReader& in) {
+template <typename Allocator>
+void read_vec3s(ByteReader& in, std::vector<Vec3, Allocator>& values) {
   const std::uint64_t n = in.count(3 * sizeof(double));
-  std::vector<Vec3> values(n);
+  values.assign(n, Vec3::Zero());
   for (Vec3& p : values)
     for (int a = 0; a < 3; ++a) p[a] = in.f64();
-  return values;
 }
 
 // The report's counters, stage times and per-step figures, in the order they are stored: one
@@ -170,7 +171,7 @@ void write_mesh_state(ByteWriter& out, const Mesh& mesh) {
 
 Mesh read_mesh_state(ByteReader& in) {
   Mesh mesh;
-  mesh.positions = read_vec3s(in);
+  read_vec3s(in, mesh.positions);
   const std::uint64_t faces = in.count(1 + 4 * 4);
   const auto vertices = static_cast<std::int64_t>(mesh.positions.size());
   mesh.faces.resize(faces);
@@ -183,16 +184,16 @@ Mesh read_mesh_state(ByteReader& in) {
         in.fail("a face names vertex " + std::to_string(f.v[static_cast<std::size_t>(k)]) + " of " +
                 std::to_string(vertices));
   }
-  mesh.time = in.array<double>();
-  mesh.alpha = in.array<double>();
-  mesh.s = in.array<double>();
-  mesh.error = in.array<double>();
-  mesh.front_id = in.array<std::int32_t>();
-  mesh.step = in.array<std::int32_t>();
-  mesh.release_time = in.array<double>();
-  mesh.age = in.array<double>();
-  mesh.speed = in.array<double>();
-  mesh.particle_id = in.array<std::int32_t>();
+  in.array(mesh.time);
+  in.array(mesh.alpha);
+  in.array(mesh.s);
+  in.array(mesh.error);
+  in.array(mesh.front_id);
+  in.array(mesh.step);
+  in.array(mesh.release_time);
+  in.array(mesh.age);
+  in.array(mesh.speed);
+  in.array(mesh.particle_id);
   const auto n = mesh.positions.size();
   for (const std::size_t size : {mesh.time.size(), mesh.alpha.size(), mesh.s.size(),
                                  mesh.error.size(), mesh.front_id.size(), mesh.step.size()})

@@ -23,8 +23,8 @@ class ByteWriter {
     u64(s.size());
     bytes_.append(s);
   }
-  template <typename T>
-  void array(const std::vector<T>& values) {
+  template <typename T, typename Allocator>
+  void array(const std::vector<T, Allocator>& values) {
     u64(values.size());
     if (!values.empty()) raw(values.data(), values.size() * sizeof(T));
   }
@@ -56,6 +56,13 @@ class ByteReader {
     std::vector<T> values(n);
     if (n) take(values.data(), n * sizeof(T));
     return values;
+  }
+  /// array<T>() into `values`, whatever their allocator.
+  template <typename T, typename Allocator>
+  void array(std::vector<T, Allocator>& values) {
+    const std::uint64_t n = count(sizeof(T));
+    values.assign(n, T{});
+    if (n) take(values.data(), n * sizeof(T));
   }
   /// A count of items of `item_bytes` each that the bytes left can hold (else FormatError).
   std::uint64_t count(std::size_t item_bytes);

@@ -389,12 +389,12 @@ class VtpReader {
       }
       for (const RealAttribute& attribute : kRealAttributes) {
         if (name != attribute.name) continue;
-        std::vector<double>& values = mesh_.*attribute.values;
+        Mesh::Array<double>& values = mesh_.*attribute.values;
         for (std::size_t i = 0; i < n; ++i) values.push_back(array.real_at(i));
       }
       for (const IntAttribute& attribute : kIntAttributes) {
         if (name != attribute.name) continue;
-        std::vector<std::int32_t>& values = mesh_.*attribute.values;
+        Mesh::Array<std::int32_t>& values = mesh_.*attribute.values;
         for (const std::int64_t v : integers(array, "point data '" + name + "'")) {
           if (v < std::numeric_limits<std::int32_t>::min() ||
               v > std::numeric_limits<std::int32_t>::max()) {
@@ -432,13 +432,13 @@ void write_vtp(const Mesh& mesh, std::ostream& out) {
                  "NumberOfPolys=\"" +
                  std::to_string(mesh.faces.size()) + "\">\n      <PointData>\n");
   for (const RealAttribute& attribute : kRealAttributes) {
-    const std::vector<double>& values = mesh.*attribute.values;
+    const Mesh::Array<double>& values = mesh.*attribute.values;
     if (!is_recorded(mesh, values)) continue;
     write_array<double>(out, "Float64", attribute.name, 1, n,
                         [&](std::size_t i) { return values[i]; });
   }
   for (const IntAttribute& attribute : kIntAttributes) {
-    const std::vector<std::int32_t>& values = mesh.*attribute.values;
+    const Mesh::Array<std::int32_t>& values = mesh.*attribute.values;
     if (!is_recorded(mesh, values)) continue;
     write_array<std::int32_t>(out, "Int32", attribute.name, 1, n,
                               [&](std::size_t i) { return values[i]; });

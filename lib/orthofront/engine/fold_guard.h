@@ -8,6 +8,7 @@
 #include <functional>
 #include <vector>
 
+#include "orthofront/huge_pages.h"
 #include "orthofront/mesh/close_gaps.h"
 #include "orthofront/mesh/mesh.h"
 
@@ -138,14 +139,14 @@ class alignas(64) FoldGuard {
       std::uint32_t first = kNone;
       std::uint32_t generation = 0;
     };
-    std::vector<Head> heads_;
+    HugePageVector<Head> heads_;
     std::uint32_t generation_ = 1;
     /// One past the highest vertex of any edge added since the last clear(): an edge whose
     /// higher vertex is at or above it has no entry, found without a look. The strip's new
     /// vertices are numbered after everything accepted, and in the order stitch makes faces, so
     /// most of a strip's edges are new to both lists.
     std::int32_t vertex_end_ = 0;
-    std::vector<Entry> entries_;
+    HugePageVector<Entry> entries_;
     std::uint32_t free_ = kNone;  ///< removed entries, chained through `next`
   };
 

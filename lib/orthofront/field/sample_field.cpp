@@ -10,7 +10,7 @@
 #include <string>
 
 #include "orthofront/error.h"
-#include "orthofront/field/huge_pages.h"
+#include "orthofront/huge_pages.h"
 
 namespace orthofront {
 

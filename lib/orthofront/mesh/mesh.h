@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "orthofront/huge_pages.h"
 #include "orthofront/types.h"
 
 namespace orthofront {
@@ -19,21 +20,25 @@ struct Face {
 };
 
 /// Surface mesh. Positions are 3D (for N = 4 engines: the first three coordinates).
-/// All attribute arrays have one entry per vertex.
+/// All attribute arrays have one entry per vertex. The arrays grow on huge pages once large: a
+/// surface of millions of vertices is built by push_back, and in 4 KiB pages its first writes
+/// and each growth's copies fault every 4 KiB (half the stitch stage of a Lorenz run).
 struct Mesh {
-  std::vector<Vec3> positions;            ///< world units
-  std::vector<Face> faces;
-  std::vector<double> time;               ///< integration time in v since the seed (or physical time)
-  std::vector<double> alpha;              ///< α used on the step that produced the vertex (0 on the seed)
-  std::vector<double> s;                  ///< seed-curve parameter of the stream line, in [0, 1]
-  std::vector<double> error;              ///< orthogonality error |cos(front tangent, v)| at the vertex
-  std::vector<std::int32_t> front_id;     ///< front the vertex belonged to when created
-  std::vector<std::int32_t> step;         ///< front step that created the vertex (0 = seed)
+  template <class T>
+  using Array = HugePageVector<T>;
+  Array<Vec3> positions;                  ///< world units
+  Array<Face> faces;
+  Array<double> time;                     ///< integration time in v since the seed (or physical time)
+  Array<double> alpha;                    ///< α used on the step that produced the vertex (0 on the seed)
+  Array<double> s;                        ///< seed-curve parameter of the stream line, in [0, 1]
+  Array<double> error;                    ///< orthogonality error |cos(front tangent, v)| at the vertex
+  Array<std::int32_t> front_id;           ///< front the vertex belonged to when created
+  Array<std::int32_t> step;               ///< front step that created the vertex (0 = seed)
   // Streak surfaces (empty elsewhere): each vertex is a particle released from the seed curve.
-  std::vector<double> release_time;       ///< time the particle left the seed curve
-  std::vector<double> age;                ///< observation time - release_time
-  std::vector<double> speed;              ///< |v| at the vertex at the observation time
-  std::vector<std::int32_t> particle_id;  ///< stable id of the particle across frames
+  Array<double> release_time;             ///< time the particle left the seed curve
+  Array<double> age;                      ///< observation time - release_time
+  Array<double> speed;                    ///< |v| at the vertex at the observation time
+  Array<std::int32_t> particle_id;        ///< stable id of the particle across frames
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t face_count() const { return faces.size(); }

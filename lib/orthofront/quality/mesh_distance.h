@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "orthofront/mesh/mesh.h"
@@ -35,8 +36,8 @@ inline double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& 
 }
 
 /// The triangles of `faces` over `positions`.
-inline std::vector<Triangle> triangles_of(const std::vector<Vec3>& positions,
-                                          const std::vector<Face>& faces) {
+inline std::vector<Triangle> triangles_of(std::span<const Vec3> positions,
+                                          std::span<const Face> faces) {
   std::vector<Triangle> triangles;
   for (const Face& f : faces) {
     const auto p = [&](int k) { return positions[static_cast<std::size_t>(f.v[k])]; };

@@ -21,7 +21,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "orthofront/error.h"
-#include "orthofront/field/huge_pages.h"
+#include "orthofront/huge_pages.h"
 
 namespace orthofront {
 namespace {
