@@ -39,13 +39,17 @@ void reserve_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
   advise_huge_pages(values.data(), count * sizeof(T));
 }
 
-/// The size from which an array is placed on huge pages of its own.
+/// The size of a huge page, the alignment of a block on them.
 inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+/// The size from which a block is placed on huge pages of its own: half a page, so a block takes
+/// at most twice its size (a surface's per-vertex arrays of 4 or 8 bytes pass 1 MiB at 128 k
+/// and 256 k vertices).
+inline constexpr std::size_t kHugePageBlockBytes = kHugePageBytes / 2;
 
-/// std::allocator, but a block of kHugePageBytes or more starts on a 2 MiB boundary and is
-/// advised to huge pages before it is touched: an array that grows by push_back then faults
-/// 2 MiB at a time, the copies of each growth included (an unaligned block keeps its ends, up to
-/// 4 MiB, in 4 KiB pages).
+/// std::allocator, but a block of kHugePageBlockBytes or more starts on a 2 MiB boundary and
+/// fills whole huge pages, advised before they are touched: an array that grows by push_back
+/// then faults 2 MiB at a time, the copies of each growth included (an unaligned block keeps its
+/// ends, up to 4 MiB, in 4 KiB pages).
 template <class T>
 struct HugePageAllocator {
   using value_type = T;
@@ -54,11 +58,10 @@ struct HugePageAllocator {
   HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
 
   T* allocate(std::size_t n) {
-    if (n > (static_cast<std::size_t>(std::numeric_limits<std::ptrdiff_t>::max()) - kHugePageBytes) /
-                sizeof(T))
-      throw std::bad_array_new_length();
+    constexpr auto largest = static_cast<std::size_t>(std::numeric_limits<std::ptrdiff_t>::max());
+    if (n > (largest - kHugePageBytes) / sizeof(T)) throw std::bad_array_new_length();
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHugePageBytes) return std::allocator<T>{}.allocate(n);
+    if (bytes < kHugePageBlockBytes) return std::allocator<T>{}.allocate(n);
     // Whole huge pages: the block's last bytes are not left in small ones.
     const std::size_t whole = (bytes + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
     void* p = ::operator new(whole, std::align_val_t{kHugePageBytes});
@@ -66,7 +69,7 @@ struct HugePageAllocator {
     return static_cast<T*>(p);
   }
   void deallocate(T* p, std::size_t n) noexcept {
-    if (n * sizeof(T) < kHugePageBytes) {
+    if (n * sizeof(T) < kHugePageBlockBytes) {
       std::allocator<T>{}.deallocate(p, n);
       return;
     }

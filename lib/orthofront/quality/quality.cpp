@@ -31,8 +31,9 @@ constexpr double kDegrees = 180.0 / std::numbers::pi;
 /// Leaves elements default-initialized (trivial ones untouched): the buffers of a mesh of
 /// millions of faces are then first touched, and their pages faulted in, by the parallel loops
 /// that fill them, not zeroed by one thread beforehand (which kept the measurement from scaling).
+/// Large ones are on huge pages (HugePageAllocator).
 template <class T>
-struct UninitializedAllocator : std::allocator<T> {
+struct UninitializedAllocator : HugePageAllocator<T> {
   using value_type = T;
   UninitializedAllocator() = default;
   template <class U>
@@ -57,7 +58,6 @@ using Buffer = std::vector<T, UninitializedAllocator<T>>;
 template <class T>
 Buffer<T> untouched(std::size_t n) {
   Buffer<T> b;
-  reserve_huge_pages(b, n);
   b.resize(n);
   return b;
 }
