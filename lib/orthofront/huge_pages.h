@@ -17,11 +17,14 @@
 
 namespace orthofront {
 
+/// The size of a huge page, the alignment of a block on them.
+inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+
 /// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with huge pages.
 /// Call before the memory is first touched; harmless when the system says no.
 inline void advise_huge_pages(const void* data, std::size_t bytes) {
 #ifdef __linux__
-  constexpr std::uintptr_t huge = std::uintptr_t{2} << 20;
+  constexpr std::uintptr_t huge = kHugePageBytes;
   const auto begin = reinterpret_cast<std::uintptr_t>(data);
   const std::uintptr_t first = (begin + huge - 1) & ~(huge - 1);
   const std::uintptr_t last = (begin + bytes) & ~(huge - 1);
@@ -39,8 +42,6 @@ void reserve_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
   advise_huge_pages(values.data(), count * sizeof(T));
 }
 
-/// The size of a huge page, the alignment of a block on them.
-inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 /// The size from which a block is placed on huge pages of its own: half a page, so a block takes
 /// at most twice its size (a surface's per-vertex arrays of 4 or 8 bytes pass 1 MiB at 128 k
 /// and 256 k vertices).
