@@ -19,7 +19,6 @@
 #include <utility>
 
 #include "orthofront/error.h"
-#include "orthofront/huge_pages.h"
 #include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
 #include "orthofront/spacetime/streamed_field.h"
@@ -58,13 +57,14 @@ void for_each_row(std::size_t n, const F& f, bool parallel = true) {
 }
 
 // Resizes a frame's array to n elements. One that must grow is first emptied (nothing of it is
-// kept: every element is written anew) and reserved on huge pages, so that a frame several times
-// larger than the last is not copied over and faults in 2 MiB at a time.
+// kept: every element is written anew) and reserved anew, so that a frame several times larger
+// than the last is not copied over (the mesh's arrays take their huge pages from their
+// allocator).
 template <class T, class Allocator>
 void grow(std::vector<T, Allocator>& values, std::size_t n) {
   if (values.capacity() < n) {
     std::vector<T, Allocator>().swap(values);
-    reserve_huge_pages(values, n + n / 4);  // room for the next frame to grow a little
+    values.reserve(n + n / 4);  // room for the next frame to grow a little
   }
   values.resize(n);
 }
