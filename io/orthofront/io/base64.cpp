@@ -29,26 +29,33 @@ bool is_space(char c) {
 
 std::string base64_encode(std::string_view bytes) {
   std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
+  base64_encode(bytes, out);
+  return out;
+}
+
+void base64_encode(std::string_view bytes, std::string& out) {
+  // Into a buffer sized once: appending a character at a time (a size check and a terminator
+  // each) took a cold Lorenz surface's .vtp writing 6 % of its process time.
+  out.resize((bytes.size() + 2) / 3 * 4);
+  char* o = out.data();
   std::size_t i = 0;
-  for (; i + 3 <= bytes.size(); i += 3) {
+  for (; i + 3 <= bytes.size(); i += 3, o += 4) {
     const std::uint32_t group =
         byte_at(bytes, i) << 16 | byte_at(bytes, i + 1) << 8 | byte_at(bytes, i + 2);
-    out += kAlphabet[group >> 18 & 63];
-    out += kAlphabet[group >> 12 & 63];
-    out += kAlphabet[group >> 6 & 63];
-    out += kAlphabet[group & 63];
+    o[0] = kAlphabet[group >> 18 & 63];
+    o[1] = kAlphabet[group >> 12 & 63];
+    o[2] = kAlphabet[group >> 6 & 63];
+    o[3] = kAlphabet[group & 63];
   }
   const std::size_t rest = bytes.size() - i;
   if (rest > 0) {
     std::uint32_t group = byte_at(bytes, i) << 16;
     if (rest == 2) group |= byte_at(bytes, i + 1) << 8;
-    out += kAlphabet[group >> 18 & 63];
-    out += kAlphabet[group >> 12 & 63];
-    out += rest == 2 ? kAlphabet[group >> 6 & 63] : '=';
-    out += '=';
+    o[0] = kAlphabet[group >> 18 & 63];
+    o[1] = kAlphabet[group >> 12 & 63];
+    o[2] = rest == 2 ? kAlphabet[group >> 6 & 63] : '=';
+    o[3] = '=';
   }
-  return out;
 }
 
 bool base64_decode(std::string_view text, std::string& bytes) {

@@ -40,13 +40,14 @@ class Base64Stream {
 
   void drain(bool all) {
     const std::size_t n = all ? pending_.size() : pending_.size() / 3 * 3;
-    const std::string text = base64_encode(std::string_view(pending_).substr(0, n));
-    out_.write(text.data(), static_cast<std::streamsize>(text.size()));
+    base64_encode(std::string_view(pending_).substr(0, n), text_);
+    out_.write(text_.data(), static_cast<std::streamsize>(text_.size()));
     pending_.erase(0, n);
   }
 
   std::ostream& out_;
   std::string pending_;
+  std::string text_;  ///< a chunk's base64, its storage kept from chunk to chunk
 };
 
 void write_text(std::ostream& out, const std::string& text) {
