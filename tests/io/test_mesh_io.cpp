@@ -458,6 +458,18 @@ TEST_CASE("binary VTK XML arrays decode with either header type and split base64
   std::string decoded;
   CHECK_FALSE(base64_decode("QQ=A", decoded));
   CHECK_FALSE(base64_decode("Q$==", decoded));
+  // Whole groups decode four characters at a time; whitespace anywhere, also inside a group
+  // (text wrapped at any width), takes the character-by-character path and gives the same bytes.
+  std::string bytes;
+  for (int i = 0; i < 1000; ++i) bytes += static_cast<char>((i * 7919 + 13) % 256);
+  const std::string text = base64_encode(bytes);
+  for (const std::size_t width : {1, 3, 4, 5, 76}) {
+    std::string wrapped;
+    for (std::size_t i = 0; i < text.size(); i += width) wrapped += text.substr(i, width) + "\n ";
+    REQUIRE(base64_decode(wrapped, decoded));
+    CHECK(decoded == bytes);
+  }
+  CHECK_FALSE(base64_decode(text.substr(0, 40) + "A$AA" + text.substr(40), decoded));
 
   // A UInt32 byte count encoded apart from the data (padding inside the text), as some writers do.
   std::string count;

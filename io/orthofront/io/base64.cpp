@@ -59,8 +59,11 @@ void base64_encode(std::string_view bytes, std::string& out) {
 }
 
 bool base64_decode(std::string_view text, std::string& bytes) {
-  bytes.clear();
-  bytes.reserve(text.size() / 4 * 3);
+  // Written through a pointer into room for the most the text can hold, then cut to size:
+  // appending a byte at a time took half of reading a large .vtp.
+  bytes.resize(text.size() / 4 * 3 + 3);
+  char* const begin = bytes.data();
+  char* out = begin;
   std::uint32_t group = 0;
   int filled = 0;   // characters in the current group, padding included
   int padding = 0;  // '=' in the current group
@@ -69,15 +72,31 @@ bool base64_decode(std::string_view text, std::string& bytes) {
     const int significant = filled - padding;
     if (significant < 2) return false;
     group <<= 6 * (4 - filled);
-    bytes += static_cast<char>(group >> 16 & 255);
-    if (significant > 2) bytes += static_cast<char>(group >> 8 & 255);
-    if (significant > 3) bytes += static_cast<char>(group & 255);
+    *out++ = static_cast<char>(group >> 16 & 255);
+    if (significant > 2) *out++ = static_cast<char>(group >> 8 & 255);
+    if (significant > 3) *out++ = static_cast<char>(group & 255);
     group = 0;
     filled = 0;
     padding = 0;
     return true;
   };
-  for (const char c : text) {
+  const auto digit_at = [&](std::size_t i) { return kDecode[static_cast<unsigned char>(text[i])]; };
+  for (std::size_t i = 0; i < text.size();) {
+    // A whole group of four alphabet characters at once (whitespace and '=' decode to -1 and
+    // take the general path below).
+    if (filled == 0 && i + 4 <= text.size()) {
+      const int a = digit_at(i), b = digit_at(i + 1), c = digit_at(i + 2), d = digit_at(i + 3);
+      if ((a | b | c | d) >= 0) {
+        const auto whole = static_cast<std::uint32_t>(a << 18 | b << 12 | c << 6 | d);
+        out[0] = static_cast<char>(whole >> 16 & 255);
+        out[1] = static_cast<char>(whole >> 8 & 255);
+        out[2] = static_cast<char>(whole & 255);
+        out += 3;
+        i += 4;
+        continue;
+      }
+    }
+    const char c = text[i++];
     if (is_space(c)) continue;
     if (c == '=') {
       if (filled - padding < 2) return false;
@@ -90,7 +109,9 @@ bool base64_decode(std::string_view text, std::string& bytes) {
     }
     if (++filled == 4 && !flush()) return false;
   }
-  return filled == 0 || flush();
+  if (filled != 0 && !flush()) return false;
+  bytes.resize(static_cast<std::size_t>(out - begin));
+  return true;
 }
 
 }  // namespace orthofront::io::detail
