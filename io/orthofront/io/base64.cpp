@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <cstring>
 
 namespace orthofront::io::detail {
 namespace {
@@ -16,6 +17,14 @@ constexpr std::array<std::int8_t, 256> make_decode_table() {
   return table;
 }
 constexpr std::array<std::int8_t, 256> kDecode = make_decode_table();
+
+/// The two characters of every 12-bit half of a group: two lookups a group instead of four.
+constexpr std::array<std::array<char, 2>, 4096> make_pair_table() {
+  std::array<std::array<char, 2>, 4096> table{};
+  for (std::size_t i = 0; i < 4096; ++i) table[i] = {kAlphabet[i >> 6], kAlphabet[i & 63]};
+  return table;
+}
+constexpr std::array<std::array<char, 2>, 4096> kPairs = make_pair_table();
 
 std::uint32_t byte_at(std::string_view bytes, std::size_t i) {
   return static_cast<unsigned char>(bytes[i]);
@@ -42,10 +51,8 @@ void base64_encode(std::string_view bytes, std::string& out) {
   for (; i + 3 <= bytes.size(); i += 3, o += 4) {
     const std::uint32_t group =
         byte_at(bytes, i) << 16 | byte_at(bytes, i + 1) << 8 | byte_at(bytes, i + 2);
-    o[0] = kAlphabet[group >> 18 & 63];
-    o[1] = kAlphabet[group >> 12 & 63];
-    o[2] = kAlphabet[group >> 6 & 63];
-    o[3] = kAlphabet[group & 63];
+    std::memcpy(o, kPairs[group >> 12].data(), 2);
+    std::memcpy(o + 2, kPairs[group & 4095].data(), 2);
   }
   const std::size_t rest = bytes.size() - i;
   if (rest > 0) {
