@@ -80,11 +80,11 @@ class DeviceArray {
     return *this;
   }
   T* get() const { return data_; }
-  void upload(const T* host, std::size_t n) {
-    check(cudaMemcpy(data_, host, n * sizeof(T), cudaMemcpyHostToDevice), "upload");
-  }
-  void download(T* host, std::size_t n) const {
-    check(cudaMemcpy(host, data_, n * sizeof(T), cudaMemcpyDeviceToHost), "download");
+  /// In the order of `stream`: work queued there after it reads the values. (A plain
+  /// cudaMemcpy from pageable memory may return before its DMA ends, on the legacy stream,
+  /// which a non-blocking stream's kernels do not wait for.) `host` may be reused on return.
+  void upload(const T* host, std::size_t n, cudaStream_t stream) {
+    check(cudaMemcpyAsync(data_, host, n * sizeof(T), cudaMemcpyHostToDevice, stream), "upload");
   }
 
  private:
@@ -880,16 +880,20 @@ class CudaAdvector final : public BatchAdvector {
     slot_floats_ = floats;
   }
 
-  // The grid view with device pointers to its axis tables (uploaded for every call: small).
+  // The grid view with device pointers to its axis tables (uploaded for every call: small), on
+  // the lane's stream, ahead of its kernels. (Copied on the legacy stream, a call's kernels
+  // could read a rectilinear grid's tables before they arrived: under load, a call now and then
+  // gave most of its particles other bits than the same call alone.)
   static GridView device_grid(Lane& lane, const GridTables& tables) {
     GridView grid = tables.view();
+    const cudaStream_t s = lane.compute;
     for (int a = 0; a < grid.axes && grid.rectilinear; ++a) {
       const auto ua = static_cast<std::size_t>(a);
-      lane.coordinates[ua] = DeviceArray<double>(tables.coordinates()[ua].size());
-      lane.coordinates[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size());
-      lane.inverse_widths[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size());
+      lane.coordinates[ua] = DeviceArray<double>(tables.coordinates()[ua].size(), s);
+      lane.coordinates[ua].upload(tables.coordinates()[ua].data(), tables.coordinates()[ua].size(), s);
+      lane.inverse_widths[ua] = DeviceArray<double>(tables.inverse_widths()[ua].size(), s);
       lane.inverse_widths[ua].upload(tables.inverse_widths()[ua].data(),
-                                     tables.inverse_widths()[ua].size());
+                                     tables.inverse_widths()[ua].size(), s);
       grid.axis[a].coordinates = lane.coordinates[ua].get();
       grid.axis[a].inverse_width = lane.inverse_widths[ua].get();
     }
