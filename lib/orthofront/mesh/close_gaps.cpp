@@ -63,7 +63,7 @@ Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges)
   bd.chain.assign(nb, -1);
   bd.index.assign(nb, -1);
   bd.arc.assign(nb, 0.0);
-  const auto usable = [&](std::int32_t v) { return v >= 0 && bd.next[bd.slot(v)] >= 0; };
+  const auto usable = [&](std::size_t u) { return bd.next[u] >= 0; };  // u: a slot
   const auto walk = [&](std::int32_t start) {
     const auto id = static_cast<std::int32_t>(bd.chains.size());
     std::vector<std::int32_t> chain;
@@ -87,7 +87,7 @@ Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges)
       }
       const std::size_t uw = bd.slot(w);
       if (bd.chain[uw] >= 0 || bd.prev[uw] < 0) break;  // runs into a pinch: the chain ends here
-      if (!usable(w)) {  // the chain's last vertex has no successor
+      if (!usable(uw)) {  // the chain's last vertex has no successor
         bd.chain[uw] = id;
         bd.index[uw] = static_cast<std::int32_t>(chain.size());
         bd.arc[uw] = s;
@@ -102,9 +102,9 @@ Boundary find_boundary(const Mesh& mesh, const std::vector<BoundaryEdge>& edges)
   };
   // Open chains first (from vertices without a single predecessor), then the closed loops.
   for (std::size_t u = 0; u < nb; ++u)
-    if (usable(vertices[u]) && bd.prev[u] < 0 && bd.chain[u] < 0) walk(vertices[u]);
+    if (usable(u) && bd.prev[u] < 0 && bd.chain[u] < 0) walk(vertices[u]);
   for (std::size_t u = 0; u < nb; ++u)
-    if (usable(vertices[u]) && bd.chain[u] < 0) walk(vertices[u]);
+    if (usable(u) && bd.chain[u] < 0) walk(vertices[u]);
   return bd;
 }
 
@@ -186,10 +186,10 @@ GapReport close_gaps(Mesh& mesh, double distance, double min_length,
     };
     return c(x.x(), dx) << 42 | c(x.y(), dy) << 21 | c(x.z(), dz);
   };
-  std::unordered_map<CellKey, std::vector<std::int32_t>> cells;
+  std::unordered_map<CellKey, std::vector<std::size_t>> cells;  // slots, ascending
   const auto pinch = [&](std::size_t u) { return bd.next[u] == kAmbiguous || bd.prev[u] == kAmbiguous; };
   for (std::size_t u = 0; u < nb; ++u)
-    if (bd.chain[u] >= 0 && !pinch(u)) cells[cell_of(at(bd.vertices[u]), 0, 0, 0)].push_back(bd.vertices[u]);
+    if (bd.chain[u] >= 0 && !pinch(u)) cells[cell_of(at(bd.vertices[u]), 0, 0, 0)].push_back(u);
 
   // Each boundary vertex's partner across a gap: the nearest boundary vertex closer than
   // `distance`, running the other way (a boundary edge at each that point against each other:
@@ -212,10 +212,10 @@ GapReport close_gaps(Mesh& mesh, double distance, double min_length,
         for (int dz = -1; dz <= 1; ++dz) {
           const auto it = cells.find(cell_of(p[v], dx, dy, dz));
           if (it == cells.end()) continue;
-          for (const std::int32_t w : it->second) {
+          for (const std::size_t uw : it->second) {
+            const std::int32_t w = bd.vertices[uw];
             const double d = (at(w) - p[v]).norm();
-            if (w == static_cast<std::int32_t>(v) || !(d < best)) continue;
-            const std::size_t uw = bd.slot(w);
+            if (uw == uv || !(d < best)) continue;
             if (!antiparallel(uv, uw)) continue;
             if (bd.chain[uw] == bd.chain[uv]) {
               const auto c = static_cast<std::size_t>(bd.chain[uv]);
