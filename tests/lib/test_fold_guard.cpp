@@ -218,3 +218,46 @@ TEST_CASE("the fold guard checks the second part of a step against its own faces
   m.add_quad(8, 9, 14, 13);
   CHECK(guard.folded_vertices(m, part_b, first_vertex) == std::vector<std::int32_t>{13});
 }
+
+TEST_CASE("accepting checked strips gives the boundary of a guard built from the whole mesh",
+          "[engine][fold]") {
+  // Accepting a checked strip applies the boundary changes its check learnt; where an edge meets
+  // more faces than a boundary edge and one strip face, or two strip faces, it looks every edge
+  // up instead. Either way the boundary must be the one a guard gets from the whole mesh, edge
+  // for edge and in the same order (gap closing walks it in that order).
+  Mesh m = previous_strip(30);
+  FoldGuard guard;
+  guard.rebuild(m);
+  const auto key = [](const BoundaryEdge& e) { return std::tuple(e.from, e.to, e.face); };
+  const auto same_as_rebuilt = [&] {
+    FoldGuard rebuilt;
+    rebuilt.rebuild(m);
+    const auto a = guard.boundary(), b = rebuilt.boundary();
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) CHECK(key(a[i]) == key(b[i]));
+  };
+  // Row 2: quads over row 1 (its edges come off the boundary, the column edges pair up).
+  std::size_t first_face = m.face_count();
+  add_next_row(m, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 30));
+  REQUIRE(guard.folded_vertices(m, first_face, 6).empty());
+  guard.accept_later(m, first_face);
+  same_as_rebuilt();
+  // Row 3 with a triangle that closes the corner (6, 7, 9): edge (6, 7) is on the boundary and
+  // shared by both the triangle and the quad over it, three faces in all.
+  first_face = m.face_count();
+  for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 3, 0), 2, 2, 0, 0, 0, 3);
+  m.add_quad(6, 7, 10, 9);
+  m.add_quad(7, 8, 11, 10);
+  m.add_triangle(7, 6, 9);
+  guard.folded_vertices(m, first_face, 9);
+  guard.accept_later(m, first_face);
+  same_as_rebuilt();
+  // Row 4 over row 3: plain again, after the lookup.
+  first_face = m.face_count();
+  for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 4, 0), 3, 3, 0, 0, 0, 4);
+  m.add_quad(9, 10, 13, 12);
+  m.add_quad(10, 11, 14, 13);
+  REQUIRE(guard.folded_vertices(m, first_face, 12).empty());
+  guard.accept(m, first_face);
+  same_as_rebuilt();
+}

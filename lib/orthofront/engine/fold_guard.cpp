@@ -124,15 +124,33 @@ void FoldGuard::add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t
                                 std::size_t end) {
   // The faces just checked are the ones accepted, their normals already known.
   const bool checked = first == checked_first_ && end - first == checked_normals_.size();
-  for (std::size_t f = first; f < end; ++f) {
-    const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
-    for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
-      // An edge's second face puts it inside the surface.
-      if (!open_.remove(a, b))
-        open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
-    });
+  if (checked && changes_known_ && first == changes_first_ && end == changes_end_) {
+    apply_changes();
+  } else {
+    for (std::size_t f = first; f < end; ++f) {
+      const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
+      for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
+        // An edge's second face puts it inside the surface.
+        if (!open_.remove(a, b))
+          open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
+      });
+    }
   }
   checked_normals_.clear();
+  changes_.clear();
+  changes_known_ = false;
+}
+
+void FoldGuard::apply_changes() {
+  // The same lists, in the same order, as looking every edge up again: an edge whose addition
+  // was cancelled would have been added and taken out again, leaving the others' order alone.
+  for (const BoundaryChange& c : changes_) {
+    if (c.kind == BoundaryChange::add) {
+      open_.add(c.a, c.b, OpenEdge{checked_normals_[c.face - checked_first_], c.face, c.a < c.b});
+    } else if (c.kind == BoundaryChange::remove) {
+      open_.remove(c.a, c.b);
+    }
+  }
 }
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
@@ -217,6 +235,9 @@ void FoldGuard::start_check(std::size_t first_face) {
     checked_normals_.clear();
   }
   strip_.clear();
+  changes_.clear();
+  changes_first_ = changes_end_ = first_face;
+  changes_known_ = true;
 }
 
 void FoldGuard::finish_check(std::vector<std::int32_t>& out) {
@@ -248,6 +269,7 @@ void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_
     const Vec3 n0 = area_vector(positions, face);
     checked_normals_.push_back(n0);
     const auto face_id = static_cast<std::uint32_t>(f);
+    const bool has_area = n0.squaredNorm() > 0;
     for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
       const auto folds_over = [&](std::uint32_t other, bool forward, const Vec3& n1) {
         if (other == face_id) return false;
@@ -256,25 +278,45 @@ void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_
         const double dot = forward == (a < b) ? -n0.dot(n1) : n0.dot(n1);
         return n1.squaredNorm() > 0 && dot < 0;
       };
-      if (n0.squaredNorm() > 0) {
-        // Each pair of strip faces on an edge is compared once, when the second one comes.
-        bool folded = false;
-        strip_.any_of(a, b, [&](const StripEdge& other) {
-          if (folds_over(other.face, other.forward,
-                         checked_normals_[other.face - checked_first_])) {
-            folded = true;
-            take(other.face, a, b);
-          }
-          return false;
-        });
-        if (folded || open_.any_of(a, b, [&](const OpenEdge& other) {
-              return folds_over(other.face, other.forward, other.normal);
-            }))
-          take(f, a, b);
+      // Each pair of strip faces on an edge is compared once, when the second one comes. Every
+      // face on the edge is counted, for the boundary change.
+      bool folded = false, folds_open = false;
+      std::size_t strip_faces = 0, open_faces = 0;
+      std::uint32_t strip_change = kNoChange;
+      strip_.any_of(a, b, [&](const StripEdge& other) {
+        ++strip_faces;
+        strip_change = other.change;
+        if (has_area &&
+            folds_over(other.face, other.forward, checked_normals_[other.face - checked_first_])) {
+          folded = true;
+          take(other.face, a, b);
+        }
+        return false;
+      });
+      open_.any_of(a, b, [&](const OpenEdge& other) {
+        ++open_faces;
+        folds_open = folds_open || (has_area && !folded &&
+                                    folds_over(other.face, other.forward, other.normal));
+        return false;
+      });
+      if (folded || folds_open) take(f, a, b);
+      // Accepting adds an edge new to both lists, removes one on the boundary, and nothing for
+      // the second strip face of an edge the first added; any other meeting is left to a lookup.
+      std::uint32_t change = kNoChange;
+      if (strip_faces == 0 && open_faces <= 1 && changes_.size() < kNoChange) {
+        change = static_cast<std::uint32_t>(changes_.size());
+        changes_.push_back(BoundaryChange{
+            a, b, face_id, open_faces == 0 ? BoundaryChange::add : BoundaryChange::remove});
+      } else if (strip_faces == 1 && open_faces == 0 && strip_change != kNoChange &&
+                 changes_[strip_change].kind == BoundaryChange::add) {
+        changes_[strip_change].kind = BoundaryChange::cancelled;
+      } else {
+        changes_known_ = false;
       }
-      strip_.add(a, b, StripEdge{face_id, a < b});
+      strip_.add(a, b, StripEdge{face_id, change, a < b});
     });
   }
+  changes_end_ = end;
 }
 
 template class FoldGuard::EdgeLists<FoldGuard::StripEdge>;

@@ -73,12 +73,27 @@ class alignas(64) FoldGuard {
                    std::size_t first_new_vertex, std::vector<std::int32_t>& out);
   static void finish_check(std::vector<std::int32_t>& out);
 
-  /// A face of the strip being checked on an edge: the face, and whether it walks the edge from
-  /// its lower to its higher vertex (its area vector is in checked_normals_).
+  /// A face of the strip being checked on an edge: the face, whether it walks the edge from its
+  /// lower to its higher vertex (its area vector is in checked_normals_), and the boundary change
+  /// it recorded for the edge.
+  static constexpr std::uint32_t kNoChange = (std::uint32_t{1} << 31) - 1;
   struct StripEdge {
     std::uint32_t face;
-    bool forward;
+    std::uint32_t change : 31;
+    std::uint32_t forward : 1;
   };
+  /// What accepting the checked faces does to the boundary, learnt by the check (which looks up
+  /// each of their edges in both lists anyway): accepting then only applies these, in face order,
+  /// instead of looking up every edge again. An edge two strip faces share is no change (the
+  /// first face's addition is cancelled when the second comes).
+  struct BoundaryChange {
+    enum Kind : std::uint8_t { add, remove, cancelled };
+    std::int32_t a, b;
+    std::uint32_t face;
+    Kind kind;
+  };
+  /// Applies changes_ to the boundary (faces [changes_first_, changes_end_), all checked).
+  void apply_changes();
   /// An accepted face on a boundary edge, with its area vector (zero for a face without area):
   /// nothing else keeps the area vectors of accepted faces.
   struct OpenEdge {
@@ -160,6 +175,12 @@ class alignas(64) FoldGuard {
   /// checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
+  /// The boundary changes of faces [changes_first_, changes_end_), checked since the last
+  /// start_check(); unusable (changes_known_ false) when an edge met more than one other face
+  /// there: accepting then looks every edge up again.
+  std::vector<BoundaryChange> changes_;
+  std::size_t changes_first_ = 0, changes_end_ = 0;
+  bool changes_known_ = false;
   /// What accept_later() left: faces [first, end) of *mesh.
   struct Left {
     const Mesh* mesh = nullptr;
