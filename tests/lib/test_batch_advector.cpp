@@ -373,3 +373,51 @@ TEST_CASE("bulk advection: a resident set moves its particles as advect() moves 
   CHECK(second.steps_loaded == 0);
   CHECK(second.slabs == 0);
 }
+
+TEST_CASE("bulk advection: a corner's NaN or infinity is no data, even where its weight is 0",
+          "[advect]") {
+  // One cell of 8 corners (x fastest), 3 components each. The value is checked instead of the
+  // corners: every bad component must still reach it, at every weight.
+  const std::int64_t stride[3] = {3, 6, 12};
+  const float kBad[] = {std::numeric_limits<float>::quiet_NaN(),
+                        std::numeric_limits<float>::infinity(),
+                        -std::numeric_limits<float>::infinity()};
+  const double kWeights[] = {0.0, 0.25, 1.0};
+  std::array<float, 24> cell{};
+  for (std::size_t i = 0; i < cell.size(); ++i) cell[i] = 0.5f + static_cast<float>(i);
+  double v[3];
+  for (const double tx : kWeights)
+    for (const double ty : kWeights)
+      for (const double tz : kWeights) {
+        REQUIRE(detail::interpolate_step<3, 3>(cell.data(), stride, tx, ty, tz, false, v));
+        for (std::size_t k = 0; k < 24; ++k)
+          for (const float bad : kBad) {
+            std::array<float, 24> broken = cell;
+            broken[k] = bad;
+            INFO("corner " << k / 3 << ", component " << k % 3 << ", value " << bad << ", weights "
+                           << tx << " " << ty << " " << tz);
+            CHECK_FALSE(detail::interpolate_step<3, 3>(broken.data(), stride, tx, ty, tz, false, v));
+            // The 2D cell is the first four corners.
+            CHECK(detail::interpolate_step<2, 3>(broken.data(), stride, tx, ty, 0, false, v) ==
+                  (k >= 12));
+          }
+      }
+  // An all-zero corner is no data only where zero means so.
+  std::array<float, 24> zero = cell;
+  zero[9] = zero[10] = zero[11] = 0;
+  CHECK(detail::interpolate_step<3, 3>(zero.data(), stride, 0.5, 0.5, 0.5, false, v));
+  CHECK_FALSE(detail::interpolate_step<3, 3>(zero.data(), stride, 0.5, 0.5, 0.5, true, v));
+}
+
+TEST_CASE("bulk advection: the step controller's norm^(-1/5) is pow's to a few ulps", "[advect]") {
+  std::vector<double> norms;
+  for (double e = -5; e <= 5; e += 1.0 / 64) norms.push_back(std::pow(10.0, e));
+  for (int j = -3; j <= 2; ++j)  // the ends of the range scaled into [1, 32)
+    for (const double x : {1.0, 1.0 + 1e-12, 32.0 - 1e-12, 32.0}) norms.push_back(x * std::pow(32.0, j));
+  for (const double norm : norms) {
+    INFO("norm " << norm);
+    CHECK(detail::inverse_fifth_root(norm) == Approx(std::pow(norm, -0.2)).epsilon(1e-15));
+  }
+  CHECK(detail::inverse_fifth_root(1e-9) == detail::inverse_fifth_root(1e-5));  // clamped
+  CHECK(detail::inverse_fifth_root(1e9) == detail::inverse_fifth_root(1e5));
+}

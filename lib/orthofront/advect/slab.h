@@ -93,7 +93,10 @@ ORTHOFRONT_HD inline bool point_has_no_data(const float* p, bool zero_is_no_data
 }
 
 /// Multilinear value of one step at a located cell (multilinear::interpolate's operations in its
-/// order); false when a corner has no data.
+/// order); false when a corner has no data. A corner's NaN or infinity makes the value of its
+/// component NaN or infinite (0 · inf and inf - inf are NaN, and floats cannot overflow these
+/// sums of doubles), so the value is checked instead of the 8 corners: a third of the sampling
+/// cost saved. All-zero corners are looked for only where they mean no data.
 template <int Axes, int Components>
 ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t* stride,
                                            double tx, double ty, double tz, bool zero_is_no_data,
@@ -106,15 +109,12 @@ ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t
   const float* p101 = Axes == 3 ? p001 + stride[0] : base;
   const float* p011 = Axes == 3 ? p001 + stride[1] : base;
   const float* p111 = Axes == 3 ? p001 + stride[0] + stride[1] : base;
-  if (point_has_no_data<Components>(p000, zero_is_no_data) ||
-      point_has_no_data<Components>(p100, zero_is_no_data) ||
-      point_has_no_data<Components>(p010, zero_is_no_data) ||
-      point_has_no_data<Components>(p110, zero_is_no_data))
-    return false;
-  if (Axes == 3 && (point_has_no_data<Components>(p001, zero_is_no_data) ||
-                    point_has_no_data<Components>(p101, zero_is_no_data) ||
-                    point_has_no_data<Components>(p011, zero_is_no_data) ||
-                    point_has_no_data<Components>(p111, zero_is_no_data)))
+  if (zero_is_no_data &&
+      (point_has_no_data<Components>(p000, true) || point_has_no_data<Components>(p100, true) ||
+       point_has_no_data<Components>(p010, true) || point_has_no_data<Components>(p110, true) ||
+       (Axes == 3 &&
+        (point_has_no_data<Components>(p001, true) || point_has_no_data<Components>(p101, true) ||
+         point_has_no_data<Components>(p011, true) || point_has_no_data<Components>(p111, true)))))
     return false;
   for (int c = 0; c < Components; ++c) {
     const double c000 = p000[c], c100 = p100[c], c010 = p010[c], c110 = p110[c];
@@ -130,8 +130,10 @@ ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t
       v[c] = b0 + tz * (b1 - b0);
     }
   }
+  bool finite = true;
+  for (int c = 0; c < Components; ++c) finite = finite && v[c] - v[c] == 0.0;
   if constexpr (Components == 2) v[2] = 0.0;
-  return true;
+  return finite;
 }
 
 /// floor / ceil of u from + - and casts (device code without <cmath>); |u| < 2^62.
