@@ -693,3 +693,48 @@ TEST_CASE("flow-map gradients step to a streamed series' cell faces and time ste
   CHECK(worst_with < 0.25 * worst_without);
   CHECK(gradient_with < 0.25 * gradient_without);
 }
+
+TEST_CASE("bricked series: NaN and infinite samples are no data at every weight, as in memory",
+          "[spacetime][bricks]") {
+  // The streamed field finds a non-finite corner from the interpolated value; the in-memory
+  // field from its mask of cells. Points on sample coordinates give such a corner weight 0 or 1.
+  TempDir dir("nonfinite");
+  const GridGeometry g = test_grid(3, false);
+  const auto file = dir.path() / "holes.h5";
+  io::Hdf5WriteOptions w;
+  w.brick_size = 4;
+  w.xdmf = false;
+  w.zero_is_no_data = false;  // no corner is looked at: the value alone tells
+  io::Hdf5SeriesWriter writer(file, g, 3, {0.0, 1.0}, w);
+  std::vector<float> values(g.point_count() * 3);
+  for (std::size_t p = 0; p < g.point_count(); ++p)
+    for (std::size_t c = 0; c < 3; ++c) values[3 * p + c] = 0.25f + 0.01f * static_cast<float>(p % 17 + c);
+  values[3 * g.index(2, 2, 2) + 0] = std::numeric_limits<float>::quiet_NaN();
+  values[3 * g.index(7, 4, 3) + 1] = std::numeric_limits<float>::infinity();
+  values[3 * g.index(4, 6, 5) + 2] = -std::numeric_limits<float>::infinity();  // on a brick border
+  writer.write_step(values);
+  writer.write_step(values);
+  writer.commit();
+  const auto series = io::open_hdf5_series(file);
+  BrickCache cache(*series, CacheOptions{});
+  StreamedField field(cache);
+  REQUIRE_FALSE(series->zero_is_no_data());
+  const GridField memory(std::make_shared<VectorGrid>(io::read_hdf5_grid(file)), GridFieldOptions{});
+  std::size_t no_data = 0, checked = 0;
+  for (std::int64_t k = 0; k + 1 < g.size[2]; ++k)
+    for (std::int64_t j = 0; j + 1 < g.size[1]; ++j)
+      for (std::int64_t i = 0; i + 1 < g.size[0]; ++i)
+        for (const double f : {0.0, 0.5, 1.0}) {
+          const Vec3 x(g.coordinate(0, i) + f * g.spacing.x(), g.coordinate(1, j) + f * g.spacing.y(),
+                       g.coordinate(2, k) + f * g.spacing.z());
+          Vec3 v_streamed, v_memory;
+          const FieldStatus streamed = field.velocity(x, 0.5, v_streamed);
+          INFO("cell " << i << " " << j << " " << k << ", fraction " << f);
+          REQUIRE(streamed == memory.velocity(x, v_memory));
+          ++checked;
+          if (streamed == FieldStatus::no_data) ++no_data;
+        }
+  CHECK(checked == 3 * 10 * 8 * 6);
+  // Each bad sample takes the cells around it: their inner points, and points on their faces.
+  CHECK(no_data >= 3 * 8);
+}

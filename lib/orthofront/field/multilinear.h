@@ -100,6 +100,17 @@ inline bool point_has_no_data(const float* p, bool zero_is_no_data) {
   return !finite || (zero_is_no_data && zero);
 }
 
+/// True when every component of an interpolated value is finite. Interpolating float corners, a
+/// corner's NaN or infinity reaches its component of the value at every weight (0 · inf and
+/// inf - inf are NaN; floats cannot overflow these sums of doubles), so this finds a cell with a
+/// non-finite corner from the value alone, without looking at the 8 corners.
+template <int Components>
+inline bool value_is_finite(const Vec3& v) {
+  bool finite = true;
+  for (int c = 0; c < Components; ++c) finite = finite && v[c] - v[c] == 0.0;
+  return finite;
+}
+
 /// True when any corner of the cell carries no data (the cell then has none).
 template <int Axes, int Components, class Corner>
 inline bool cell_has_no_data(const Corner& corner, bool zero_is_no_data) {

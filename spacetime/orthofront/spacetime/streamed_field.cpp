@@ -145,13 +145,15 @@ FieldStatus StreamedField::evaluate(const Vec3& x, double t, Vec3& v, Mat3* J, V
     const std::size_t step = k + static_cast<std::size_t>(s);
     FieldStatus status = FieldStatus::inside;
     const auto interpolate = [&](const auto& corner) {
-      if (multilinear::cell_has_no_data<Axes, Components>(corner, zero_is_no_data_)) {
+      // Non-finite corners show in the value; all-zero ones are looked for where they mean no data.
+      if (zero_is_no_data_ && multilinear::cell_has_no_data<Axes, Components>(corner, true)) {
         status = FieldStatus::no_data;
         return;
       }
       multilinear::interpolate<Axes, Components, WithJacobian>(corner, at, values[s],
                                                                WithJacobian ? &jacobians[s]
                                                                             : nullptr);
+      if (!multilinear::value_is_finite<Components>(values[s])) status = FieldStatus::no_data;
     };
     if (!straddles) {
       const float* data =
