@@ -46,11 +46,6 @@ enum class SampleStatus : unsigned char { inside = 0, outside = 1, no_data = 2 }
 
 namespace detail {
 
-ORTHOFRONT_HD inline bool is_finite(float f) {
-  // Not std::isfinite: it is not a device function everywhere. NaN fails both comparisons.
-  return f == f && f - f == 0.0f;
-}
-
 /// Cell of x along one axis (x already checked against [lo, hi]); the arithmetic of
 /// multilinear::locate_uniform / locate_rectilinear.
 template <bool Rectilinear>
@@ -82,14 +77,12 @@ ORTHOFRONT_HD inline void locate(const AxisView& a, double x, std::int64_t& i, d
   }
 }
 
+/// True when every component of a sample is zero (no data where the series says so).
 template <int Components>
-ORTHOFRONT_HD inline bool point_has_no_data(const float* p, bool zero_is_no_data) {
-  bool finite = true, zero = true;
-  for (int c = 0; c < Components; ++c) {
-    finite = finite && is_finite(p[c]);
-    zero = zero && p[c] == 0.0f;
-  }
-  return !finite || (zero_is_no_data && zero);
+ORTHOFRONT_HD inline bool point_is_zero(const float* p) {
+  bool zero = true;
+  for (int c = 0; c < Components; ++c) zero = zero && p[c] == 0.0f;
+  return zero;
 }
 
 /// Multilinear value of one step at a located cell (multilinear::interpolate's operations in its
@@ -110,11 +103,10 @@ ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t
   const float* p011 = Axes == 3 ? p001 + stride[1] : base;
   const float* p111 = Axes == 3 ? p001 + stride[0] + stride[1] : base;
   if (zero_is_no_data &&
-      (point_has_no_data<Components>(p000, true) || point_has_no_data<Components>(p100, true) ||
-       point_has_no_data<Components>(p010, true) || point_has_no_data<Components>(p110, true) ||
-       (Axes == 3 &&
-        (point_has_no_data<Components>(p001, true) || point_has_no_data<Components>(p101, true) ||
-         point_has_no_data<Components>(p011, true) || point_has_no_data<Components>(p111, true)))))
+      (point_is_zero<Components>(p000) || point_is_zero<Components>(p100) ||
+       point_is_zero<Components>(p010) || point_is_zero<Components>(p110) ||
+       (Axes == 3 && (point_is_zero<Components>(p001) || point_is_zero<Components>(p101) ||
+                      point_is_zero<Components>(p011) || point_is_zero<Components>(p111)))))
     return false;
   for (int c = 0; c < Components; ++c) {
     const double c000 = p000[c], c100 = p100[c], c010 = p010[c], c110 = p110[c];
@@ -130,6 +122,7 @@ ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t
       v[c] = b0 + tz * (b1 - b0);
     }
   }
+  // Not std::isfinite (not a device function everywhere): NaN and infinity give v - v = NaN.
   bool finite = true;
   for (int c = 0; c < Components; ++c) finite = finite && v[c] - v[c] == 0.0;
   if constexpr (Components == 2) v[2] = 0.0;
