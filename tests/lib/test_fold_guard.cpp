@@ -242,21 +242,23 @@ TEST_CASE("accepting checked strips gives the boundary of a guard built from the
   REQUIRE(guard.folded_vertices(m, first_face, 6).empty());
   guard.accept_later(m, first_face);
   same_as_rebuilt();
+  // Rows 3 and 4 at y = 3, 4: quads over the row below (its first vertex `below`).
+  const auto add_row = [&](double y, std::int32_t below) {
+    first_face = m.face_count();
+    const auto v = static_cast<std::int32_t>(m.vertex_count());
+    for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, y, 0), 2, 2, 0, 0, 0, 3);
+    m.add_quad(below, below + 1, v + 1, v);
+    m.add_quad(below + 1, below + 2, v + 2, v + 1);
+  };
   // Row 3 with a triangle that closes the corner (6, 7, 9): edge (6, 7) is on the boundary and
   // shared by both the triangle and the quad over it, three faces in all.
-  first_face = m.face_count();
-  for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 3, 0), 2, 2, 0, 0, 0, 3);
-  m.add_quad(6, 7, 10, 9);
-  m.add_quad(7, 8, 11, 10);
+  add_row(3, 6);
   m.add_triangle(7, 6, 9);
   guard.folded_vertices(m, first_face, 9);
   guard.accept_later(m, first_face);
   same_as_rebuilt();
   // Row 4 over row 3: plain again, after the lookup.
-  first_face = m.face_count();
-  for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 4, 0), 3, 3, 0, 0, 0, 4);
-  m.add_quad(9, 10, 13, 12);
-  m.add_quad(10, 11, 14, 13);
+  add_row(4, 9);
   REQUIRE(guard.folded_vertices(m, first_face, 12).empty());
   guard.accept(m, first_face);
   same_as_rebuilt();
