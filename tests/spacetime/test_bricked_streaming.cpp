@@ -719,7 +719,9 @@ TEST_CASE("bricked series: NaN and infinite samples are no data at every weight,
   BrickCache cache(*series, CacheOptions{});
   StreamedField field(cache);
   REQUIRE_FALSE(series->zero_is_no_data());
-  const GridField memory(std::make_shared<VectorGrid>(io::read_hdf5_grid(file)), GridFieldOptions{});
+  GridFieldOptions go;
+  go.zero_is_no_data = false;
+  const GridField memory(std::make_shared<VectorGrid>(io::read_hdf5_grid(file)), go);
   std::size_t no_data = 0, checked = 0;
   for (std::int64_t k = 0; k + 1 < g.size[2]; ++k)
     for (std::int64_t j = 0; j + 1 < g.size[1]; ++j)

@@ -111,13 +111,18 @@ inline bool value_is_finite(const Vec3& v) {
   return finite;
 }
 
-/// True when any corner of the cell carries no data (the cell then has none).
+/// True when any corner of the cell is a zero vector (no data where the data says so; a
+/// non-finite corner shows in the value instead: value_is_finite).
 template <int Axes, int Components, class Corner>
-inline bool cell_has_no_data(const Corner& corner, bool zero_is_no_data) {
+inline bool cell_has_zero_vector(const Corner& corner) {
   for (int bz = 0; bz < (Axes == 3 ? 2 : 1); ++bz)
     for (int by = 0; by < 2; ++by)
-      for (int bx = 0; bx < 2; ++bx)
-        if (point_has_no_data<Components>(corner(bx, by, bz), zero_is_no_data)) return true;
+      for (int bx = 0; bx < 2; ++bx) {
+        const auto* p = corner(bx, by, bz);
+        bool zero = true;
+        for (int c = 0; c < Components; ++c) zero = zero && p[c] == 0.0f;
+        if (zero) return true;
+      }
   return false;
 }
 

@@ -145,8 +145,8 @@ FieldStatus StreamedField::evaluate(const Vec3& x, double t, Vec3& v, Mat3* J, V
     const std::size_t step = k + static_cast<std::size_t>(s);
     FieldStatus status = FieldStatus::inside;
     const auto interpolate = [&](const auto& corner) {
-      // Non-finite corners show in the value; all-zero ones are looked for where they mean no data.
-      if (zero_is_no_data_ && multilinear::cell_has_no_data<Axes, Components>(corner, true)) {
+      // Non-finite corners show in the value; zero vectors are looked for where they mean no data.
+      if (zero_is_no_data_ && multilinear::cell_has_zero_vector<Axes, Components>(corner)) {
         status = FieldStatus::no_data;
         return;
       }
