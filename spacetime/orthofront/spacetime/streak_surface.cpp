@@ -1563,6 +1563,9 @@ StreakReport build_streak_surface(const UnsteadyField& flow, const SeedCurve& se
   return StreakBuilder(access, seed, options, sink).run();
 }
 
+// Steps a streamed streak surface reads ahead of the interval it moves through.
+constexpr std::size_t kStepsReadAhead = 3;
+
 StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
                                   const StreakOptions& options, const StreakFrameSink& sink) {
   StreamedField field(cache);
@@ -1576,13 +1579,18 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     } catch (const Error& e) {
       return e.what();  // a read error: the frames handed over stay valid
     }
-    // Read the next step while this interval is computed.
+    // Read the next steps while this interval is computed, nearest first (the cache stops where
+    // its prefetch share is full). More than one: intervals take uneven time (a frame, a large
+    // refinement), and a reader kept one step ahead idles through the slow ones and holds the
+    // run up in the fast ones after them.
     std::size_t k = 0;
     double w = 0;
-    if (locate_time(cache.times(), t_b, k, w) && k + 2 < cache.times().size()) {
+    if (locate_time(cache.times(), t_b, k, w)) {
       std::vector<BrickKey> next;
-      for (std::size_t b = 0; b < bricks; ++b)
-        next.push_back({static_cast<std::uint32_t>(k + 2), static_cast<std::uint32_t>(b)});
+      const std::size_t end = std::min(cache.times().size(), k + 2 + kStepsReadAhead);
+      for (std::size_t step = k + 2; step < end; ++step)
+        for (std::size_t b = 0; b < bricks; ++b)
+          next.push_back({static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)});
       cache.prefetch(next);
     }
     return {};
