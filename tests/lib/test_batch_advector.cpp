@@ -107,6 +107,47 @@ std::vector<std::array<double, 3>> random_points(std::size_t n, double radius, i
 
 }  // namespace
 
+TEST_CASE("particle batch: growing keeps the particles and adds fresh ones, small or large",
+          "[advect]") {
+  for (const std::size_t grown : {std::size_t{5}, std::size_t{200'000}}) {
+    for (const bool with_stop : {false, true}) {
+      ParticleBatch b;
+      if (with_stop) b.stop.assign(1, 0);
+      b.resize(3);
+      for (std::size_t i = 0; i < 3; ++i) {
+        for (std::size_t d = 0; d < 3; ++d) b.x[d][i] = 10.0 * static_cast<double>(i) + static_cast<double>(d);
+        b.t[i] = 0.5 + static_cast<double>(i);
+        b.h[i] = 0.25;
+        b.evaluations[i] = 7;
+        b.status[i] = ParticleStatus::no_data;
+        if (with_stop) b.stop[i] = 2.0;
+      }
+      b.resize(grown);
+      INFO("grown to " << grown << (with_stop ? ", with ends" : ""));
+      REQUIRE(b.size() == grown);
+      for (const auto& c : b.x) REQUIRE(c.size() == grown);
+      REQUIRE(b.h.size() == grown);
+      REQUIRE(b.evaluations.size() == grown);
+      REQUIRE(b.status.size() == grown);
+      REQUIRE(b.stop.size() == (with_stop ? grown : 0));
+      for (std::size_t i = 0; i < grown; ++i) {
+        const bool old = i < 3;
+        const ParticleState p = b.state(i);
+        for (std::size_t d = 0; d < 3; ++d)
+          if (p.x[d] != (old ? 10.0 * static_cast<double>(i) + static_cast<double>(d) : 0.0)) FAIL("x at " << i);
+        if (p.t != (old ? 0.5 + static_cast<double>(i) : 0.0) || p.h != (old ? 0.25 : 0.0) ||
+            p.evaluations != (old ? 7 : 0) ||
+            p.status != (old ? ParticleStatus::no_data : ParticleStatus::moving) ||
+            (with_stop && b.stop[i] != (old ? 2.0 : 0.0)))
+          FAIL("particle " << i);
+      }
+      b.resize(2);
+      CHECK(b.size() == 2);
+      CHECK(b.x[2][1] == 12.0);
+    }
+  }
+}
+
 TEST_CASE("bulk advection: the exact flow of a linear field through four slabs",
           "[advect]") {
   const auto advector = make_cpu_advector();
