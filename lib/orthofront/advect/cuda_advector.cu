@@ -27,6 +27,10 @@
 #include "orthofront/error.h"
 #include "orthofront/huge_pages.h"
 
+#ifdef __linux__
+#include <unistd.h>
+#endif
+
 namespace orthofront::advect {
 namespace {
 
@@ -127,6 +131,12 @@ class PinnedBuffer {
   bool map_and_register() {
 #ifdef __linux__
     const std::size_t whole = (bytes_ + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
+    // Touching pages the machine does not have would wake the OOM killer, where cudaMallocHost
+    // fails with an error the pool can act on: only with room to spare in free memory.
+    const long free_pages = ::sysconf(_SC_AVPHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    if (free_pages <= 0 || page <= 0 ||
+        whole > static_cast<std::size_t>(free_pages) / 2 * static_cast<std::size_t>(page))
+      return false;
     // One huge page more, so that the block can start on a huge page's boundary.
     const std::size_t mapped = whole + kHugePageBytes;
     void* p = ::mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
