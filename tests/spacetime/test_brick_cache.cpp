@@ -168,6 +168,23 @@ TEST_CASE("brick cache: a monotone sweep reads every brick once, prefetched in o
   for (std::size_t i = 1; i < log.size(); ++i) REQUIRE(log[i].step >= log[i - 1].step);
 }
 
+TEST_CASE("brick cache: the keys of whole steps, in file order, end at the series' last step",
+          "[spacetime][cache]") {
+  BrickSeries series(30);
+  const BrickCache cache(series, CacheOptions{});
+  const std::size_t bricks = cache.layout().bricks();
+  REQUIRE(bricks > 1);
+  const std::vector<BrickKey> keys = cache.step_keys(28, 35);
+  REQUIRE(keys.size() == 2 * bricks);
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    CHECK(keys[i].step == 28 + i / bricks);
+    CHECK(keys[i].brick == i % bricks);
+  }
+  CHECK(cache.step_keys(30, 31).empty());
+  CHECK(cache.step_keys(5, 5).empty());
+  CHECK(cache.step_keys(0, 1).size() == bricks);
+}
+
 TEST_CASE("brick cache: eviction takes units behind the band, then the least recently wanted",
           "[spacetime][cache]") {
   BrickSeries series(10);

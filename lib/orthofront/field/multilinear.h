@@ -88,16 +88,21 @@ inline void interpolate(const Corner& corner, const AxisCell (&cell)[3], Vec3& v
   }
 }
 
+/// True when every component of a sample point is zero.
+template <int Components>
+inline bool point_is_zero(const float* p) {
+  bool zero = true;
+  for (int c = 0; c < Components; ++c) zero = zero && p[c] == 0.0f;
+  return zero;
+}
+
 /// True when a sample point carries no data: a non-finite component, or (zero_is_no_data) a zero
 /// vector, which real data uses for land and solid cells.
 template <int Components>
 inline bool point_has_no_data(const float* p, bool zero_is_no_data) {
-  bool finite = true, zero = true;
-  for (int c = 0; c < Components; ++c) {
-    finite = finite && std::isfinite(p[c]);
-    zero = zero && p[c] == 0.0f;
-  }
-  return !finite || (zero_is_no_data && zero);
+  bool finite = true;
+  for (int c = 0; c < Components; ++c) finite = finite && std::isfinite(p[c]);
+  return !finite || (zero_is_no_data && point_is_zero<Components>(p));
 }
 
 /// True when every component of an interpolated value is finite. Interpolating float corners, a
@@ -117,12 +122,8 @@ template <int Axes, int Components, class Corner>
 inline bool cell_has_zero_vector(const Corner& corner) {
   for (int bz = 0; bz < (Axes == 3 ? 2 : 1); ++bz)
     for (int by = 0; by < 2; ++by)
-      for (int bx = 0; bx < 2; ++bx) {
-        const auto* p = corner(bx, by, bz);
-        bool zero = true;
-        for (int c = 0; c < Components; ++c) zero = zero && p[c] == 0.0f;
-        if (zero) return true;
-      }
+      for (int bx = 0; bx < 2; ++bx)
+        if (point_is_zero<Components>(corner(bx, by, bz))) return true;
   return false;
 }
 

@@ -354,6 +354,17 @@ void BrickCache::prefetch(std::span<const BrickKey> keys) {
   }
 }
 
+std::vector<BrickKey> BrickCache::step_keys(std::size_t first, std::size_t end) const {
+  end = std::min(end, times_.size());
+  std::vector<BrickKey> keys;
+  if (end <= first) return keys;
+  keys.reserve((end - first) * layout_.bricks());
+  for (std::size_t k = first; k < end; ++k)
+    for (std::size_t b = 0; b < layout_.bricks(); ++b)
+      keys.push_back({static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(b)});
+  return keys;
+}
+
 void BrickCache::new_epoch(std::size_t first_step) {
   std::lock_guard lock(mutex_);
   ++epoch_;

@@ -112,6 +112,10 @@ class BrickCache {
   /// ones; units of steps before `first_step` will not be needed again and are evicted first.
   void new_epoch(std::size_t first_step);
 
+  /// The keys of every unit of steps [first, end) (past the series' last step: none), step by
+  /// step, each in brick order (the order the file stores them).
+  std::vector<BrickKey> step_keys(std::size_t first, std::size_t end) const;
+
   /// Bytes `units` pinned units need, plus the loads in flight and the reserved units.
   std::size_t bytes_needed(std::size_t units) const;
   /// Keeps room for `units` more units beside every band require_fits() checks: what a bulk

@@ -1570,7 +1570,6 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
                                   const StreakOptions& options, const StreakFrameSink& sink) {
   StreamedField field(cache);
   FlowAccess access{field, {}, {}, cache.times()};
-  const std::size_t bricks = cache.layout().bricks();
   access.prepare = [&](double t_a, double t_b) -> std::string {
     try {
       field.update_band(t_a, t_b);
@@ -1585,14 +1584,8 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     // run up in the fast ones after them.
     std::size_t k = 0;
     double w = 0;
-    if (locate_time(cache.times(), t_b, k, w)) {
-      std::vector<BrickKey> next;
-      const std::size_t end = std::min(cache.times().size(), k + 2 + kStepsReadAhead);
-      for (std::size_t step = k + 2; step < end; ++step)
-        for (std::size_t b = 0; b < bricks; ++b)
-          next.push_back({static_cast<std::uint32_t>(step), static_cast<std::uint32_t>(b)});
-      cache.prefetch(next);
-    }
+    if (locate_time(cache.times(), t_b, k, w))
+      cache.prefetch(cache.step_keys(k + 2, k + 2 + kStepsReadAhead));
     return {};
   };
   access.read_error = [&] { return field.error(); };

@@ -271,10 +271,7 @@ void StreamedField::update_band(double t_lo, double t_hi) {
   locate_time(times, t_lo, first, w);
   locate_time(times, t_hi, last, w);
   last = std::min(last + 1, times.size() - 1);
-  std::vector<BrickKey> keys;
-  for (std::size_t k = first; k <= last; ++k)
-    for (std::size_t b = 0; b < layout_.bricks(); ++b)
-      keys.push_back({static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(b)});
+  const std::vector<BrickKey> keys = cache_.step_keys(first, last + 1);
   cache_.require_fits(keys.size(), "the band of time steps " + std::to_string(first) + ".." +
                                        std::to_string(last) + " (times " +
                                        std::to_string(times[first]) + " to " +
