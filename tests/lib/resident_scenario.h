@@ -1,10 +1,14 @@
 #pragma once
 // A resident particle set driven as a streak surface drives it: particles placed, parked, their
 // slots reused (parked and placed again, placed twice, placed and parked before the next move) and
-// new slots beyond the set's size, between intervals. Each interval's view is recorded, and
-// checked against a reference backend's advect() of the moving particles, bit for bit.
+// new slots beyond the set's size, between intervals; with `bulk`, one call placing that many
+// (new slots, and slots changed already since the last move) in the second interval, and the
+// same with a slot given twice (the last placement holds) in the third. Each interval's view is
+// recorded, and checked against a reference backend's advect() of the moving particles, bit for
+// bit.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -26,7 +30,7 @@ struct ResidentRecord {
 inline std::vector<ResidentRecord> run_resident_scenario(
     advect::ResidentParticles& set, advect::StepSource& source, const advect::MethodOptions& o,
     const std::array<double, 3>& lo, const std::array<double, 3>& hi, int dimension, std::size_t n,
-    double t0, double t1, int intervals, advect::BatchAdvector* reference) {
+    double t0, double t1, int intervals, advect::BatchAdvector* reference, std::size_t bulk = 0) {
   using advect::ParticleStatus;
   std::mt19937_64 rng(12345);
   const auto draw = [&] {
@@ -76,6 +80,19 @@ inline std::vector<ResidentRecord> run_resident_scenario(
       place(next, draw());                                                          // placed, then
       park(next++);                                                                 // parked again
       park(next + 5000);                                                            // never placed
+      if (bulk > 0 && (k == 1 || k == 2)) {
+        std::vector<std::uint32_t> slots;
+        std::vector<std::array<double, 3>> x;
+        for (std::size_t j = 1; j < parked.size(); j += 2) slots.push_back(parked[j]);  // parked just now
+        for (std::size_t j = 0; j < bulk; ++j) slots.push_back(next++);
+        if (k == 2) slots.push_back(slots[slots.size() / 2]);  // given twice
+        std::reverse(slots.begin(), slots.end());            // the largest slot first
+        for (const std::uint32_t slot : slots) {
+          x.push_back(draw());
+          held[slot] = {x.back(), ParticleStatus::moving};
+        }
+        set.place(slots, x);
+      }
     }
     const double a = t0 + (t1 - t0) * k / intervals, b = t0 + (t1 - t0) * (k + 1) / intervals;
     set.advance(source, a, b, o);

@@ -389,8 +389,9 @@ TEST_CASE("bulk advection: a resident set moves its particles as advect() moves 
   MethodOptions o;
   o.method = Method::dopri5;
   o.absolute = o.relative = 1e-9;
+  // (Bulk placements of more than kParallelPlacements slots, made in parallel.)
   const auto records = test_support::run_resident_scenario(*set, series, o, {-1.4, -1.4, -1.4}, {1.4, 1.4, 1.4}, 3,
-                                                   500, 0.1, 0.9, 6, cpu.get());
+                                                           500, 0.1, 0.9, 6, cpu.get(), kParallelPlacements + 500);
   // Some particles stopped each way, so both kinds of stop were compared.
   std::size_t left = 0, no_data = 0;
   for (const ParticleStatus s : records.back().status) {

@@ -320,7 +320,7 @@ TEST_CASE("cuda advection: a resident set on the device gives the CPU backend's 
     }
     const auto set = gpu->make_resident();
     const auto records = test_support::run_resident_scenario(*set, series, o, lo, hi, dimension, 20000,
-                                                             0.05, 0.75, 5, cpu.get());
+                                                             0.05, 0.75, 5, cpu.get(), kParallelPlacements + 500);
     std::size_t moving = 0;
     for (const ParticleStatus s : records.back().status) moving += s == ParticleStatus::moving;
     CHECK(moving > 1000);

@@ -1135,6 +1135,13 @@ class CudaResident final : public ResidentParticles {
     if (slots.size() != x.size())
       throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
                             std::to_string(slots.size()) + " slots");
+    if (slots.size() >= kParallelPlacements) {
+      const std::size_t end = std::size_t{largest_slot(slots)} + 1;
+      if (!repeats_a_slot(slots, end)) {
+        place_apart(slots, x, end);
+        return;
+      }
+    }
     for (std::size_t i = 0; i < slots.size(); ++i) change(slots[i]) = {{x[i][0], x[i][1], x[i][2]}, slots[i], 1};
   }
 
@@ -1227,6 +1234,32 @@ class CudaResident final : public ResidentParticles {
             status_.get(), nullptr};
   }
 
+  // place() of distinct slots (all below `end`), in parallel: the changes one change() after
+  // the other makes (a slot's change kept where it has one, new ones appended in order), found
+  // in blocks counted beforehand.
+  void place_apart(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x,
+                   std::size_t end) {
+    if (end > change_of_.size()) change_of_.resize(std::max(end, change_of_.size() * 3 / 2), 0);
+    constexpr std::size_t kBlock = 16384;
+    const std::size_t blocks = (slots.size() + kBlock - 1) / kBlock;
+    std::vector<std::size_t> fresh(blocks + 1, 0);  // [b + 1]: slots of block b without a change
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+      for (std::size_t i = b * kBlock; i < std::min(slots.size(), (b + 1) * kBlock); ++i)
+        fresh[b + 1] += change_of_[slots[i]] == 0;
+    });
+    for (std::size_t b = 0; b < blocks; ++b) fresh[b + 1] += fresh[b];
+    const std::size_t base = changes_.size();
+    changes_.resize(base + fresh[blocks]);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+      std::size_t k = base + fresh[b];
+      for (std::size_t i = b * kBlock; i < std::min(slots.size(), (b + 1) * kBlock); ++i) {
+        std::uint32_t& at = change_of_[slots[i]];
+        if (at == 0) at = static_cast<std::uint32_t>(++k);
+        changes_[at - 1] = {{x[i][0], x[i][1], x[i][2]}, slots[i], 1};
+      }
+    });
+  }
+
   SlotChange& change(std::uint32_t slot) {
     if (slot >= change_of_.size()) change_of_.resize(std::max<std::size_t>(slot + 1, change_of_.size() * 3 / 2), 0);
     std::uint32_t& k = change_of_[slot];
@@ -1243,9 +1276,15 @@ class CudaResident final : public ResidentParticles {
   // Grows the arrays to hold every changed slot (keeping what they hold; new slots parked),
   // then uploads the changes and applies them, on stream s.
   void upload_changes(cudaStream_t s, double& pinned_seconds) {
-    std::size_t needed = size_;
-    for (const SlotChange& c : changes_)
-      if (c.place) needed = std::max<std::size_t>(needed, std::size_t{c.slot} + 1);
+    // (Millions of changes after a streak surface's refinement: the walks over them in parallel.)
+    const std::size_t needed = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, changes_.size(), 65536), size_,
+        [&](const tbb::blocked_range<std::size_t>& r, std::size_t top) {
+          for (std::size_t i = r.begin(); i != r.end(); ++i)
+            if (changes_[i].place) top = std::max<std::size_t>(top, std::size_t{changes_[i].slot} + 1);
+          return top;
+        },
+        [](std::size_t a, std::size_t b) { return std::max(a, b); });
     if (needed > capacity_) {
       // Doubling from a million: each growth allocates pinned memory, slow to get.
       const std::size_t c = std::max({needed, 2 * capacity_, std::size_t{1} << 20});
@@ -1296,7 +1335,9 @@ class CudaResident final : public ResidentParticles {
     apply_changes_kernel<<<static_cast<unsigned>((m + threads - 1) / threads), threads, 0, s>>>(
         device_changes_.get(), m, size_, device_view());
     check(cudaGetLastError(), "resident particles: apply");
-    for (const SlotChange& c : changes_) change_of_[c.slot] = 0;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) change_of_[changes_[i].slot] = 0;
+    });
     changes_.clear();
   }
 

@@ -1,9 +1,12 @@
 #include "orthofront/advect/resident_particles.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
+#include <vector>
 #include <functional>
 #include <string>
 
@@ -24,16 +27,26 @@ class HostResidentParticles final : public ResidentParticles {
     if (slots.size() != x.size())
       throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
                             std::to_string(slots.size()) + " slots");
-    for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (slots.empty()) return;
+    const std::size_t end = std::size_t{largest_slot(slots)} + 1;
+    if (end > batch_.size()) {
+      const std::size_t old = batch_.size();
+      batch_.resize(std::max(end, old + old / 2));
+      std::fill(batch_.status.begin() + static_cast<std::ptrdiff_t>(old), batch_.status.end(), kParked);
+    }
+    const auto put = [&](std::size_t i) {
       const std::size_t s = slots[i];
-      if (s >= batch_.size()) {
-        const std::size_t old = batch_.size();
-        batch_.resize(std::max(s + 1, old + old / 2));
-        std::fill(batch_.status.begin() + static_cast<std::ptrdiff_t>(old), batch_.status.end(), kParked);
-      }
       for (std::size_t d = 0; d < 3; ++d) batch_.x[d][s] = x[i][d];
       batch_.status[s] = ParticleStatus::moving;
+    };
+    if (slots.size() < kParallelPlacements || repeats_a_slot(slots, end)) {
+      for (std::size_t i = 0; i < slots.size(); ++i) put(i);
+      return;
     }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i != r.end(); ++i) put(i);
+                      });
   }
 
   void park(std::span<const std::uint32_t> slots) override {
@@ -78,6 +91,30 @@ class HostResidentParticles final : public ResidentParticles {
 };
 
 }  // namespace
+
+bool repeats_a_slot(std::span<const std::uint32_t> slots, std::size_t end) {
+  std::vector<std::uint64_t> seen((end + 63) / 64, 0);  // a bit a slot
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, slots.size(), 16384), false,
+      [&](const tbb::blocked_range<std::size_t>& r, bool repeated) {
+        for (std::size_t i = r.begin(); i != r.end() && !repeated; ++i) {
+          const std::uint64_t bit = std::uint64_t{1} << (slots[i] % 64);
+          repeated = (std::atomic_ref(seen[slots[i] / 64]).fetch_or(bit, std::memory_order_relaxed) & bit) != 0;
+        }
+        return repeated;
+      },
+      [](bool a, bool b) { return a || b; });
+}
+
+std::uint32_t largest_slot(std::span<const std::uint32_t> slots) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, slots.size(), 65536), std::uint32_t{0},
+      [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t top) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) top = std::max(top, slots[i]);
+        return top;
+      },
+      [](std::uint32_t a, std::uint32_t b) { return std::max(a, b); });
+}
 
 std::unique_ptr<ResidentParticles> make_host_resident_particles(BatchAdvector& backend) {
   return std::make_unique<HostResidentParticles>(backend);

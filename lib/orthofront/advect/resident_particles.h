@@ -39,6 +39,17 @@ class ResidentParticles {
   virtual View view() const = 0;
 };
 
+/// place() of this many slots or more is done in parallel (the new particles of a streak
+/// surface's refinement: up to millions a call).
+inline constexpr std::size_t kParallelPlacements = std::size_t{1} << 16;
+
+/// Whether a slot appears twice in `slots`, each below `end` (checked in parallel): a place()
+/// that gives a slot twice keeps the last placement, which only a walk in turn finds.
+bool repeats_a_slot(std::span<const std::uint32_t> slots, std::size_t end);
+
+/// The largest of `slots` (not empty), found in parallel.
+std::uint32_t largest_slot(std::span<const std::uint32_t> slots);
+
 /// The set in host memory, moved by `backend`'s advect() (the CPU backend's, and any backend's
 /// without a set of its own). Non-owning: `backend` must outlive it.
 std::unique_ptr<ResidentParticles> make_host_resident_particles(BatchAdvector& backend);
