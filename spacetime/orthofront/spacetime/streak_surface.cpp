@@ -342,6 +342,8 @@ class StreakBuilder {
   std::vector<Vec3> catch_x_;                // the catch-up call's particles, as fresh_slots_
   std::vector<double> catch_from_;
   std::vector<ParticleStatus> catch_status_;
+  std::vector<std::uint32_t> place_slots_;   // land(): the fresh particles still moving, to place
+  std::vector<std::array<double, 3>> place_at_;
   std::size_t catch_up_evaluations_ = 0;
   double catch_up_call_seconds_ = 0;
   std::exception_ptr catch_up_error_;
@@ -791,44 +793,61 @@ bool StreakBuilder::land() {
   // The fresh particles still in the rows take their catch-up positions; those still moving go
   // into the set, the slots of those that stopped are free.
   const auto c1 = Clock::now();
-  std::vector<std::size_t> first(nr + 1, 0);
-  for (std::size_t r = 0; r < nr; ++r) first[r + 1] = first[r] + fresh_at[r].size();
-  const std::size_t n = first[nr];
+  std::size_t n = 0;
+  for (const std::vector<std::uint32_t>& f : fresh_at) n += f.size();
   if (n > 0) {
     std::vector<std::size_t> with;  // only the rows with fresh particles
     for (std::size_t r = 0; r < nr; ++r)
       if (!fresh_at[r].empty()) with.push_back(r);
-    std::vector<std::uint32_t> slots(n);
-    std::vector<std::array<double, 3>> at(n);
-    std::vector<char> moving(n);
-    const auto row = [&](std::size_t r) {
-      for (std::size_t j = 0; j < fresh_at[r].size(); ++j) {
-        Particle& p = rows_[r].p[fresh_at[r][j]];
-        const std::size_t k = first[r] + j, c = fresh_[p.slot()] - 1;
+    // Millions after a late break: the rows in parallel, the moving ones written where a count of
+    // those before them puts them (no pass in turn over them), into arrays kept from the last.
+    const bool parallel = n >= kParallelParticles;
+    std::vector<std::size_t> kept(with.size() + 1, 0);  // [w + 1]: moving fresh particles of with[w]
+    std::vector<std::vector<std::uint32_t>> freed(with.size());
+    for_each_row(with.size(), [&](std::size_t w) {
+      const std::size_t r = with[w];
+      for (const std::uint32_t i : fresh_at[r]) {
+        Particle& p = rows_[r].p[i];
+        const std::size_t c = fresh_[p.slot()] - 1;
         p.x = catch_x_[c];
         p.set_status(catch_status_[c]);
-        slots[k] = p.slot();
-        at[k] = {p.x.x(), p.x.y(), p.x.z()};
-        moving[k] = p.alive();
-        if (p.alive()) continue;
+        if (p.alive()) {
+          ++kept[w + 1];
+          continue;
+        }
         count_stop(p.status(), stopped[r]);
+        freed[w].push_back(p.slot());
         p.set_slot(kNoSlot);
       }
-    };
-    for_each_row(with.size(), [&](std::size_t w) { row(with[w]); }, n >= kParallelParticles);
-    std::size_t placed = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (!moving[k]) {
-        free_slots_.push_back(slots[k]);
-        continue;
-      }
-      slots[placed] = slots[k];
-      at[placed++] = at[k];
+    }, parallel);
+    for (std::size_t w = 0; w < with.size(); ++w) kept[w + 1] += kept[w];
+    const std::size_t placed = kept.back();
+    if (place_slots_.size() < placed) {
+      place_slots_.resize(placed);
+      place_at_.resize(placed);
     }
-    resident_->place(std::span(slots.data(), placed), std::span(at.data(), placed));
+    for_each_row(with.size(), [&](std::size_t w) {
+      const std::size_t r = with[w];
+      std::size_t k = kept[w];
+      for (const std::uint32_t i : fresh_at[r]) {
+        const Particle& p = rows_[r].p[i];
+        if (!p.alive()) continue;
+        place_slots_[k] = p.slot();
+        place_at_[k++] = {p.x.x(), p.x.y(), p.x.z()};
+      }
+    }, parallel);
+    for (const std::vector<std::uint32_t>& f : freed) free_slots_.insert(free_slots_.end(), f.begin(), f.end());
+    resident_->place(std::span(place_slots_.data(), placed), std::span(place_at_.data(), placed));
     moved += n;
   }
-  for (const std::uint32_t slot : fresh_slots_) fresh_[slot] = 0;
+  if (fresh_slots_.size() >= kParallelParticles) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh_slots_.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t k = range.begin(); k != range.end(); ++k) fresh_[fresh_slots_[k]] = 0;
+                      });
+  } else {
+    for (const std::uint32_t slot : fresh_slots_) fresh_[slot] = 0;
+  }
   fresh_slots_.clear();
   free_slots_.insert(free_slots_.end(), flight_freed_.begin(), flight_freed_.end());
   flight_freed_.clear();
