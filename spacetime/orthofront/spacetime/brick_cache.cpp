@@ -68,9 +68,6 @@ BrickCache::Handle& BrickCache::Handle::operator=(Handle&& other) noexcept {
   }
   return *this;
 }
-BrickCache::Handle::~Handle() {
-  if (cache_) cache_->release(key_);
-}
 
 BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
     : series_(series), options_(options) {

@@ -84,7 +84,9 @@ class BrickCache {
     Handle& operator=(Handle&& other) noexcept;
     Handle(const Handle&) = delete;
     Handle& operator=(const Handle&) = delete;
-    ~Handle();
+    ~Handle() {
+      if (cache_) cache_->release(key_);  // inline: most handles are empty (moved from)
+    }
     const float* data() const { return data_; }
     BrickKey key() const { return key_; }
     explicit operator bool() const { return cache_ != nullptr; }

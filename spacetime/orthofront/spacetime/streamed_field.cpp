@@ -86,7 +86,7 @@ std::string StreamedField::error() const {
 }
 
 const float* StreamedField::unit(std::size_t step, std::size_t brick, bool resident_only,
-                                 BrickCache::Handle& local) const {
+                                 std::vector<BrickCache::Handle>& local) const {
   const std::size_t index = step * layout_.bricks() + brick;
   if (const float* p = table_[index].load(std::memory_order_acquire)) return p;
   if (resident_only || failed_.load(std::memory_order_relaxed)) return nullptr;
@@ -97,7 +97,7 @@ const float* StreamedField::unit(std::size_t step, std::size_t brick, bool resid
     const float* p = h.data();
     std::lock_guard lock(extra_mutex_);
     if ((extra_pins_.size() + 1) * cache_.unit_bytes() * 4 > cache_.budget()) {
-      local = std::move(h);
+      local.push_back(std::move(h));
       return p;
     }
     table_[index].store(p, std::memory_order_release);
@@ -140,7 +140,7 @@ FieldStatus StreamedField::evaluate(const Vec3& x, double t, Vec3& v, Mat3* J, V
   const std::size_t sy = stride_[1], sz = stride_[2];
   Vec3 values[2];
   Mat3 jacobians[2];
-  BrickCache::Handle held[16];  // slow-path pins of this evaluation only (rarely used)
+  std::vector<BrickCache::Handle> held;  // slow-path pins of this evaluation only (rarely used)
   for (int s = 0; s < 2; ++s) {
     const std::size_t step = k + static_cast<std::size_t>(s);
     FieldStatus status = FieldStatus::inside;
@@ -157,7 +157,7 @@ FieldStatus StreamedField::evaluate(const Vec3& x, double t, Vec3& v, Mat3* J, V
     };
     if (!straddles) {
       const float* data =
-          unit(step, layout_.brick_index(brick[0], brick[1], brick[2]), resident_only, held[8 * s]);
+          unit(step, layout_.brick_index(brick[0], brick[1], brick[2]), resident_only, held);
       if (data == nullptr) return FieldStatus::no_data;
       const float* p = data + static_cast<std::size_t>(local[0]) * Components +
                        static_cast<std::size_t>(local[1]) * sy +
@@ -178,7 +178,7 @@ FieldStatus StreamedField::evaluate(const Vec3& x, double t, Vec3& v, Mat3* J, V
           l[a] = i - b[a] * layout_.size[ua];
         }
         const float* data =
-            unit(step, layout_.brick_index(b[0], b[1], b[2]), resident_only, held[8 * s + corner]);
+            unit(step, layout_.brick_index(b[0], b[1], b[2]), resident_only, held);
         if (data == nullptr) return FieldStatus::no_data;
         corners[corner] = data + static_cast<std::size_t>(l[0]) * Components +
                           static_cast<std::size_t>(l[1]) * sy + static_cast<std::size_t>(l[2]) * sz;

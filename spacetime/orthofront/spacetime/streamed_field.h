@@ -88,9 +88,10 @@ class StreamedField final : public UnsteadyField {
   // Pointer to the floats of unit (step, brick): from the table, or pinned now (slow path);
   // nullptr on error or, with resident_only, when not pinned.
   // Slow-path pins are kept until the next update while they take at most a quarter of the
-  // budget; beyond that `local` holds the pin for the one evaluation.
+  // budget; beyond that `local` takes the pin for the one evaluation (empty until then: nothing
+  // to build or tear down on the fast path, which is every evaluation of a well-predicted band).
   const float* unit(std::size_t step, std::size_t brick, bool resident_only,
-                    BrickCache::Handle& local) const;
+                    std::vector<BrickCache::Handle>& local) const;
   void publish(std::vector<BrickCache::Handle>&& pins);
   // Releases the pins of units not in `keep` (sorted by step, then brick) and the slow path's,
   // so the budget can take the next band.
