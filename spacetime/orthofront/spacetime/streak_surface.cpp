@@ -89,6 +89,8 @@ class LengthLimit {
     const double q = d.squaredNorm();
     return q < below_ || (q <= above_ && std::sqrt(q) <= limit_);
   }
+  /// A square above this has a root above the limit, whatever the roundings.
+  double above_squared() const { return above_; }
 
  private:
   double limit_, below_, above_;
@@ -268,7 +270,8 @@ class StreakBuilder {
   // the particles `added`.
   std::vector<Insert> inserts_along(std::size_t r, double long_edge, const RowChange& change) const;
   // The row to insert between rows r and r + 1 when they are more than `long_edge` apart;
-  // measures their distance into `gap` when it is not known.
+  // measures their distance into `gap` when it is not known (where they are that far apart, a
+  // distance beyond long_edge, not necessarily the largest).
   std::optional<Row> row_between(std::size_t r, double long_edge, double& gap) const;
   // The distance of rows r and r + 1 after particles were added to them (`gap`: before).
   double grown_gap(std::size_t r, double gap, const RowChange& a, const RowChange& b) const;
@@ -287,7 +290,11 @@ class StreakBuilder {
   void join_finisher();
   // Rethrows what the finished frame's sink threw; files its record; keeps its mesh as spare.
   void collect_frame();
-  double row_distance(const Row& a, const Row& b) const;
+  // The largest distance between the particles of rows a and b that share a seed parameter;
+  // or, as soon as one is longer than `stop` for certain, that one (callers only compare the
+  // result with stop's limit: most pairs of a stretching surface's rows are either close or
+  // far apart early on).
+  double row_distance(const Row& a, const Row& b, const LengthLimit& stop) const;
   // The first particle of p (a row) that coarsening removes, looking from index `from` (>= 1)
   // on; p.size() - 1 or more where none does.
   std::size_t first_removable(const std::vector<Particle>& p, std::size_t from) const;
@@ -867,9 +874,9 @@ std::size_t StreakBuilder::first_removable(const std::vector<Particle>& p, std::
   return i;
 }
 
-// Largest distance between the particles of two rows that share a seed parameter.
-double StreakBuilder::row_distance(const Row& a, const Row& b) const {
+double StreakBuilder::row_distance(const Row& a, const Row& b, const LengthLimit& stop) const {
   // A merge by s without branches on it (rows drift apart in s, so they would be mispredicted).
+  const double beyond = stop.above_squared();
   double d = 0;
   std::size_t i = 0, k = 0;
   const std::size_t na = a.p.size(), nb = b.p.size();
@@ -879,6 +886,7 @@ double StreakBuilder::row_distance(const Row& a, const Row& b) const {
     const double q = (pa.x - pb.x).squaredNorm();
     const bool pair = pa.s == pb.s && pa.alive() && pb.alive();
     d = pair && q > d ? q : d;
+    if (d > beyond) break;
     i += pa.s <= pb.s;
     k += pb.s <= pa.s;
   }
@@ -1141,7 +1149,8 @@ std::optional<Row> StreakBuilder::row_between(std::size_t r, double long_edge, d
   const Row& a = rows_[r];
   const Row& b = rows_[r + 1];
   if (b.tau - a.tau <= min_dtau_) return std::nullopt;
-  if (gap == kUnmeasured) gap = row_distance(a, b);
+  // (Beyond long_edge the measure stops: the pair is split, and its distance dropped.)
+  if (gap == kUnmeasured) gap = row_distance(a, b, LengthLimit(long_edge));
   if (gap <= long_edge) return std::nullopt;
   Row row;
   row.tau = 0.5 * (a.tau + b.tau);
@@ -1230,7 +1239,7 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
   if (rows_.size() > 2) {
     std::vector<double> next_distance(rows_.size() - 1);  // [r]: rows r and r + 1
     for_each_row(next_distance.size(), [&](std::size_t r) {
-      next_distance[r] = gap[r] != kUnmeasured ? gap[r] : row_distance(rows_[r], rows_[r + 1]);
+      next_distance[r] = gap[r] != kUnmeasured ? gap[r] : row_distance(rows_[r], rows_[r + 1], short_limit);
     });
     std::vector<Row> kept;
     kept.reserve(rows_.size());
@@ -1240,8 +1249,8 @@ void StreakBuilder::coarsen(std::vector<double>& gap) {
       const Row& a = kept.back();
       const Row& m = rows_[r];
       const Row& b = rows_[r + 1];
-      const double am = previous_kept ? next_distance[r - 1] : row_distance(a, m);
-      if (am < short_edge && next_distance[r] < short_edge && row_distance(a, b) < long_edge) {
+      const double am = previous_kept ? next_distance[r - 1] : row_distance(a, m, short_limit);
+      if (am < short_edge && next_distance[r] < short_edge && row_distance(a, b, long_limit) < long_edge) {
         ++report_.rows_removed;
         for (Particle& p : rows_[r].p) leave(p);
         previous_kept = false;
