@@ -291,9 +291,8 @@ class StreakBuilder {
   // Rethrows what the finished frame's sink threw; files its record; keeps its mesh as spare.
   void collect_frame();
   // The largest distance between the particles of rows a and b that share a seed parameter;
-  // or, as soon as one is longer than `stop` for certain, that one (callers only compare the
-  // result with stop's limit: most pairs of a stretching surface's rows are either close or
-  // far apart early on).
+  // or, as soon as one is longer than `stop` for certain, that one: callers only compare the
+  // result with stop's limit, and rows that far apart are found out at their first pair beyond.
   double row_distance(const Row& a, const Row& b, const LengthLimit& stop) const;
   // The first particle of p (a row) that coarsening removes, looking from index `from` (>= 1)
   // on; p.size() - 1 or more where none does.
