@@ -846,14 +846,11 @@ bool StreakBuilder::land() {
     resident_->place(std::span(place_slots_.data(), placed), std::span(place_at_.data(), placed));
     moved += n;
   }
-  if (fresh_slots_.size() >= kParallelParticles) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh_slots_.size(), 16384),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t k = range.begin(); k != range.end(); ++k) fresh_[fresh_slots_[k]] = 0;
-                      });
-  } else {
-    for (const std::uint32_t slot : fresh_slots_) fresh_[slot] = 0;
-  }
+  // (A range below one grain runs on this thread.)
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh_slots_.size(), 16384),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) fresh_[fresh_slots_[k]] = 0;
+                    });
   fresh_slots_.clear();
   free_slots_.insert(free_slots_.end(), flight_freed_.begin(), flight_freed_.end());
   flight_freed_.clear();
