@@ -275,12 +275,14 @@ TEST_CASE("quality: degenerate faces", "[quality]") {
   CHECK(r.boundary_edges == 3);  // no self-loop edge
   CHECK(r.measured_quads == 0);  // no angles for a zero-length edge
   CHECK(total(r.quad_angles) == 0);
+  CHECK(r.longest_edge == std::sqrt(2.0));  // c to a: a face left out of the shapes still counts
 
   Mesh line;
   line.add_triangle(add(line, 0, 0), add(line, 1, 0), add(line, 2, 0));  // zero area
   line.add_triangle(add(line, 5, 0), add(line, 6, 0), add(line, 5, 1));  // fine
   const auto rl = measure_quality(line);
   CHECK(rl.degenerate_faces == 1);
+  CHECK(rl.longest_edge == 2.0);  // the zero-area triangle's
   CHECK(rl.triangle_min_angle_median == Approx(22.5));  // min angles 0° and 45°
 
   // A straight angle at a corner still leaves the quad its area (normal from the diagonals).
@@ -390,13 +392,14 @@ TEST_CASE("quality: order statistics and means of over a million values (the par
   {
     const Mesh m = grid(600, 450, jitter);  // 270,000 quads: 1,080,000 corners
     std::vector<double> dev, spread;
-    double dev_sum = 0, spread_sum = 0;
+    double dev_sum = 0, spread_sum = 0, longest = 0;
     for (const Face& f : m.faces) {
       std::array<Vec3, 4> e;
       double length[4], avg = 0;
       for (int i = 0; i < 4; ++i) {
         e[i] = m.positions[f.v[(i + 1) % 4]] - m.positions[f.v[i]];
         length[i] = e[i].norm();
+        longest = std::max(longest, length[i]);
         avg += 0.25 * length[i];
       }
       for (int i = 0; i < 4; ++i) {
@@ -413,6 +416,7 @@ TEST_CASE("quality: order statistics and means of over a million values (the par
     CHECK(r.edge_spread_p90 == Approx(quantile(spread, 0.9)).epsilon(1e-12));
     CHECK(r.quad_angle_mean_abs_dev == Approx(dev_sum / static_cast<double>(dev.size())).epsilon(1e-12));
     CHECK(r.edge_spread_mean == Approx(spread_sum / static_cast<double>(spread.size())).epsilon(1e-12));
+    CHECK(r.longest_edge == longest);
   }
   {
     // 1,100,000 triangles: two per cell.

@@ -62,6 +62,7 @@ nlohmann::json to_json(const QualityReport& q) {
       {"t_junctions", q.t_junctions},
       {"degenerate_faces", q.degenerate_faces},
       {"boundary_edges", q.boundary_edges},
+      {"longest_edge", q.longest_edge},
       {"histograms",
        {{"quad_angles_deg", to_json(q.quad_angles)},
         {"edge_ratio", to_json(q.edge_ratio)},

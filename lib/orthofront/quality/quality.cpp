@@ -552,7 +552,7 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
     struct Shapes {
       Histogram quad_angles, edge_ratio, triangle_min_angle;
       std::span<double> angle_dev, spread, tri_min;  // the block's values, in face order
-      double angle_dev_sum = 0, spread_sum = 0;
+      double angle_dev_sum = 0, spread_sum = 0, longest_edge = 0;
       std::size_t measured_quads = 0, measured_triangles = 0, within_10 = 0, below_10 = 0;
     };
     constexpr std::size_t kShapeBlock = 16384;
@@ -582,6 +582,7 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
         for (int i = 0; i < n; ++i) {
           e[i] = p[face.v[(i + 1) % n]] - p[face.v[i]];
           length[i] = e[i].norm();
+          out.longest_edge = std::max(out.longest_edge, length[i]);
           measurable = measurable && length[i] > 0;
         }
         if (!measurable) continue;
@@ -628,6 +629,7 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
       below_10 += block.below_10;
       angle_dev_sum += block.angle_dev_sum;
       spread_sum += block.spread_sum;
+      r.longest_edge = std::max(r.longest_edge, block.longest_edge);
       add_counts(r.quad_angles, block.quad_angles);
       add_counts(r.edge_ratio, block.edge_ratio);
       add_counts(r.triangle_min_angle, block.triangle_min_angle);

@@ -43,6 +43,7 @@ struct QualityReport {
   std::size_t t_junctions = 0;            ///< boundary vertices lying inside another boundary edge
   std::size_t degenerate_faces = 0;       ///< repeated index or (near) zero area
   std::size_t boundary_edges = 0;
+  double longest_edge = 0;                ///< of any face, degenerate ones included
   Histogram quad_angles;                  ///< degrees; 4 * measured_quads values
   Histogram edge_ratio;                   ///< 1 - l_i / l_avg; 4 * measured_quads values
   Histogram triangle_min_angle;           ///< degrees; measured_triangles values

@@ -1303,33 +1303,46 @@ void StreakBuilder::emit(int index) {
   frame.rows = rows_.size();
   frame.mesh = std::move(spare_mesh_);
   Mesh& mesh = frame.mesh;
-  // Vertices: the live particles, row after row. Each row's first vertex index comes from a
-  // count of the live particles before it, so the rows fill the arrays in parallel.
+  // Vertices: the live particles, row after row; faces: the strips between neighbouring rows, in
+  // row order. Both are counted first (a row's live particles numbered from 0, and the faces of
+  // the strips, which need only which particles live), so that every array is sized at once,
+  // side by side, and the rows and strips then fill them in parallel at offsets counted before.
   const std::size_t nr = rows_.size();
+  const std::size_t strips = nr > 0 ? nr - 1 : 0;
+  std::vector<std::vector<std::int32_t>> vertex(nr);  // [r][i]: particle i's vertex, -1: stopped
   std::vector<std::size_t> first(nr + 1, 0);
   for_each_row(nr, [&](std::size_t r) {
-    first[r + 1] = static_cast<std::size_t>(
-        std::count_if(rows_[r].p.begin(), rows_[r].p.end(), [](const Particle& p) { return p.alive(); }));
+    const std::vector<Particle>& p = rows_[r].p;
+    vertex[r].resize(p.size());
+    std::int32_t v = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) vertex[r][i] = p[i].alive() ? v++ : -1;
+    first[r + 1] = static_cast<std::size_t>(v);
+  });
+  std::vector<std::size_t> first_face(strips + 1, 0);
+  for_each_row(strips, [&](std::size_t r) {
+    std::size_t n = 0;
+    for_each_strip_face(r, vertex[r], vertex[r + 1], [&n](const Face&) { ++n; });
+    first_face[r + 1] = n;
   });
   std::size_t dead = 0;
   for (std::size_t r = 0; r < nr; ++r) {
     dead += rows_[r].p.size() - first[r + 1];
     first[r + 1] += first[r];
   }
+  for (std::size_t r = 0; r < strips; ++r) first_face[r + 1] += first_face[r];
   const std::size_t nv = first[nr];
   // Side by side: an array that must grow is zero-filled anew (see grow()), one thread each.
   tbb::parallel_invoke([&] { grow(mesh.positions, nv); }, [&] { grow(mesh.s, nv); },
                        [&] { grow(mesh.release_time, nv); }, [&] { grow(mesh.age, nv); },
-                       [&] { grow(mesh.speed, nv); }, [&] { grow(mesh.particle_id, nv); });
-  std::vector<std::vector<std::int32_t>> vertex(nr);
+                       [&] { grow(mesh.speed, nv); }, [&] { grow(mesh.particle_id, nv); },
+                       [&] { grow(mesh.faces, first_face.back()); });
   for_each_row(nr, [&](std::size_t r) {
     const Row& row = rows_[r];
-    vertex[r].assign(row.p.size(), -1);
-    std::size_t v = first[r];
+    const auto offset = static_cast<std::int32_t>(first[r]);
     for (std::size_t i = 0; i < row.p.size(); ++i) {
       const Particle& p = row.p[i];
       if (!p.alive()) continue;
-      vertex[r][i] = static_cast<std::int32_t>(v);
+      const auto v = static_cast<std::size_t>(vertex[r][i] += offset);
       mesh.positions[v] = p.x;
       mesh.s[v] = p.s;
       mesh.release_time[v] = row.tau;
@@ -1339,20 +1352,8 @@ void StreakBuilder::emit(int index) {
       if (flow_.dimension() == 2) u.z() = 0;
       mesh.speed[v] = u.norm();
       mesh.particle_id[v] = p.id;
-      ++v;
     }
   });
-  // Strips between neighbouring rows in row order: each strip's faces are counted, then
-  // written in place (no list per strip to copy from).
-  const std::size_t strips = nr > 0 ? nr - 1 : 0;
-  std::vector<std::size_t> first_face(strips + 1, 0);
-  for_each_row(strips, [&](std::size_t r) {
-    std::size_t n = 0;
-    for_each_strip_face(r, vertex[r], vertex[r + 1], [&n](const Face&) { ++n; });
-    first_face[r + 1] = n;
-  });
-  for (std::size_t r = 0; r < strips; ++r) first_face[r + 1] += first_face[r];
-  grow(mesh.faces, first_face.back());
   for_each_row(strips, [&](std::size_t r) {
     Face* out = mesh.faces.data() + first_face[r];
     for_each_strip_face(r, vertex[r], vertex[r + 1], [&out](const Face& f) { *out++ = f; });
@@ -1386,19 +1387,7 @@ void StreakBuilder::finish_frame(double built) {
     Mesh& m = finishing_.mesh;
     finishing_.quality = measure_quality(m);
     finishing_record_.quality = finishing_.quality;
-    finishing_record_.max_edge = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, m.faces.size(), 4096), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& range, double longest) {
-          for (std::size_t k = range.begin(); k != range.end(); ++k) {
-            const Face& f = m.faces[k];
-            for (int c = 0; c < f.size; ++c)
-              longest = std::max(longest, (m.positions[static_cast<std::size_t>(f.v[c])] -
-                                           m.positions[static_cast<std::size_t>(f.v[(c + 1) % f.size])])
-                                              .norm());
-          }
-          return longest;
-        },
-        [](double a, double b) { return std::max(a, b); });
+    finishing_record_.max_edge = finishing_.quality.longest_edge;
     if (sink_) sink_(finishing_);
   } catch (...) {
     finisher_error_ = std::current_exception();
