@@ -1132,12 +1132,10 @@ class CudaResident final : public ResidentParticles {
   }
 
   void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
-    if (slots.size() != x.size())
-      throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
-                            std::to_string(slots.size()) + " slots");
-    if (slots.size() >= kParallelPlacements) {
+    check_placement(slots, x);
+    if (slots.size() >= kParallelPlacements) {  // (largest_slot is a pass of its own)
       const std::size_t end = std::size_t{largest_slot(slots)} + 1;
-      if (!repeats_a_slot(slots, end)) {
+      if (placeable_in_parallel(slots, end)) {
         place_apart(slots, x, end);
         return;
       }

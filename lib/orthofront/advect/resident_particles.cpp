@@ -24,9 +24,7 @@ class HostResidentParticles final : public ResidentParticles {
   explicit HostResidentParticles(BatchAdvector& backend) : backend_(backend) {}
 
   void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
-    if (slots.size() != x.size())
-      throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
-                            std::to_string(slots.size()) + " slots");
+    check_placement(slots, x);
     if (slots.empty()) return;
     const std::size_t end = std::size_t{largest_slot(slots)} + 1;
     if (end > batch_.size()) {
@@ -39,7 +37,7 @@ class HostResidentParticles final : public ResidentParticles {
       for (std::size_t d = 0; d < 3; ++d) batch_.x[d][s] = x[i][d];
       batch_.status[s] = ParticleStatus::moving;
     };
-    if (slots.size() < kParallelPlacements || repeats_a_slot(slots, end)) {
+    if (!placeable_in_parallel(slots, end)) {
       for (std::size_t i = 0; i < slots.size(); ++i) put(i);
       return;
     }
@@ -92,9 +90,16 @@ class HostResidentParticles final : public ResidentParticles {
 
 }  // namespace
 
-bool repeats_a_slot(std::span<const std::uint32_t> slots, std::size_t end) {
+void check_placement(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) {
+  if (slots.size() != x.size())
+    throw InvalidArgument("resident particles: " + std::to_string(x.size()) + " positions for " +
+                          std::to_string(slots.size()) + " slots");
+}
+
+bool placeable_in_parallel(std::span<const std::uint32_t> slots, std::size_t end) {
+  if (slots.size() < kParallelPlacements) return false;
   std::vector<std::uint64_t> seen((end + 63) / 64, 0);  // a bit a slot
-  return tbb::parallel_reduce(
+  return !tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, slots.size(), 16384), false,
       [&](const tbb::blocked_range<std::size_t>& r, bool repeated) {
         for (std::size_t i = r.begin(); i != r.end() && !repeated; ++i) {

@@ -43,9 +43,13 @@ class ResidentParticles {
 /// surface's refinement: up to millions a call).
 inline constexpr std::size_t kParallelPlacements = std::size_t{1} << 16;
 
-/// Whether a slot appears twice in `slots`, each below `end` (checked in parallel): a place()
-/// that gives a slot twice keeps the last placement, which only a walk in turn finds.
-bool repeats_a_slot(std::span<const std::uint32_t> slots, std::size_t end);
+/// place()'s argument check, the same for every set: a position for each slot.
+void check_placement(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x);
+
+/// Whether place() may write `slots` (each below `end`) in parallel: kParallelPlacements of them
+/// or more, none twice (checked in parallel; a slot given twice keeps its last placement, which
+/// only a walk in turn finds).
+bool placeable_in_parallel(std::span<const std::uint32_t> slots, std::size_t end);
 
 /// The largest of `slots` (not empty), found in parallel.
 std::uint32_t largest_slot(std::span<const std::uint32_t> slots);
