@@ -1133,7 +1133,7 @@ class CudaResident final : public ResidentParticles {
 
   void place(std::span<const std::uint32_t> slots, std::span<const std::array<double, 3>> x) override {
     check_placement(slots, x);
-    if (slots.size() >= kParallelPlacements) {  // (largest_slot is a pass of its own)
+    if (slots.size() >= kParallelPlacements) {  // (a smaller call takes no pass for its largest slot)
       const std::size_t end = std::size_t{largest_slot(slots)} + 1;
       if (placeable_in_parallel(slots, end)) {
         place_apart(slots, x, end);

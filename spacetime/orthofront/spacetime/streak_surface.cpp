@@ -3,7 +3,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
@@ -1384,8 +1383,7 @@ void StreakBuilder::emit(int index) {
 void StreakBuilder::finish_frame(double built) {
   const auto t1 = Clock::now();
   try {
-    Mesh& m = finishing_.mesh;
-    finishing_.quality = measure_quality(m);
+    finishing_.quality = measure_quality(finishing_.mesh);
     finishing_record_.quality = finishing_.quality;
     finishing_record_.max_edge = finishing_.quality.longest_edge;
     if (sink_) sink_(finishing_);
