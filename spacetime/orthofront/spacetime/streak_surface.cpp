@@ -1308,7 +1308,9 @@ void StreakBuilder::emit(int index) {
   // side by side, and the rows and strips then fill them in parallel at offsets counted before.
   const std::size_t nr = rows_.size();
   const std::size_t strips = nr > 0 ? nr - 1 : 0;
-  std::vector<std::vector<std::int32_t>> vertex(nr);  // [r][i]: particle i's vertex, -1: stopped
+  // [r][i]: particle i's vertex, -1 where it stopped (its number within the row until the vertex
+  // pass below adds the row's first vertex).
+  std::vector<std::vector<std::int32_t>> vertex(nr);
   std::vector<std::size_t> first(nr + 1, 0);
   for_each_row(nr, [&](std::size_t r) {
     const std::vector<Particle>& p = rows_[r].p;
