@@ -291,6 +291,14 @@ TEST_CASE("streak surface: streamed runs give the frames of a resident series, b
       runs.push_back(std::move(frames));
       REQUIRE(reports.back().complete);
       REQUIRE(reports.back().streamed);
+      // The reader runs ahead as far as the run needs, never past the last frame's interval
+      // (the series goes on to t = 5).
+      const std::vector<unsigned>& reads = reports.back().cache.units_read_per_step;
+      REQUIRE(reads.size() == series.step_count());
+      for (std::size_t k = 1; k < reads.size(); ++k) {
+        INFO("budget " << budget << ", step " << k);
+        if (series.time(k - 1) > o.frames.back()) CHECK(reads[k] == 0);
+      }
     }
     INFO(to_string(insertion));
     for (std::size_t k = 1; k < budgets.size(); ++k) {
