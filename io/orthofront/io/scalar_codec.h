@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <type_traits>
 
 namespace orthofront::io::detail {
 
@@ -70,57 +71,51 @@ void store_le(std::string& out, T value) {
   out.append(reinterpret_cast<const char*>(buffer), sizeof(T));
 }
 
-/// Reads one value of `type` as a double: exact for every type but 64-bit integers above 2^53.
-inline double load_real(ScalarType type, const unsigned char* bytes, bool little_endian) {
+/// Calls f(T{}) with the C++ type T that stores `type`, and returns what it returns.
+template <class F>
+decltype(auto) with_scalar_type(ScalarType type, F&& f) {
   switch (type) {
     case ScalarType::kInt8:
-      return load<std::int8_t>(bytes, little_endian);
+      return f(std::int8_t{});
     case ScalarType::kUInt8:
-      return load<std::uint8_t>(bytes, little_endian);
+      return f(std::uint8_t{});
     case ScalarType::kInt16:
-      return load<std::int16_t>(bytes, little_endian);
+      return f(std::int16_t{});
     case ScalarType::kUInt16:
-      return load<std::uint16_t>(bytes, little_endian);
+      return f(std::uint16_t{});
     case ScalarType::kInt32:
-      return load<std::int32_t>(bytes, little_endian);
+      return f(std::int32_t{});
     case ScalarType::kUInt32:
-      return load<std::uint32_t>(bytes, little_endian);
+      return f(std::uint32_t{});
     case ScalarType::kInt64:
-      return static_cast<double>(load<std::int64_t>(bytes, little_endian));
+      return f(std::int64_t{});
     case ScalarType::kUInt64:
-      return static_cast<double>(load<std::uint64_t>(bytes, little_endian));
+      return f(std::uint64_t{});
     case ScalarType::kFloat32:
-      return load<float>(bytes, little_endian);
-    case ScalarType::kFloat64:
-      return load<double>(bytes, little_endian);
-  }
-  return 0.0;
-}
-
-/// Reads one value of an integer `type` as int64 (UInt64 above 2^63 wraps).
-inline std::int64_t load_integer(ScalarType type, const unsigned char* bytes, bool little_endian) {
-  switch (type) {
-    case ScalarType::kInt8:
-      return load<std::int8_t>(bytes, little_endian);
-    case ScalarType::kUInt8:
-      return load<std::uint8_t>(bytes, little_endian);
-    case ScalarType::kInt16:
-      return load<std::int16_t>(bytes, little_endian);
-    case ScalarType::kUInt16:
-      return load<std::uint16_t>(bytes, little_endian);
-    case ScalarType::kInt32:
-      return load<std::int32_t>(bytes, little_endian);
-    case ScalarType::kUInt32:
-      return load<std::uint32_t>(bytes, little_endian);
-    case ScalarType::kInt64:
-      return load<std::int64_t>(bytes, little_endian);
-    case ScalarType::kUInt64:
-      return static_cast<std::int64_t>(load<std::uint64_t>(bytes, little_endian));
-    case ScalarType::kFloat32:
+      return f(float{});
     case ScalarType::kFloat64:
       break;
   }
-  return 0;
+  return f(double{});
+}
+
+/// Reads one value of `type` as a double: exact for every type but 64-bit integers above 2^53.
+inline double load_real(ScalarType type, const unsigned char* bytes, bool little_endian) {
+  return with_scalar_type(type, [&](auto stored) {
+    return static_cast<double>(load<decltype(stored)>(bytes, little_endian));
+  });
+}
+
+/// Reads one value of an integer `type` as int64 (UInt64 above 2^63 wraps); 0 for a real type.
+inline std::int64_t load_integer(ScalarType type, const unsigned char* bytes, bool little_endian) {
+  return with_scalar_type(type, [&](auto stored) -> std::int64_t {
+    using T = decltype(stored);
+    if constexpr (std::is_integral_v<T>) {
+      return static_cast<std::int64_t>(load<T>(bytes, little_endian));
+    } else {
+      return 0;
+    }
+  });
 }
 
 }  // namespace orthofront::io::detail

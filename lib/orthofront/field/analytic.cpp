@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/abc_flow.h"
 #include "orthofront/field/field_registry.h"
 #include "orthofront/field/field_spec.h"
 
@@ -168,25 +169,6 @@ struct Diagonal {
   }
 };
 
-// Arnold-Beltrami-Childress flow.
-struct Abc {
-  double a;
-  double b;
-  double c;
-  void velocity(const Vec3& x, Vec3& v) const {
-    v = Vec3(a * std::sin(x[2]) + c * std::cos(x[1]), b * std::sin(x[0]) + a * std::cos(x[2]),
-             c * std::sin(x[1]) + b * std::cos(x[0]));
-  }
-  void velocity_jacobian(const Vec3& x, Vec3& v, Mat3& J) const {
-    const double sx = std::sin(x[0]), cx = std::cos(x[0]);
-    const double sy = std::sin(x[1]), cy = std::cos(x[1]);
-    const double sz = std::sin(x[2]), cz = std::cos(x[2]);
-    v = Vec3(a * sz + c * cy, b * sx + a * cz, c * sy + b * cx);
-    J << 0, -c * sy, a * cz,  //
-        b * cx, 0, -a * sz,   //
-        -b * sx, c * cy, 0;
-  }
-};
 
 // --- registry --------------------------------------------------------------------------------
 
@@ -286,7 +268,7 @@ const std::vector<FieldSpec>& registry() {
         {"b", std::sqrt(2.0), "coefficient B"},
         {"c", 1, "coefficient C"}},
        [](std::span<const double> p, std::string d) {
-         return wrap(Abc{p[0], p[1], p[2]},
+         return wrap(AbcFlow{p[0], p[1], p[2]},
                      make_box(-2 * kPi, 4 * kPi, -2 * kPi, 4 * kPi, -2 * kPi, 4 * kPi),
                      std::move(d));
        }},

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "orthofront/error.h"
+#include "orthofront/field/abc_flow.h"
 #include "orthofront/field/field_registry.h"
 #include "orthofront/field/field_spec.h"
 
@@ -137,21 +138,12 @@ struct UnsteadyAbc {
     return amp * (decay * e * std::sin(omega * t) + (1.0 - e) * omega * std::cos(omega * t));
   }
   void velocity(const Vec3& x, double t, Vec3& v) const {
-    const double a = coefficient(t);
-    v = Vec3(a * std::sin(x[2]) + c * std::cos(x[1]), b * std::sin(x[0]) + a * std::cos(x[2]),
-             c * std::sin(x[1]) + b * std::cos(x[0]));
+    AbcFlow{coefficient(t), b, c}.velocity(x, v);
   }
   void velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J, Vec3& dvdt) const {
-    const double a = coefficient(t);
-    const double sx = std::sin(x[0]), cx = std::cos(x[0]);
-    const double sy = std::sin(x[1]), cy = std::cos(x[1]);
-    const double sz = std::sin(x[2]), cz = std::cos(x[2]);
-    v = Vec3(a * sz + c * cy, b * sx + a * cz, c * sy + b * cx);
-    J << 0, -c * sy, a * cz,  //
-        b * cx, 0, -a * sz,   //
-        -b * sx, c * cy, 0;
+    AbcFlow{coefficient(t), b, c}.velocity_jacobian(x, v, J);
     const double at = coefficient_rate(t);
-    dvdt = Vec3(at * sz, at * cz, 0.0);
+    dvdt = Vec3(at * std::sin(x[2]), at * std::cos(x[2]), 0.0);
   }
 };
 
