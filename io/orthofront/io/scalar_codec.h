@@ -96,7 +96,7 @@ decltype(auto) with_scalar_type(ScalarType type, F&& f) {
     case ScalarType::kFloat64:
       break;
   }
-  return f(double{});
+  return f(double{});  // kFloat64 (the switch lists every type)
 }
 
 /// Reads one value of `type` as a double: exact for every type but 64-bit integers above 2^53.
