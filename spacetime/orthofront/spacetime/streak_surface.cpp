@@ -1604,8 +1604,9 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     // cache stops where its prefetch share is full. Intervals take uneven time (a frame, a large
     // refinement), and a reader kept a few steps ahead idles through the slow ones and holds the
     // run up in the fast ones after them (256^3 steps, three ahead: 4.4-5.0 s waiting for data).
-    // Asked again where the interval reaches another step (what is asked for stays wanted until
-    // a later band's loads need room; the request walks every unit it names).
+    // Asked again only where the interval reaches another step: the request walks every unit it
+    // names, and units read ahead stay resident until loads need their room (units behind the
+    // band go first), so asking at every interval would only walk them again.
     std::size_t k = 0;
     double w = 0;
     if (locate_time(cache.times(), t_b, k, w) && k != read_ahead_from && k + 2 < steps_needed) {
