@@ -188,6 +188,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     // holds, no less than the run asks for). Read ahead one step only and gathered into fresh
     // memory, the 256^3 series took longer than the whole streak surface run beside it.
     double io_floor = 0;
+    spacetime::CacheStatistics floor_cache;
     {
       spacetime::BrickCache cache(*series, co);
       const auto t0 = Clock::now();
@@ -200,6 +201,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
         }
       }
       io_floor = since(t0);
+      floor_cache = cache.statistics();
     }
     const double pcie = cuda ? advect::cuda_upload_rate(step_bytes) : 0;
 
@@ -263,6 +265,10 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"frames_finish", r.frame_finish_seconds},
           {"wait", r.wait_seconds},
           {"io_floor", io_floor},
+          {"io_floor_reading", floor_cache.read_seconds},
+          {"io_floor_decoding", floor_cache.decode_seconds},
+          {"reading", r.io_seconds},
+          {"decoding", r.decode_seconds},
           {"gpu_compute", b.compute_seconds},
           {"backend_calls", b.total_seconds},
           {"uploads", b.upload_seconds},
@@ -272,6 +278,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
           {"batch_calls", r.bulk_batch.total_seconds},
           {"batch_kernels", r.bulk_batch.compute_seconds},
           {"batch_downloads", r.bulk_batch.download_seconds}}},
+        {"units_read_at_once", floor_cache.live_tokens},
         {"bytes_uploaded", b.bytes_uploaded},
         {"bytes_downloaded", b.bytes_downloaded},
         {"steps_uploaded", b.steps_loaded},
@@ -328,8 +335,11 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                 r.frame_seconds);
     std::printf("%-44s %10.3f\n", a->frames_in_line ? "    of which quality" : "  frames finished aside (quality)",
                 r.frame_finish_seconds);
-    std::printf("%-44s %10.3f\n", "  waiting for data", r.wait_seconds);
-    std::printf("%-44s %10.3f\n", "I/O floor (read + decode every step once)", io_floor);
+    std::printf("%-44s %10.3f  (reading %.3f s, decoding %.3f s, summed over threads)\n", "  waiting for data",
+                r.wait_seconds, r.io_seconds, r.decode_seconds);
+    std::printf("%-44s %10.3f  (reading %.3f s, decoding %.3f s, summed; %zu units at once)\n",
+                "I/O floor (read + decode every step once)", io_floor, floor_cache.read_seconds,
+                floor_cache.decode_seconds, floor_cache.live_tokens);
     std::printf("%-44s %10.3f\n", cuda ? "GPU compute (kernels)" : "compute (CPU loops)",
                 b.compute_seconds);
     std::printf("%-44s %10.3f  (%.2f GiB, %.1f GB/s; pinned PCIe %.1f GB/s)\n", "uploads (steps)",

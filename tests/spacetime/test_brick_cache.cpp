@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <chrono>
@@ -238,6 +239,28 @@ TEST_CASE("brick cache: too small a budget is an error naming the budget needed"
   CHECK_NOTHROW(cache.require_fits(23, "a band"));
   CHECK_THROWS_WITH(cache.require_fits(24, "the front's band"),
                     Catch::Contains("(and 5 kept free for bulk advection)"));
+}
+
+TEST_CASE("brick cache: units read at once: one for every other thread, at least four, within a "
+          "sixteenth of the budget",
+          "[spacetime][cache]") {
+  BrickSeries series(10);
+  const std::size_t reserve = 3 * 768;  // a unit in flight: raw bytes, scratch and floats
+  const auto tokens = [&](int threads, std::size_t budget, std::size_t asked = 0) {
+    std::size_t n = 0;
+    tbb::task_arena(threads).execute([&] {
+      CacheOptions o;
+      o.budget_bytes = budget;
+      o.max_live_tokens = asked;
+      n = BrickCache(series, o).statistics().live_tokens;
+    });
+    return n;
+  };
+  CHECK(tokens(32, std::size_t{64} << 20) == 16);
+  CHECK(tokens(2, std::size_t{64} << 20) == 4);
+  CHECK(tokens(32, 16 * reserve * 6) == 6);   // the budget holds six
+  CHECK(tokens(32, 16 * 768 + 4 * reserve) == 4);  // no fewer than four, as a small budget had
+  CHECK(tokens(32, std::size_t{64} << 20, 3) == 3);  // as asked
 }
 
 TEST_CASE("brick cache: a brick that cannot be read names the step, the brick and the file",

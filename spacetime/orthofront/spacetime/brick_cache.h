@@ -25,7 +25,9 @@ namespace orthofront::spacetime {
 struct CacheOptions {
   std::size_t budget_bytes = std::size_t{512} << 20;  ///< resident + in-flight bytes, at most
   bool prefetch = true;           ///< read what the front will reach while the engine computes
-  std::size_t max_live_tokens = 4;  ///< pipeline tokens (units decoded at once)
+  /// Pipeline tokens (units read and decoded at once); 0: one for every other thread, at least
+  /// 4, at most what a sixteenth of the budget holds.
+  std::size_t max_live_tokens = 0;
   /// Ignore the series' bricks: each time step is one unit (the whole-step cache, kept as a
   /// baseline and for series stored without bricks).
   bool whole_steps = false;
@@ -38,6 +40,7 @@ struct CacheOptions {
 struct CacheStatistics {
   std::size_t unit_bytes = 0;      ///< decoded bytes of one unit (brick or step)
   std::size_t units_per_step = 0;  ///< bricks per step (1 for whole steps)
+  std::size_t live_tokens = 0;     ///< units read and decoded at once (the pipeline's tokens)
   std::size_t hits = 0;            ///< pins of a resident unit
   std::size_t late_prefetches = 0; ///< pins that waited for a prefetch still in flight
   std::size_t misses = 0;          ///< pins that had to start a load
