@@ -14,9 +14,9 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <span>
 
+#include "cli/bench_series_file.h"
 #include "cli/commands.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
@@ -107,19 +107,8 @@ void add_bench_gpu_streak_command(CLI::App& app) {
     const spacetime::SampledTimeSeries sampled(
         *flow, spacetime::uniform_grid(flow->domain(), 3, a->resolution),
         spacetime::uniform_times(0, 4, static_cast<std::size_t>(a->steps - 1)));
-    std::filesystem::path file = a->keep;
-    const bool temporary = file.empty();
-    if (temporary)
-      file = std::filesystem::temp_directory_path() /
-             ("orthofront-bench-gpu-streak-" + std::to_string(std::random_device{}()) + ".h5");
-    struct Remove {
-      std::filesystem::path p;
-      bool on;
-      ~Remove() {
-        std::error_code ec;
-        if (on) std::filesystem::remove(p, ec);
-      }
-    } remove{file, temporary};
+    const BenchSeriesFile series_file(a->keep, "orthofront-bench-gpu-streak");
+    const std::filesystem::path& file = series_file.path();
     const auto w0 = Clock::now();
     {
       io::Hdf5WriteOptions w;

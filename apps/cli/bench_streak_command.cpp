@@ -9,8 +9,8 @@
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <random>
 
+#include "cli/bench_series_file.h"
 #include "cli/commands.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
@@ -122,19 +122,8 @@ void add_bench_streak_command(CLI::App& app) {
         (flow->domain().hi[1] - flow->domain().lo[1]) / static_cast<double>(g.size[1] - 1);
     const auto times = spacetime::uniform_times(0, a->t1, static_cast<std::size_t>(a->steps - 1));
     const spacetime::SampledTimeSeries sampled(*flow, g, times);
-    std::filesystem::path file = a->keep;
-    const bool temporary = file.empty();
-    if (temporary)
-      file = std::filesystem::temp_directory_path() /
-             ("orthofront-bench-streak-" + std::to_string(std::random_device{}()) + ".h5");
-    struct Remove {
-      std::filesystem::path p;
-      bool on;
-      ~Remove() {
-        std::error_code ec;
-        if (on) std::filesystem::remove(p, ec);
-      }
-    } remove{file, temporary};
+    const BenchSeriesFile series_file(a->keep, "orthofront-bench-streak");
+    const std::filesystem::path& file = series_file.path();
     const auto w0 = std::chrono::steady_clock::now();
     {
       io::Hdf5WriteOptions w;
