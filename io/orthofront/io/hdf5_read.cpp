@@ -349,29 +349,19 @@ struct Hdf5TimeSeries::Impl {
       raw = options.raw_chunks && (whole_slices || bricked) && known_filters &&
             std::endian::native == std::endian::little && H5Tequal(type.get(), H5T_IEEE_F32LE) > 0;
     }
-    if (raw && d.storage != Hdf5Storage::per_step) {
-      // Raw reads find chunks by their stored size (see stored_chunk_bytes), which HDF5 would
-      // report for a chunk never written once it has read that chunk's fill values into its
-      // chunk cache: the dataset goes without one (raw reads bypass it anyway).
-      H5Id access(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
-      if (!access.valid() ||
-          H5Pset_chunk_cache(access.get(), 0, 0, H5D_CHUNK_CACHE_W0_DEFAULT) < 0)
-        throw FormatError(where() + ": cannot set up reading '" + d.dataset + "'");
-      // (Closed first: a dataset opened again while open keeps its first access properties.)
-      dataset = H5Id();
-      dataset = H5Id(H5Dopen2(group.get(), velocity_name.c_str(), access.get()), H5Dclose);
-      if (!dataset.valid()) throw FormatError(where() + ": cannot open '" + d.dataset + "'");
-    }
     if (vetting_child) check_storage();
   }
 
-  /// The stored bytes of the chunk at `offset` of `set`; 0 for a chunk never written. In the
-  /// series' own dataset, one lookup in the chunk index: H5Dget_chunk_info_by_coord walks every
-  /// chunk stored before the one asked for (14.8 us a chunk on average in a 128^3 series of
-  /// 2,624 chunks, against 0.2 us; it held reading a 256^3 series to 1.0-1.3 GB/s).
+  /// The stored bytes of the chunk at `offset` of `set`; 0 for a chunk never written. For a
+  /// filtered dataset with a step axis, one lookup in the chunk index: H5Dget_chunk_info_by_coord
+  /// walks every chunk stored before the one asked for (14.8 us a chunk on average in a 128^3
+  /// series of 2,624 chunks, against 0.2 us; it held reading a 256^3 series to 1.0-1.3 GB/s).
+  /// Unfiltered, HDF5 1.10 reports the chunk's nominal size instead of the stored one (which
+  /// H5Dread_chunk copies), and a chunk never written looks stored once HDF5 has filled it.
   hsize_t stored_chunk_bytes(hid_t set, const hsize_t* offset) const {
     hsize_t bytes = 0;
-    if (set == dataset.get()) return H5Dget_chunk_storage_size(set, offset, &bytes) >= 0 ? bytes : 0;
+    if (set == dataset.get() && !filters.empty())
+      return H5Dget_chunk_storage_size(set, offset, &bytes) >= 0 ? bytes : 0;
     unsigned mask = 0;
     haddr_t address = HADDR_UNDEF;
     const bool stored = H5Dget_chunk_info_by_coord(set, offset, &mask, &address, &bytes) >= 0 &&

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <system_error>
 
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include "orthofront/error.h"
@@ -97,11 +98,14 @@ BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
   // A load holds its raw bytes (at most about a unit), a decode scratch buffer and the floats.
   load_reserve_ = 3 * unit_bytes_;
   if (options_.max_live_tokens == 0) {
-    // A unit in flight for every other thread of the caller's arena: the readers keep up
-    // with a host that waits for data and leave it the other cores when it does not (two
-    // units a thread made a 192^3 streak surface, which never waits, 30 % slower); no fewer
-    // than four (what a small budget always had), no more than a sixteenth of the budget holds.
-    const auto threads = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    // A unit in flight for every other thread TBB may use here: the readers keep up with a
+    // host that waits for data and leave it the other cores when it does not (two units a
+    // thread made a 192^3 streak surface, which never waits, 30 % slower); four at least (what
+    // a small budget always had), more only as far as a sixteenth of the budget holds them.
+    const auto threads = static_cast<std::size_t>(std::max(
+        1, std::min<int>(tbb::this_task_arena::max_concurrency(),
+                         static_cast<int>(tbb::global_control::active_value(
+                             tbb::global_control::max_allowed_parallelism)))));
     const std::size_t fit = options_.budget_bytes / 16 / std::max<std::size_t>(1, load_reserve_);
     options_.max_live_tokens = std::max<std::size_t>(4, std::min(threads / 2, fit));
   }

@@ -25,8 +25,8 @@ namespace orthofront::spacetime {
 struct CacheOptions {
   std::size_t budget_bytes = std::size_t{512} << 20;  ///< resident + in-flight bytes, at most
   bool prefetch = true;           ///< read what the front will reach while the engine computes
-  /// Pipeline tokens (units read and decoded at once); 0: one for every other thread, at least
-  /// 4, at most what a sixteenth of the budget holds.
+  /// Pipeline tokens (units read and decoded at once); 0: one for every other thread TBB may
+  /// use, at least 4, more only as far as a sixteenth of the budget holds them.
   std::size_t max_live_tokens = 0;
   /// Ignore the series' bricks: each time step is one unit (the whole-step cache, kept as a
   /// baseline and for series stored without bricks).
