@@ -118,7 +118,7 @@ BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
   const std::size_t least = layout_.bricks() == 1 ? 2 : 16;
   require_fits(least, "sampling one cell between two time steps");
   BrickPipelineOptions po;
-  po.max_live_tokens = std::max<std::size_t>(1, options_.max_live_tokens);
+  po.max_live_tokens = options_.max_live_tokens;
   po.whole_steps = options_.whole_steps;
   po.upload = options_.upload;
   pipeline_ = std::make_unique<BrickPipeline>(
@@ -132,7 +132,7 @@ BrickCache::~BrickCache() {
 
 std::size_t BrickCache::bytes_needed(std::size_t units) const {
   return (units + reserved_units_) * unit_bytes_ +
-         std::max<std::size_t>(1, options_.max_live_tokens) * load_reserve_;
+         options_.max_live_tokens * load_reserve_;
 }
 
 void BrickCache::reserve_units(std::size_t units) {
