@@ -33,38 +33,16 @@ void FoldGuard::EdgeLists<Payload>::clear() {
 }
 
 template <class Payload>
-std::uint32_t& FoldGuard::EdgeLists<Payload>::head_slot(std::int32_t v) {
-  const auto i = static_cast<std::size_t>(v);
-  if (i >= heads_.size()) heads_.resize(std::max(i + 1, 2 * heads_.size()));
-  Head& h = heads_[i];
-  if (h.generation != generation_) {
-    h.generation = generation_;
-    h.first = kNone;
-  }
-  return h.first;
-}
-
-template <class Payload>
-void FoldGuard::EdgeLists<Payload>::add(std::int32_t a, std::int32_t b, const Payload& face) {
-  const auto [lo, hi] = ordered(a, b);
-  vertex_end_ = std::max(vertex_end_, hi + 1);
-  std::uint32_t& first = head_slot(lo);
-  std::uint32_t e = free_;
-  if (e != kNone) {
-    free_ = entries_[e].next;
-    entries_[e] = Entry{face, hi, first};
-  } else {
-    e = static_cast<std::uint32_t>(entries_.size());
-    entries_.push_back(Entry{face, hi, first});
-  }
-  first = e;
+void FoldGuard::EdgeLists<Payload>::grow_heads() {
+  heads_.resize(std::max(static_cast<std::size_t>(vertex_end_), 2 * heads_.size()));
 }
 
 template <class Payload>
 bool FoldGuard::EdgeLists<Payload>::remove(std::int32_t a, std::int32_t b) {
   const auto [lo, hi] = ordered(a, b);
-  if (hi >= vertex_end_ || head(lo) == kNone) return false;
-  for (std::uint32_t* link = &head_slot(lo); *link != kNone; link = &entries_[*link].next) {
+  if (hi >= vertex_end_ || covered_head(lo) == kNone) return false;
+  for (std::uint32_t* link = &heads_[static_cast<std::size_t>(lo)].first; *link != kNone;
+       link = &entries_[*link].next) {
     const std::uint32_t e = *link;
     if (entries_[e].other != hi) continue;
     *link = entries_[e].next;

@@ -117,7 +117,21 @@ class alignas(64) FoldGuard {
 
     /// Forgets every edge (O(1): list heads of an older generation read as empty).
     void clear();
-    void add(std::int32_t a, std::int32_t b, const Payload& face);
+    void add(std::int32_t a, std::int32_t b, const Payload& face) {
+      const auto [lo, hi] = ordered(a, b);
+      if (hi >= vertex_end_) cover(hi);
+      Head& h = heads_[static_cast<std::size_t>(lo)];
+      if (h.generation != generation_) h = Head{kNone, generation_};
+      std::uint32_t e = free_;
+      if (e != kNone) {
+        free_ = entries_[e].next;
+        entries_[e] = Entry{face, hi, h.first};
+      } else {
+        e = static_cast<std::uint32_t>(entries_.size());
+        entries_.push_back(Entry{face, hi, h.first});
+      }
+      h.first = e;
+    }
     /// Removes one entry of edge (a, b); false when there is none.
     bool remove(std::int32_t a, std::int32_t b);
     /// Calls visit(lower vertex, entry) for every entry.
@@ -133,7 +147,7 @@ class alignas(64) FoldGuard {
     bool any_of(std::int32_t a, std::int32_t b, Visit&& visit) const {
       const auto [lo, hi] = ordered(a, b);
       if (hi >= vertex_end_) return false;
-      for (std::uint32_t e = head(lo); e != kNone; e = entries_[e].next)
+      for (std::uint32_t e = covered_head(lo); e != kNone; e = entries_[e].next)
         if (entries_[e].other == hi && visit(entries_[e].payload)) return true;
       return false;
     }
@@ -144,9 +158,20 @@ class alignas(64) FoldGuard {
     }
     std::uint32_t head(std::int32_t v) const {
       const auto i = static_cast<std::size_t>(v);
-      return i < heads_.size() && heads_[i].generation == generation_ ? heads_[i].first : kNone;
+      return i < heads_.size() ? covered_head(v) : kNone;
     }
-    std::uint32_t& head_slot(std::int32_t v);
+    /// head() of a vertex below vertex_end_, which heads_ always covers.
+    std::uint32_t covered_head(std::int32_t v) const {
+      const Head& h = heads_[static_cast<std::size_t>(v)];
+      return h.generation == generation_ ? h.first : kNone;
+    }
+    /// Raises vertex_end_ past `hi` (most edges of a strip end at its newest vertex), growing
+    /// heads_ to cover it.
+    void cover(std::int32_t hi) {
+      vertex_end_ = hi + 1;
+      if (static_cast<std::size_t>(vertex_end_) > heads_.size()) grow_heads();
+    }
+    void grow_heads();
 
     /// A vertex's list: its first entry, valid while `generation` is the lists' (one cache line
     /// for both).
@@ -156,8 +181,8 @@ class alignas(64) FoldGuard {
     };
     HugePageVector<Head> heads_;
     std::uint32_t generation_ = 1;
-    /// One past the highest vertex of any edge added since the last clear(): an edge whose
-    /// higher vertex is at or above it has no entry, found without a look. The strip's new
+    /// One past the highest vertex of any edge added since the last clear() (heads_ covers it):
+    /// an edge whose higher vertex is at or above it has no entry, found without a look. The strip's new
     /// vertices are numbered after everything accepted, and in the order stitch makes faces, so
     /// most of a strip's edges are new to both lists.
     std::int32_t vertex_end_ = 0;
