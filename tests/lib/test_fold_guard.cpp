@@ -2,7 +2,6 @@
 // crease sharper than 90° between two faces of one strip, and strips that only bend.
 #include <catch2/catch.hpp>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <tuple>
@@ -100,18 +99,16 @@ TEST_CASE("the fold guard's boundary is the mesh's boundary, edge for edge", "[e
   CHECK(from_guard == sorted(boundary_edges(m)));
 }
 
-TEST_CASE("faces accepted later are checked against like faces accepted in line",
-          "[engine][fold]") {
-  // Rows 0-1, then row 2 accepted later while row 3's vertices are added (the next step's
-  // inserted vertices); row 3 turned back over row 2 must be found against the faces accepted
-  // later, and the boundary must be the whole mesh's.
+TEST_CASE("a strip is checked against the faces accepted before it", "[engine][fold]") {
+  // Rows 0-1, then row 2 checked and accepted; row 3 turned back over row 2 must be found
+  // against it, and the boundary must be the whole mesh's.
   Mesh m = previous_strip();
   FoldGuard guard;
   guard.rebuild(m);
   const std::size_t row2_faces = m.face_count();
   add_next_row(m, Vec3(0, 2, 0), Vec3(1, 2, 0), Vec3(2, 2, 0));
   REQUIRE(guard.folded_vertices(m, row2_faces, 6).empty());
-  guard.accept_later(m, row2_faces);
+  guard.accept(m, row2_faces);
   for (const double x : {0.0, 1.0, 2.0}) m.add_vertex(Vec3(x, 1.5, 0.01), 2, 2, 0, 0, 0, 3);
   const std::size_t row3_faces = m.face_count();
   m.add_quad(6, 7, 10, 9);
@@ -120,71 +117,6 @@ TEST_CASE("faces accepted later are checked against like faces accepted in line"
   m.faces.resize(row3_faces);  // undone: rows 0-2 are a 2 x 2 sheet of quads
   CHECK(guard.boundary().size() == 8);
   CHECK(boundary_edges(m).size() == 8);
-}
-
-TEST_CASE("a strip checked while it is stitched gives the in-line answer", "[engine][fold]") {
-  // A sheet of rows 600 columns wide; the next row turns back over the last one at some columns
-  // and creases by 100 degrees at others. The faces are added one at a time, the count published
-  // now and then, while the check runs beside.
-  constexpr int kColumns = 600;
-  const auto sheet = [&] {
-    Mesh m;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < kColumns; ++c) m.add_vertex(Vec3(c, r, 0), 0, 0, 0, 0, 0, r);
-    for (int r = 0; r < 2; ++r)
-      for (int c = 0; c + 1 < kColumns; ++c)
-        m.add_quad(r * kColumns + c, r * kColumns + c + 1, (r + 1) * kColumns + c + 1,
-                   (r + 1) * kColumns + c);
-    return m;
-  };
-  const auto next_row = [&](int c) -> Vec3 {
-    if (c % 97 >= 13 && c % 97 < 19) return Vec3(c, 1.5, 0.01);  // turned back over row 2
-    if (c % 89 == 40) return Vec3(c - 1.1, 2.0, -0.3);          // a sharp crease
-    return Vec3(c, 3, 0.05 * std::sin(c));
-  };
-  const auto add_faces = [&](Mesh& m, std::atomic<std::size_t>* count) {
-    const int first = 3 * kColumns;
-    for (int c = 0; c < kColumns; ++c) m.add_vertex(next_row(c), 0, 0, 0, 0, 0, 3);
-    for (int c = 0; c + 1 < kColumns; ++c) {
-      m.add_quad(2 * kColumns + c, 2 * kColumns + c + 1, first + c + 1, first + c);
-      if (count && c % 7 == 0) count->store(m.face_count(), std::memory_order_release);
-    }
-    if (count) count->store(m.face_count(), std::memory_order_release);
-  };
-
-  Mesh in_line = sheet();
-  FoldGuard serial;
-  serial.rebuild(in_line);
-  const std::size_t first_face = in_line.face_count(), first_vertex = in_line.vertex_count();
-  add_faces(in_line, nullptr);
-  const std::vector<std::int32_t> expected =
-      serial.folded_vertices(in_line, first_face, first_vertex);
-  REQUIRE(expected.size() > 10);
-
-  // Here the sheet's second strip is checked, then left for accept_later(), which the task
-  // takes up before it checks the new strip.
-  Mesh beside = sheet();
-  const std::size_t second_strip = static_cast<std::size_t>(kColumns - 1);
-  beside.faces.resize(second_strip);
-  FoldGuard concurrent;
-  concurrent.rebuild(beside);
-  const Mesh whole = sheet();
-  beside.faces.assign(whole.faces.begin(), whole.faces.end());
-  REQUIRE(concurrent.folded_vertices(beside, second_strip, first_vertex).empty());
-  concurrent.accept_later(beside, second_strip);
-  const std::vector<std::int32_t> found = concurrent.folded_vertices_while(
-      beside, first_vertex, kColumns, [&](std::atomic<std::size_t>& count) {
-        add_faces(beside, &count);
-      });
-  CHECK(found == expected);
-  CHECK(beside.face_count() == in_line.face_count());
-  // Its faces are accepted as the in-line check's are: the same boundary, edge for edge.
-  serial.accept(in_line, first_face);
-  concurrent.accept(beside, first_face);
-  const auto key = [](const BoundaryEdge& e) { return std::tuple(e.from, e.to, e.face); };
-  const auto a = serial.boundary(), b = concurrent.boundary();
-  REQUIRE(a.size() == b.size());
-  for (std::size_t i = 0; i < a.size(); ++i) CHECK(key(a[i]) == key(b[i]));
 }
 
 TEST_CASE("the fold guard checks the second part of a step against its own faces",
@@ -240,7 +172,7 @@ TEST_CASE("accepting checked strips gives the boundary of a guard built from the
   std::size_t first_face = m.face_count();
   add_next_row(m, Vec3(0, 2, 0), Vec3(1, 2, 0), creased(2, 30));
   REQUIRE(guard.folded_vertices(m, first_face, 6).empty());
-  guard.accept_later(m, first_face);
+  guard.accept(m, first_face);
   same_as_rebuilt();
   // Rows 3 and 4 at y = 3, 4: quads over the row below (its first vertex `below`).
   const auto add_row = [&](double y, std::int32_t below) {
@@ -255,7 +187,7 @@ TEST_CASE("accepting checked strips gives the boundary of a guard built from the
   add_row(3, 6);
   m.add_triangle(7, 6, 9);
   guard.folded_vertices(m, first_face, 9);
-  guard.accept_later(m, first_face);
+  guard.accept(m, first_face);
   same_as_rebuilt();
   // Row 4 over row 3: plain again, after the lookup.
   add_row(4, 9);

@@ -126,7 +126,6 @@ TEST_CASE("a strip that folds back over the surface is stitched without the fold
     CHECK(q.non_manifold_edges == 0);
     CHECK(report.folds_left == 0);
     // The guard's boundary is the mesh's, edge for edge.
-    linker.wait();
     CHECK(linker.boundary().size() == boundary_edges(mesh).size());
   }
 }

@@ -77,11 +77,11 @@ TEST_CASE("serial and parallel runs build the same mesh, bit for bit", "[engine]
   }
 }
 
-TEST_CASE("strips checked beside their stitching give the in-line result, folds included",
+TEST_CASE("surfaces the fold guard rips are the same with the per-vertex stages in parallel",
           "[engine][threads][fold]") {
   // Surfaces that fold: the guard rips vertices out and stitches strips again. With threshold 0
-  // every strip is checked by a task beside its stitching (in an arena of one thread the task
-  // runs after it); with a threshold above every front, in line.
+  // every front's per-vertex stages run in tasks (in an arena of one thread, one after
+  // another); with a threshold above every front, in line.
   const test_support::SurfaceCase cases[] = {
       {"abc", SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 0.1, 120},
       {"abc", SeedCurve::line(Vec3(1, 1, 0), Vec3(1, 1, 6)), 0.2, 120},
@@ -95,10 +95,10 @@ TEST_CASE("strips checked beside their stitching give the in-line result, folds 
     const SurfaceResult in_line = build_in_arena(2, *field, c.seed, 20, o);
     CHECK(in_line.report.fold_rips > 0);
     o.parallel_threshold = 0;
-    const SurfaceResult beside = build_in_arena(2, *field, c.seed, 20, o);
-    INFO("fold rips " << in_line.report.fold_rips << " in line, " << beside.report.fold_rips
-                      << " beside");
-    check_identical(in_line, beside);
+    const SurfaceResult in_tasks = build_in_arena(2, *field, c.seed, 20, o);
+    INFO("fold rips " << in_line.report.fold_rips << " in line, " << in_tasks.report.fold_rips
+                      << " in tasks");
+    check_identical(in_line, in_tasks);
     check_identical(in_line, build_in_arena(1, *field, c.seed, 20, o));
   }
 }

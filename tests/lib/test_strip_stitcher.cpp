@@ -1,7 +1,6 @@
 // Stitch and emit on hand-made fronts: quads between rows that advance together, triangles where
 // a row has more segments or a vertex kept its mesh vertex, consistently oriented.
 #include <catch2/catch.hpp>
-#include <atomic>
 #include <map>
 #include <stdexcept>
 #include <utility>
@@ -192,85 +191,3 @@ TEST_CASE("row skipping by runs: a waiting run of up to 16 vertices beside movin
   }
 }
 
-TEST_CASE("stitch beside a reader: counts published, faces bounded, never moved",
-          "[engine][stitch]") {
-  StreamSurfaceOptions o;
-  o.edge = 1;
-  // Rows of 40 with 7 vertices inserted and 5 merged away: quads and triangles.
-  const auto fronts = [](Mesh& mesh) {
-    Front<3> old = previous_row(mesh, 40);
-    Front<3> f = advanced(old, 1.0);
-    for (int k = 0; k < 5; ++k) f.v.erase(f.v.begin() + 3 + 6 * k);
-    for (int k = 0; k < 7; ++k) {
-      FrontVertex<3> inserted;
-      const std::size_t at = 2 + 4 * static_cast<std::size_t>(k);
-      inserted.x = inserted.anchor = 0.5 * (f.v[at - 1].x + f.v[at].x);
-      inserted.mesh = emit_vertex(mesh, inserted, false, 0.0, 0, 1);
-      f.v.insert(f.v.begin() + static_cast<long>(at), inserted);
-    }
-    return std::pair(old, f);
-  };
-  Mesh plain;
-  SurfaceReport report;
-  StripStitcher<3> in_line(o, o.row_skip, false, plain, report);
-  auto [old, f] = fronts(plain);
-  in_line.emit_moved(f, old, 1);
-  in_line.stitch(old, f);
-
-  Mesh mesh;
-  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
-  auto [old2, f2] = fronts(mesh);
-  stitcher.emit_moved(f2, old2, 1);
-  const std::size_t most = stitcher.most_faces(old2, f2);
-  CHECK(most >= plain.face_count());
-  CHECK(most <= old2.v.size() + f2.v.size());
-  std::atomic<std::size_t> count{0};
-  // No room reserved: the first face would move the array, so it is refused.
-  Mesh::Array<Face>().swap(mesh.faces);
-  REQUIRE(mesh.faces.capacity() == 0);
-  CHECK_THROWS_AS(stitcher.stitch(old2, f2, count), std::logic_error);
-  mesh.faces.clear();
-  mesh.faces.reserve(most);
-  const Face* const before = mesh.faces.data();
-  stitcher.stitch(old2, f2, count);
-  CHECK(mesh.faces.data() == before);
-  CHECK(count.load() == mesh.face_count());
-  REQUIRE(mesh.face_count() == plain.face_count());
-  CHECK(count_quads(mesh) == count_quads(plain));
-  CHECK(count_quads(mesh) < static_cast<int>(mesh.face_count()));
-  for (std::size_t i = 0; i < mesh.face_count(); ++i)
-    for (std::size_t c = 0; c < 4; ++c) CHECK(mesh.faces[i].v[c] == plain.faces[i].v[c]);
-}
-
-TEST_CASE("most_faces counts every chain's segments on both sides", "[stitch]") {
-  // Only origins and closedness matter: most_faces = sum over the chains between consecutive
-  // anchors (vertices with an origin, the last to the first on a closed front) of the old and
-  // the new segments, counted here by hand.
-  const auto front = [](std::vector<std::int32_t> origins, bool closed) {
-    Front<3> f;
-    f.closed = closed;
-    for (const std::int32_t o : origins) {
-      FrontVertex<3> fv;
-      fv.x = fv.anchor = Vec3::Zero();
-      fv.origin = o;
-      f.v.push_back(fv);
-    }
-    return f;
-  };
-  StreamSurfaceOptions o;
-  Mesh mesh;
-  SurfaceReport report;
-  StripStitcher<3> stitcher(o, o.row_skip, false, mesh, report);
-  const Front<3> old_open = front({0, 1, 2, 3, 4}, false);
-  const Front<3> old_closed = front({0, 1, 2, 3}, true);
-  // Anchors 0, 2, 3, 5: (1 + 2) + (1 + 1) + (2 + 2).
-  CHECK(stitcher.most_faces(old_open, front({0, -1, 1, 2, -1, 4}, false)) == 9);
-  // One anchor on an open front: no chain.
-  CHECK(stitcher.most_faces(old_open, front({-1, 2, -1}, false)) == 0);
-  // Origins wrapping on a closed old front, and the closing chain: (1 + 1) + (1 + 2) + (2 + 1).
-  CHECK(stitcher.most_faces(old_closed, front({2, 3, -1, 0}, true)) == 8);
-  // A closed front with a single anchor goes all the way round both fronts.
-  CHECK(stitcher.most_faces(old_closed, front({-1, 1, -1}, true)) == 4 + 3);
-  // Origins going backwards on an open old front: no old segment joins them.
-  CHECK(stitcher.most_faces(old_open, front({3, 1}, false)) == 0);
-}

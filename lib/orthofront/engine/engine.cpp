@@ -183,7 +183,6 @@ class Engine {
 
   SurfaceResult finish() {
     adapter_.finish();
-    linker_.wait();  // gap closing and the unused-vertex sweep change faces
     // Only a surface that tore (its front was cut into parts) has gaps to close.
     if (opt_.close_gaps && discretization_->safeguarded() && report_.fronts_created > 0) {
       StageTimer timer(report_.times.gaps);

@@ -1,10 +1,6 @@
 #include "orthofront/engine/fold_guard.h"
 
-#include <tbb/task_arena.h>
-#include <tbb/task_group.h>
-
 #include <algorithm>
-#include <thread>
 
 namespace orthofront {
 
@@ -54,7 +50,6 @@ bool FoldGuard::EdgeLists<Payload>::remove(std::int32_t a, std::int32_t b) {
 }
 
 std::vector<BoundaryEdge> FoldGuard::boundary() {
-  accept_left(nullptr);
   std::vector<BoundaryEdge> out;
   open_.for_each([&](std::int32_t lo, const EdgeLists<OpenEdge>::Entry& e) {
     const auto face = static_cast<std::int32_t>(e.payload.face);
@@ -65,49 +60,26 @@ std::vector<BoundaryEdge> FoldGuard::boundary() {
 }
 
 void FoldGuard::rebuild(const Mesh& mesh) {
-  left_ = Left{};
   checked_first_ = 0;
   checked_normals_.clear();
   open_.clear();
-  add_to_boundary(mesh, mesh.faces.data(), 0, mesh.faces.size());
-}
-
-void FoldGuard::accept_later(const Mesh& mesh, std::size_t first_face) {
-  accept_left(nullptr);
-  const std::size_t end = mesh.faces.size();
-  // The faces are read later, maybe while vertices are added: their area vectors are taken now
-  // (those checked last are known already).
-  if (!(first_face == checked_first_ && end - first_face == checked_normals_.size())) {
-    checked_first_ = first_face;
-    checked_normals_.clear();
-    for (std::size_t f = first_face; f < end; ++f)
-      checked_normals_.push_back(area_vector(mesh, mesh.faces[f]));
-  }
-  left_ = Left{&mesh, first_face, end};
+  add_to_boundary(mesh, 0, mesh.faces.size());
 }
 
 void FoldGuard::accept(const Mesh& mesh, std::size_t first_face) {
-  accept_left(nullptr);
-  add_to_boundary(mesh, mesh.faces.data(), first_face, mesh.faces.size());
+  add_to_boundary(mesh, first_face, mesh.faces.size());
 }
 
-void FoldGuard::accept_left(const Face* faces) {
-  if (!left_.mesh) return;
-  const Left left = left_;
-  left_ = Left{};
-  add_to_boundary(*left.mesh, faces ? faces : left.mesh->faces.data(), left.first, left.end);
-}
-
-void FoldGuard::add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t first,
-                                std::size_t end) {
+void FoldGuard::add_to_boundary(const Mesh& mesh, std::size_t first, std::size_t end) {
   // The faces just checked are the ones accepted, their normals already known.
   const bool checked = first == checked_first_ && end - first == checked_normals_.size();
   if (checked && changes_known_ && first == changes_first_ && end == changes_end_) {
     apply_changes();
   } else {
     for (std::size_t f = first; f < end; ++f) {
-      const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, faces[f]);
-      for_each_edge(faces[f], [&](std::int32_t a, std::int32_t b) {
+      const Face& face = mesh.faces[f];
+      const Vec3 normal = checked ? checked_normals_[f - first] : area_vector(mesh, face);
+      for_each_edge(face, [&](std::int32_t a, std::int32_t b) {
         // An edge's second face puts it inside the surface.
         if (!open_.remove(a, b))
           open_.add(a, b, OpenEdge{normal, static_cast<std::uint32_t>(f), a < b});
@@ -133,80 +105,6 @@ void FoldGuard::apply_changes() {
 
 std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size_t first_face,
                                                      std::size_t first_new_vertex) {
-  accept_left(nullptr);
-  std::vector<std::int32_t> out;
-  start_check(first_face);
-  check_faces(mesh.positions.data(), mesh.faces.data(), first_face, mesh.faces.size(),
-              first_new_vertex, out);
-  finish_check(out);
-  return out;
-}
-
-std::vector<std::int32_t> FoldGuard::folded_vertices_while(
-    Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
-    const std::function<void(std::atomic<std::size_t>& faces)>& stitch) {
-  const std::size_t first_face = mesh.faces.size();
-  // What accept_later() left of another mesh is not this call's to read.
-  if (left_.mesh && left_.mesh != &mesh) accept_left(nullptr);
-  const std::size_t room = first_face + max_faces;
-  if (mesh.faces.capacity() < room)
-    mesh.faces.reserve(std::max(room, 2 * mesh.faces.capacity()));
-  const Face* const faces = mesh.faces.data();
-  // Each on a cache line of its own: the task reads them over and over.
-  struct alignas(64) Count {
-    std::atomic<std::size_t> value;
-  };
-  struct alignas(64) Flag {
-    std::atomic<bool> value{false};
-  };
-  Count stitched_count{first_face};
-  Flag finished_flag;
-  std::atomic<std::size_t>& stitched = stitched_count.value;
-  std::atomic<bool>& finished = finished_flag.value;
-  std::vector<std::int32_t> out;
-  // Isolated twice: a cancelled outer task group must not skip the check (it would find no
-  // folds), and the waits below take no other task of the arena (seed_shot_legs.h).
-  tbb::this_task_arena::isolate([&] {
-    tbb::task_group_context isolated(tbb::task_group_context::isolated);
-    tbb::task_group checker(isolated);
-    checker.run([&] {
-      // The last strip's faces first (they lie before first_face: the caller adds none there).
-      accept_left(faces);
-      start_check(first_face);
-      std::size_t checked = first_face;
-      int idle = 0;
-      for (;;) {
-        // `finished` first: once it is set, the count read after it is the last one.
-        const bool last = finished.load(std::memory_order_acquire);
-        const std::size_t ready = stitched.load(std::memory_order_acquire);
-        if (ready > checked) {
-          // The positions, made before the first face, are read through their own pointer: the
-          // mesh's array headers share a cache line with the faces' end, which moves per face.
-          check_faces(mesh.positions.data(), faces, checked, ready, first_new_vertex, out);
-          checked = ready;
-          idle = 0;
-        } else if (last) {
-          return;
-        } else if (++idle > 64) {
-          std::this_thread::yield();  // the stitcher is still emitting: let a sibling run
-        }
-      }
-    });
-    try {
-      stitch(stitched);
-    } catch (...) {
-      finished.store(true, std::memory_order_release);
-      checker.wait();
-      throw;
-    }
-    finished.store(true, std::memory_order_release);
-    checker.wait();
-  });
-  finish_check(out);
-  return out;
-}
-
-void FoldGuard::start_check(std::size_t first_face) {
   // Parts of one step are checked one after another: keep their normals for accept().
   if (first_face != checked_first_ + checked_normals_.size()) {
     checked_first_ = first_face;
@@ -214,18 +112,19 @@ void FoldGuard::start_check(std::size_t first_face) {
   }
   strip_.clear();
   changes_.clear();
-  changes_first_ = changes_end_ = first_face;
+  changes_first_ = first_face;
   changes_known_ = true;
-}
-
-void FoldGuard::finish_check(std::vector<std::int32_t>& out) {
+  std::vector<std::int32_t> out;
+  check_faces(mesh, first_face, mesh.faces.size(), first_new_vertex, out);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
-void FoldGuard::check_faces(const Vec3* positions, const Face* faces, std::size_t begin,
-                            std::size_t end, std::size_t first_new_vertex,
-                            std::vector<std::int32_t>& out) {
+void FoldGuard::check_faces(const Mesh& mesh, std::size_t begin, std::size_t end,
+                            std::size_t first_new_vertex, std::vector<std::int32_t>& out) {
+  const Vec3* const positions = mesh.positions.data();
+  const Face* const faces = mesh.faces.data();
   const auto is_new = [&](std::int32_t v) {
     return v >= 0 && static_cast<std::size_t>(v) >= first_new_vertex;
   };

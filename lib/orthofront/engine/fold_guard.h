@@ -2,10 +2,8 @@
 /// Folds caught at stitch time: a face of the strip just stitched whose normal turns by more than
 /// 90° from a neighbour's across a shared edge (the quality measure's definition of a fold), the
 /// neighbour being another face of that strip or a face of the surface so far.
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "orthofront/huge_pages.h"
@@ -14,9 +12,7 @@
 
 namespace orthofront {
 
-// On cache lines of its own: its check runs beside the stitcher, whose scratch comes before it
-// in the engine (sharing a line made every chain the stitcher built a miss for the check).
-class alignas(64) FoldGuard {
+class FoldGuard {
  public:
   FoldGuard() = default;
   FoldGuard(const FoldGuard&) = delete;
@@ -31,47 +27,21 @@ class alignas(64) FoldGuard {
   std::vector<std::int32_t> folded_vertices(const Mesh& mesh, std::size_t first_face,
                                             std::size_t first_new_vertex);
 
-  /// folded_vertices() of the faces `stitch` adds to `mesh` (at most `max_faces` of them),
-  /// checked in a task beside it as they come: `stitch` runs on the calling thread and stores
-  /// the mesh's face count in its argument (release) as it goes and at its end. Room for
-  /// max_faces is reserved first, so the faces do not move while they are read; `stitch` must
-  /// neither add more nor wait for TBB work (the task might be waiting for its faces on that
-  /// thread). It may add vertices before its first face (while the task accepts what
-  /// accept_later() left), but must not move or change any once it has published a face.
-  std::vector<std::int32_t> folded_vertices_while(
-      Mesh& mesh, std::size_t first_new_vertex, std::size_t max_faces,
-      const std::function<void(std::atomic<std::size_t>& faces)>& stitch);
-
   /// Faces [first_face, end) are part of the surface: later strips are checked against them.
   void accept(const Mesh& mesh, std::size_t first_face);
-
-  /// accept(), left for later: for the task of the next folded_vertices_while(), which takes it
-  /// up beside the caller's first work there (emitting the strip's vertices), or else for
-  /// whichever member needs the guard first (wait() included). `mesh` must outlive that, and
-  /// its faces up to the current end must stay until then (faces may be added after them).
-  void accept_later(const Mesh& mesh, std::size_t first_face);
-  /// Accepts what accept_later() left now.
-  void wait() { accept_left(nullptr); }
 
   /// The accepted surface's boundary edges, as their faces walk them: those with one face (and,
   /// on a non-manifold mesh, those with an odd number: boundary_edges() leaves those out).
   std::vector<BoundaryEdge> boundary();
 
  private:
-  /// accept()'s work on faces [first, end) of `faces` (`mesh`'s; its positions give the area
-  /// vectors of faces not checked last).
-  void add_to_boundary(const Mesh& mesh, const Face* faces, std::size_t first, std::size_t end);
+  /// rebuild()'s and accept()'s work on faces [first, end) of `mesh` (the area vectors of the
+  /// faces checked last are known already).
+  void add_to_boundary(const Mesh& mesh, std::size_t first, std::size_t end);
 
-  /// Accepts what accept_later() left, reading the faces through `faces` (null: the mesh's own).
-  void accept_left(const Face* faces);
-
-  /// folded_vertices() in parts: start (a part at first_face), check faces [begin, end) of
-  /// `faces` (the mesh's faces and positions, read through pointers that stay valid while faces
-  /// are added), then the sorted vertices.
-  void start_check(std::size_t first_face);
-  void check_faces(const Vec3* positions, const Face* faces, std::size_t begin, std::size_t end,
+  /// folded_vertices()'s check of faces [begin, end), adding the vertices on folds to `out`.
+  void check_faces(const Mesh& mesh, std::size_t begin, std::size_t end,
                    std::size_t first_new_vertex, std::vector<std::int32_t>& out);
-  static void finish_check(std::vector<std::int32_t>& out);
 
   /// A face of the strip being checked on an edge: the face, whether it walks the edge from its
   /// lower to its higher vertex (its area vector is in checked_normals_), and the boundary change
@@ -193,24 +163,18 @@ class alignas(64) FoldGuard {
   /// Edges of accepted faces that have one face so far: the surface's boundary, which holds
   /// every edge a new strip can share with it (the front's rows among them).
   EdgeLists<OpenEdge> open_;
-  /// Scratch: the faces of the part being checked. Their area vectors are in checked_normals_:
-  /// entries of 16 bytes instead of 40 are what keeps the check up with the stitcher beside it.
+  /// Scratch: the faces of the part being checked. Their area vectors are in checked_normals_
+  /// (entries of 16 bytes instead of 40).
   EdgeLists<StripEdge> strip_;
-  /// Area vectors of the faces checked (or left for later) since the last acceptance, from face
-  /// checked_first_ on.
+  /// Area vectors of the faces checked since the last acceptance, from face checked_first_ on.
   std::vector<Vec3> checked_normals_;
   std::size_t checked_first_ = 0;
-  /// The boundary changes of faces [changes_first_, changes_end_), checked since the last
-  /// start_check(); unusable (changes_known_ false) when an edge met more than one other face
-  /// there: accepting then looks every edge up again.
+  /// The boundary changes of faces [changes_first_, changes_end_), checked by the last
+  /// folded_vertices(); unusable (changes_known_ false) when an edge met more than one other
+  /// face there: accepting then looks every edge up again.
   std::vector<BoundaryChange> changes_;
   std::size_t changes_first_ = 0, changes_end_ = 0;
   bool changes_known_ = false;
-  /// What accept_later() left: faces [first, end) of *mesh.
-  struct Left {
-    const Mesh* mesh = nullptr;
-    std::size_t first = 0, end = 0;
-  } left_;
 };
 
 }  // namespace orthofront

@@ -1,7 +1,6 @@
 #include "orthofront/engine/link.h"
 
 #include <algorithm>
-#include <atomic>
 #include <utility>
 
 namespace orthofront {
@@ -9,7 +8,7 @@ namespace orthofront {
 template <int N>
 StripLinker<N>::StripLinker(const StreamSurfaceOptions& options, RowSkip row_skip, bool guarded,
                             bool closed_seed, Mesh& mesh, SurfaceReport& report, Split split)
-    : opt_(options), guarded_(guarded), mesh_(mesh), report_(report), split_(std::move(split)),
+    : guarded_(guarded), mesh_(mesh), report_(report), split_(std::move(split)),
       stitcher_(options, row_skip, closed_seed, mesh, report) {}
 
 template <int N>
@@ -33,11 +32,6 @@ void StripLinker<N>::rebuild(const Mesh& mesh) {
 }
 
 template <int N>
-void StripLinker<N>::wait() {
-  fold_guard_.wait();
-}
-
-template <int N>
 std::vector<BoundaryEdge> StripLinker<N>::boundary() {
   return fold_guard_.boundary();
 }
@@ -56,28 +50,17 @@ void StripLinker<N>::link_guarded(Front<N>&& part, const Front<N>& old, int step
     std::vector<std::int32_t> folded;
     for (auto& piece : pieces) {
       const std::size_t first_face = mesh_.face_count();
-      // A large strip is checked while it is stitched, by a task that starts while the
-      // vertices are emitted (accepting the previous strip's faces meanwhile).
-      std::vector<std::int32_t> found;
-      if (piece.v.size() >= opt_.parallel_threshold) {
-        found = fold_guard_.folded_vertices_while(
-            mesh_, first_inserted, stitcher_.most_faces(old, piece),
-            [&](std::atomic<std::size_t>& count) {
-              stitcher_.emit_moved(piece, old, step);
-              stitcher_.stitch(old, piece, count);
-            });
-      } else {
-        stitcher_.emit_moved(piece, old, step);
-        stitcher_.stitch(old, piece);
-        found = fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
-      }
+      // Checked after its stitching, on this thread: checked on another core as the faces came,
+      // a strip took longer (its faces and the guard's lists crossed between the cores).
+      stitcher_.emit_moved(piece, old, step);
+      stitcher_.stitch(old, piece);
+      const std::vector<std::int32_t> found =
+          fold_guard_.folded_vertices(mesh_, first_face, first_inserted);
       folded.insert(folded.end(), found.begin(), found.end());
     }
     if (folded.empty() || round + 1 == kRounds) {
       if (!folded.empty()) report_.folds_left += folded.size();
-      // Accepted when the next strip is checked (beside its emit where that strip is large),
-      // or at the end: the next core is free for the α, advance and insertion loops meanwhile.
-      fold_guard_.accept_later(mesh_, faces);
+      fold_guard_.accept(mesh_, faces);
       for (auto& piece : pieces) out.push_back(std::move(piece));
       return;
     }

@@ -38,8 +38,6 @@ class StripLinker {
 
   /// Starts from a surface made elsewhere (a restored engine).
   void rebuild(const Mesh& mesh);
-  /// Settles the guard's deferred work: call before anything else changes the mesh's faces.
-  void wait();
   /// The surface's boundary edges, as the guard kept them (guarded only).
   std::vector<BoundaryEdge> boundary();
   bool guarded() const { return guarded_; }
@@ -52,7 +50,6 @@ class StripLinker {
   void link_guarded(Front<N>&& part, const Front<N>& old, int step, std::size_t first_inserted,
                     std::vector<Front<N>>& out);
 
-  const StreamSurfaceOptions& opt_;
   bool guarded_;
   Mesh& mesh_;
   SurfaceReport& report_;

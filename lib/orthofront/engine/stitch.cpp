@@ -1,6 +1,5 @@
 #include "orthofront/engine/stitch.h"
 
-#include <stdexcept>
 
 namespace orthofront {
 
@@ -155,8 +154,6 @@ void StripStitcher<N>::add_face(std::array<std::int32_t, 4> ids, int count) {
     if (!seen) u[static_cast<std::size_t>(m++)] = ids[static_cast<std::size_t>(k)];
   }
   if (m < 3) return;
-  if (published_ && mesh_.faces.size() == mesh_.faces.capacity())
-    throw std::logic_error("StripStitcher: more faces than most_faces() allows");
   if (m == 4) {
     mesh_.add_quad(u[0], u[1], u[2], u[3]);
   } else {
@@ -165,9 +162,6 @@ void StripStitcher<N>::add_face(std::array<std::int32_t, 4> ids, int count) {
     // its mesh vertex.
     ++(count == 3 ? report_.triangles_at_row_changes : report_.triangles_at_waiting_vertices);
   }
-  // Every 32 faces: a store per face kept the reader's line bouncing between the cores.
-  if (published_ && mesh_.faces.size() % 32 == 0)
-    published_->store(mesh_.faces.size(), std::memory_order_release);
 }
 
 template <int N>
@@ -300,17 +294,6 @@ void StripStitcher<N>::for_each_chain(const Front<N>& old, const Front<N>& f,
 }
 
 template <int N>
-std::size_t StripStitcher<N>::most_faces(const Front<N>& old, const Front<N>& f) const {
-  std::size_t most = 0;
-  // zipper adds a face per step along A, B or both.
-  for_each_chain(old, f,
-                 [&](std::size_t, std::size_t steps_old, std::size_t, std::size_t steps_new) {
-                   most += steps_old + steps_new;
-                 });
-  return most;
-}
-
-template <int N>
 void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
   const std::size_t n = f.v.size();
   const std::size_t n_old = old.v.size();
@@ -333,20 +316,6 @@ void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f) {
       chain_b.push_back(f.v[j].mesh);
     zipper(chain_a, chain_b);
   });
-}
-
-template <int N>
-void StripStitcher<N>::stitch(const Front<N>& old, const Front<N>& f,
-                              std::atomic<std::size_t>& faces) {
-  published_ = &faces;
-  try {
-    stitch(old, f);
-  } catch (...) {
-    published_ = nullptr;
-    throw;
-  }
-  published_ = nullptr;
-  faces.store(mesh_.faces.size(), std::memory_order_release);
 }
 
 template class StripStitcher<3>;

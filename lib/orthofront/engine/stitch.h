@@ -4,7 +4,6 @@
 /// vertices and the new ones: quads while both rows advance together, triangles where one has
 /// more segments.
 #include <array>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -34,14 +33,6 @@ class StripStitcher {
   /// of f that came from `old` (origin >= 0), zipper joins the chain of old mesh vertices from
   /// one's origin to the other's with the chain of f's mesh vertices between them.
   void stitch(const Front<N>& old, const Front<N>& f);
-
-  /// stitch(), storing the mesh's face count in `faces` (release) every 32 faces and at the end,
-  /// for a reader on another thread; throws std::logic_error rather than let the faces move
-  /// (the mesh must have room for most_faces() more).
-  void stitch(const Front<N>& old, const Front<N>& f, std::atomic<std::size_t>& faces);
-
-  /// The most faces stitch() adds between `old` and `f`: its chains' segments on both sides.
-  std::size_t most_faces(const Front<N>& old, const Front<N>& f) const;
 
   /// Faces between an old chain A and a new chain B with common ends in correspondence:
   /// quads while both advance together, triangles where one side has more segments, placed
@@ -110,7 +101,6 @@ class StripStitcher {
   bool closed_seed_;
   Mesh& mesh_;
   SurfaceReport& report_;
-  std::atomic<std::size_t>* published_ = nullptr;  ///< where stitch() reports its face count
   // emit_moved's scratch, kept between steps: which vertices get a new mesh vertex, and how far
   // each went from its old one (one square root per vertex for all of row skipping's rules).
   std::vector<char> fresh_;
