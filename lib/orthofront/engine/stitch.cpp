@@ -145,6 +145,12 @@ void StripStitcher<N>::renew_across_merges(const Front<N>& f, const Front<N>& ol
 
 template <int N>
 void StripStitcher<N>::add_face(std::array<std::int32_t, 4> ids, int count) {
+  // Four different corners (almost every face): the quad as it is.
+  if (count == 4 && ids[0] != ids[1] && ids[0] != ids[2] && ids[0] != ids[3] &&
+      ids[1] != ids[2] && ids[1] != ids[3] && ids[2] != ids[3]) {
+    mesh_.add_quad(ids[0], ids[1], ids[2], ids[3]);
+    return;
+  }
   std::array<std::int32_t, 4> u{};
   int m = 0;
   for (int k = 0; k < count; ++k) {
