@@ -17,12 +17,8 @@ template <int N>
 struct Box {
   Vec<N> lo = Vec<N>::Constant(-1.0);
   Vec<N> hi = Vec<N>::Constant(1.0);
-  /// False for a NaN coordinate. One pass with `&` (no early exit): Eigen's all() of the two
-  /// comparisons took a third of an analytic field's evaluation.
   bool contains(const Vec<N>& x) const {
-    bool inside = true;
-    for (int i = 0; i < N; ++i) inside &= (x[i] >= lo[i]) & (x[i] <= hi[i]);
-    return inside;
+    return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
   }
   Vec<N> extent() const { return hi - lo; }
 };
