@@ -152,9 +152,9 @@ class FoldGuard {
     HugePageVector<Head> heads_;
     std::uint32_t generation_ = 1;
     /// One past the highest vertex of any edge added since the last clear() (heads_ covers it):
-    /// an edge whose higher vertex is at or above it has no entry, found without a look. The strip's new
-    /// vertices are numbered after everything accepted, and in the order stitch makes faces, so
-    /// most of a strip's edges are new to both lists.
+    /// an edge whose higher vertex is at or above it has no entry, found without a look. The
+    /// strip's new vertices are numbered after everything accepted, and in the order stitch makes
+    /// faces, so most of a strip's edges are new to both lists.
     std::int32_t vertex_end_ = 0;
     HugePageVector<Entry> entries_;
     std::uint32_t free_ = kNone;  ///< removed entries, chained through `next`
