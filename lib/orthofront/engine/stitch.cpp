@@ -1,6 +1,5 @@
 #include "orthofront/engine/stitch.h"
 
-
 namespace orthofront {
 
 template <int N>
