@@ -118,7 +118,7 @@ struct StreamSurfaceOptions {
   double timeline_step = 0;  ///< time step of the timeline baseline; 0: ℓ / median seed speed
   double closed_log_product_limit = 0.5;  ///< |ln ∏(-p_i/q_i)| above this: no closed front
 
-  /// Fronts (and stitched strips) with fewer vertices (faces) run serially: `orthofront bench
+  /// Fronts with fewer vertices run their per-vertex stages serially: `orthofront bench
   /// --parallel-threshold` on 2 cores, 128 against 512: Lorenz 82.4-82.5 against 84.6-86.1 ms.
   std::size_t parallel_threshold = 128;
   bool measure_quality = true;
