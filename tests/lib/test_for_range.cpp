@@ -36,40 +36,42 @@ std::vector<int> visit(CheapLoop& loop, std::size_t n, std::size_t threshold,
   return out;
 }
 
+/// Whether `try_once` returns true within `attempts` tries. CheapLoop measures wall time: a
+/// thread descheduled while a loop runs makes a cheap loop look dear, so a timed check gets a
+/// few fresh loops; a CheapLoop that split cheap items would fail every one.
+template <class Try>
+bool within_attempts(int attempts, Try&& try_once) {
+  for (int attempt = 0; attempt < attempts; ++attempt)
+    if (try_once()) return true;
+  return false;
+}
+
 }  // namespace
 
 TEST_CASE("CheapLoop splits a loop only once its serial time would pay for that",
           "[engine][threads]") {
   const std::vector<int> once_each(600, 1);
-  // What the loop measures is wall time: a thread descheduled while it runs makes a cheap loop
-  // look dear. So each timed check gets a few fresh loops; a CheapLoop that split cheap items
-  // would fail every one.
   constexpr int kAttempts = 5;
   SECTION("cheap items stay serial") {
-    bool serial = false;
-    for (int attempt = 0; attempt < kAttempts && !serial; ++attempt) {
+    CHECK(within_attempts(kAttempts, [&] {
       CheapLoop loop;
       CHECK_FALSE(loop.splits(600, 128));  // nothing measured yet
       CHECK(visit(loop, 600, 128, 0.0) == once_each);
       // 600 increments take far less than 40 µs: still serial.
-      serial = !loop.splits(600, 128);
-    }
-    CHECK(serial);
+      return !loop.splits(600, 128);
+    }));
   }
   SECTION("costly items split, below the threshold never") {
-    bool single_item_serial = false;
-    for (int attempt = 0; attempt < kAttempts && !single_item_serial; ++attempt) {
+    CHECK(within_attempts(kAttempts, [&] {
       CheapLoop loop;
       CHECK(visit(loop, 600, 128, 1e-6) == once_each);  // measured: about 600 µs in all
       CHECK(loop.splits(600, 128));
       CHECK_FALSE(loop.splits(100, 128));  // under the threshold
-      single_item_serial = !loop.splits(1, 0);  // about 1 µs: not worth a split
-    }
-    CHECK(single_item_serial);
+      return !loop.splits(1, 0);           // about 1 µs: not worth a split
+    }));
   }
   SECTION("after kRemeasureAfter split loops one runs serially and measures again") {
-    bool measured_cheap = false;
-    for (int attempt = 0; attempt < kAttempts && !measured_cheap; ++attempt) {
+    CHECK(within_attempts(kAttempts, [&] {
       CheapLoop loop;
       visit(loop, 600, 128, 1e-6);
       for (unsigned k = 0; k < CheapLoop::kRemeasureAfter; ++k) {
@@ -78,9 +80,8 @@ TEST_CASE("CheapLoop splits a loop only once its serial time would pay for that"
       }
       CHECK_FALSE(loop.splits(600, 128));
       CHECK(visit(loop, 600, 128, 0.0) == once_each);  // serial: now measured as cheap
-      measured_cheap = !loop.splits(600, 128);
-    }
-    CHECK(measured_cheap);
+      return !loop.splits(600, 128);
+    }));
   }
   SECTION("a split loop visits every item once") {
     tbb::task_arena arena(2);

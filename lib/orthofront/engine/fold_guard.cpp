@@ -115,16 +115,17 @@ std::vector<std::int32_t> FoldGuard::folded_vertices(const Mesh& mesh, std::size
   changes_first_ = first_face;
   changes_known_ = true;
   std::vector<std::int32_t> out;
-  check_faces(mesh, first_face, mesh.faces.size(), first_new_vertex, out);
+  check_faces(mesh, first_face, first_new_vertex, out);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
-void FoldGuard::check_faces(const Mesh& mesh, std::size_t begin, std::size_t end,
-                            std::size_t first_new_vertex, std::vector<std::int32_t>& out) {
+void FoldGuard::check_faces(const Mesh& mesh, std::size_t begin, std::size_t first_new_vertex,
+                            std::vector<std::int32_t>& out) {
   const Vec3* const positions = mesh.positions.data();
   const Face* const faces = mesh.faces.data();
+  const std::size_t end = mesh.faces.size();
   const auto is_new = [&](std::int32_t v) {
     return v >= 0 && static_cast<std::size_t>(v) >= first_new_vertex;
   };

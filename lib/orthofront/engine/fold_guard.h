@@ -39,9 +39,10 @@ class FoldGuard {
   /// faces checked last are known already).
   void add_to_boundary(const Mesh& mesh, std::size_t first, std::size_t end);
 
-  /// folded_vertices()'s check of faces [begin, end), adding the vertices on folds to `out`.
-  void check_faces(const Mesh& mesh, std::size_t begin, std::size_t end,
-                   std::size_t first_new_vertex, std::vector<std::int32_t>& out);
+  /// folded_vertices()'s check of the faces from `begin` on, adding the vertices on folds to
+  /// `out`.
+  void check_faces(const Mesh& mesh, std::size_t begin, std::size_t first_new_vertex,
+                   std::vector<std::int32_t>& out);
 
   /// A face of the strip being checked on an edge: the face, whether it walks the edge from its
   /// lower to its higher vertex (its area vector is in checked_normals_), and the boundary change
