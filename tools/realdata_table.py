@@ -3,10 +3,11 @@
 guard, the stall cut and gap closing (the engine as it was before them), with the guard only, and
 the default (all three): quads, angles, edge spread, folds, non-manifold edges, T-junctions, fold
 rips, stall cuts, gap faces, boundary edges, why α was clamped and insertions fell back, seed
-shots skipped, field evaluations, and time by stage.
+shots skipped, field evaluations, and time by stage. --baseline adds a row per case from another
+build run with its defaults (an older one: figures its report lacks print as "-").
 
-    tools/realdata_table.py [--binary build/apps/orthofront] [--data ../shared/datasets]
-                            [--json table.json]
+    tools/realdata_table.py [--binary build/apps/orthofront] [--baseline OLD/orthofront]
+                            [--data ../shared/datasets] [--json table.json]
 
 Data sets that are absent are skipped with a line saying so."""
 
@@ -55,34 +56,41 @@ def run(binary, field, args, variant, work):
 
 def row(name, variant, r):
     c, q, t = r["counts"], r["quality"], r["times_s"]
-    inserted = (c["streamline_insertions"] + c["previous_row_insertions"] +
+    inserted = (c["streamline_insertions"] + c.get("previous_row_insertions", 0) +
                 c["insertion_fallbacks"])
+    gaps = c.get("gaps_closed")
     return {
         "case": name, "variant": variant, "vertices": c["vertices"],
         "quads_pct": 100.0 * c["quads"] / max(1, c["faces"]),
         "angles_within_10_pct": 100.0 * q["quad_angles_within_10deg"],
         "edge_spread": q["edge_spread_median"], "folds": q["folds"],
         "non_manifold_edges": q["non_manifold_edges"], "t_junctions": q["t_junctions"],
-        "degenerate_faces": q["degenerate_faces"], "fold_rips": c["fold_rips"],
-        "stall_cuts": c["stall_cuts"], "gap_faces": c["gaps_closed"]["faces"],
-        "boundary_edges": q["boundary_edges"],
+        "degenerate_faces": q["degenerate_faces"], "fold_rips": c.get("fold_rips"),
+        "stall_cuts": c.get("stall_cuts"), "gap_faces": gaps["faces"] if gaps else None,
+        "boundary_edges": q.get("boundary_edges"),
         "clamped_pct": 100.0 * c["clamped_alpha"] / max(1, c["vertex_steps"]),
-        "clamped_by_cause": c["clamped_alpha_by_cause"],
+        "clamped_by_cause": c.get("clamped_alpha_by_cause"),
         "fallback_pct": 100.0 * c["insertion_fallbacks"] / max(1, inserted),
-        "previous_row_insertions": c["previous_row_insertions"],
-        "seed_shots_skipped": c.get("seed_shots_skipped", 0),
+        "previous_row_insertions": c.get("previous_row_insertions"),
+        "seed_shots_skipped": c.get("seed_shots_skipped"),
         "evaluations": c["field_evaluations"],
-        "fallbacks_by_cause": c["insertion_fallbacks_by_cause"],
+        "fallbacks_by_cause": c.get("insertion_fallbacks_by_cause"),
         "skipped_pct": 100.0 * c["skipped_vertex_steps"] / max(1, c["vertex_steps"]),
         "times_s": {k: t[k] for k in ("total", "alpha", "advance", "adapt", "stitch", "quality")
                     if k in t},
     }
 
 
+def cell(value, form):
+    """A figure as `form`, or "-" where the build that ran has no such figure."""
+    return "-" if value is None else form % value
+
+
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--binary", default=os.path.join(here, "..", "build", "apps", "orthofront"))
+    parser.add_argument("--baseline", help="another build (e.g. an older one), run with its defaults")
     parser.add_argument("--data", default=os.path.join(here, "..", "..", "shared", "datasets"))
     parser.add_argument("--json", help="also write the rows here")
     a = parser.parse_args()
@@ -98,20 +106,25 @@ def main():
             if not os.path.exists(field):
                 print("| %s | skipped: %s not found |" % (name, field))
                 continue
-            for variant, options in VARIANTS:
-                x = row(name, variant, run(a.binary, field, args, options, work))
+            runs = [(variant, a.binary, options) for variant, options in VARIANTS]
+            if a.baseline:
+                runs.insert(0, ("baseline", a.baseline, ""))
+            for variant, binary, options in runs:
+                x = row(name, variant, run(binary, field, args, options, work))
                 rows.append(x)
                 t = x["times_s"]
-                print("| %s | %s | %d | %.1f | %.1f | %.3f | %d | %d | %d | %d | %d | %d | %d | %d | %.1f | %.1f | "
-                      "%.1f | %d | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |" % (
-                          name, variant, x["vertices"], x["quads_pct"],
-                          x["angles_within_10_pct"], x["edge_spread"], x["folds"],
-                          x["non_manifold_edges"], x["t_junctions"], x["degenerate_faces"],
-                          x["fold_rips"], x["stall_cuts"], x["gap_faces"], x["boundary_edges"],
-                          x["clamped_pct"], x["fallback_pct"], x["skipped_pct"],
-                          x["seed_shots_skipped"], x["evaluations"] / 1e6,
-                          t.get("total", 0), t.get("alpha", 0), t.get("advance", 0),
-                          t.get("adapt", 0), t.get("stitch", 0), t.get("quality", 0)))
+                cells = [name, variant, "%d" % x["vertices"], "%.1f" % x["quads_pct"],
+                         "%.1f" % x["angles_within_10_pct"], "%.3f" % x["edge_spread"],
+                         "%d" % x["folds"], "%d" % x["non_manifold_edges"],
+                         "%d" % x["t_junctions"], "%d" % x["degenerate_faces"],
+                         cell(x["fold_rips"], "%d"), cell(x["stall_cuts"], "%d"),
+                         cell(x["gap_faces"], "%d"), cell(x["boundary_edges"], "%d"),
+                         "%.1f" % x["clamped_pct"], "%.1f" % x["fallback_pct"],
+                         "%.1f" % x["skipped_pct"], cell(x["seed_shots_skipped"], "%d"),
+                         "%.2f" % (x["evaluations"] / 1e6)]
+                cells += ["%.3f" % t.get(k, 0)
+                          for k in ("total", "alpha", "advance", "adapt", "stitch", "quality")]
+                print("| " + " | ".join(cells) + " |")
     print()
     for x in rows:
         if x["variant"] == "default":

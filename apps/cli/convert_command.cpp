@@ -17,6 +17,7 @@
 
 #include "cli/commands.h"
 #include "cli/grid_args.h"
+#include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
 #include "orthofront/io/data_file.h"
@@ -273,12 +274,6 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
   return input;
 }
 
-std::string mib(double bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f MiB", bytes / (1024.0 * 1024.0));
-  return text;
-}
-
 void run_convert(const ConvertArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path out = args.out;
@@ -419,8 +414,8 @@ void run_convert(const ConvertArgs& args) {
       if (steps > 1) std::cout << " .. " << out_times.back();
       if (default_times) std::cout << " (no --times or --dt: steps at t = 0, 1, 2, ...)";
     }
-    std::cout << ", " << mib(static_cast<double>(series.step_bytes()) * static_cast<double>(steps))
-              << " (" << mib(static_cast<double>(std::filesystem::file_size(out)))
+    std::cout << ", " << format_memory(series.step_bytes() * steps) << " ("
+              << format_memory(std::filesystem::file_size(out))
               << " on disk) in " << seconds << " s\n";
   }
 }

@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/grid_args.h"
+#include "cli/process_memory.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
@@ -54,12 +55,6 @@ class FieldAtTime final : public Field3 {
   const UnsteadyField& field_;
   double t_;
 };
-
-std::string mib(double bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f MiB", bytes / (1024.0 * 1024.0));
-  return text;
-}
 
 void run_generate(const GenerateArgs& args) {
   const std::filesystem::path out = args.out;
@@ -142,13 +137,13 @@ void run_generate(const GenerateArgs& args) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
-    const double step_bytes = static_cast<double>(geometry.point_count()) * components * 4.0;
+    const std::size_t step_bytes = geometry.point_count() * static_cast<std::size_t>(components) * 4;
     std::cout << "Wrote " << args.out << " and " << io::xdmf_path(out).string() << ": "
               << args.field << " on " << geometry.size[0] << " x " << geometry.size[1];
     if (geometry.dimension == 3) std::cout << " x " << geometry.size[2];
     std::cout << " points, " << components << " components, " << steps_written
-              << (steps_written == 1 ? " step" : " steps") << " of " << mib(step_bytes) << " ("
-              << mib(static_cast<double>(std::filesystem::file_size(out))) << " on disk) in "
+              << (steps_written == 1 ? " step" : " steps") << " of " << format_memory(step_bytes) << " ("
+              << format_memory(std::filesystem::file_size(out)) << " on disk) in "
               << seconds << " s\n";
   }
 }

@@ -1,6 +1,7 @@
 // The front type's algorithms: cutting a front into parts, its Catmull-Rom points, its length.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "orthofront/engine/front.h"
@@ -119,8 +120,16 @@ TEST_CASE("cubic_point interpolates the front's vertices", "[engine][front]") {
   }
 }
 
-TEST_CASE("front_length counts the closing segment of a closed front", "[engine][front]") {
+TEST_CASE("front_shorter_than counts the closing segment of a closed front", "[engine][front]") {
   const std::vector<Vec3> square{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)};
-  CHECK(front_length(front_through(square, false)) == Approx(3));
-  CHECK(front_length(front_through(square, true)) == Approx(4));
+  const Front<3> open = front_through(square, false), closed = front_through(square, true);
+  CHECK(front_shorter_than(open, 3.5));
+  CHECK_FALSE(front_shorter_than(open, 3));  // exactly as long
+  CHECK_FALSE(front_shorter_than(open, 1));  // reached on the first segment
+  CHECK(front_shorter_than(closed, 4.5));
+  CHECK_FALSE(front_shorter_than(closed, 3.5));  // only with the closing segment
+  // A NaN coordinate makes the length NaN, which is not shorter than anything.
+  std::vector<Vec3> broken = square;
+  broken[1][0] = std::numeric_limits<double>::quiet_NaN();
+  CHECK_FALSE(front_shorter_than(front_through(broken, false), 100));
 }

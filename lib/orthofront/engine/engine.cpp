@@ -257,7 +257,7 @@ class Engine {
     // point in the mesh, but not in the front.
     for (auto& part : split(std::move(advanced), keep, cut)) {
       for (auto& piece : adapt_and_link(std::move(part), &f, step)) {
-        if (piece.v.size() < 2 || front_length(piece) < opt_.edge) {
+        if (piece.v.size() < 2 || front_shorter_than(piece, opt_.edge)) {
           ++report_.fronts_dropped_short;
           continue;
         }

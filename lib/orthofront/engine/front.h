@@ -115,13 +115,18 @@ Vec<N> cubic_point(const Front<N>& f, std::size_t i, double lambda) {
                 (-p0 + 3 * p1 - 3 * p2 + p3) * t3);
 }
 
-/// Length of the front's polyline (with the closing segment of a closed front).
+/// Whether the front's polyline (with the closing segment of a closed front) is shorter than
+/// `length`. Stops at the first segments that reach it: most fronts are many times longer, and a
+/// sum of non-negative terms never falls, so the answer is that of the whole sum.
 template <int N>
-double front_length(const Front<N>& f) {
-  double length = 0;
-  for (std::size_t i = 0; i + 1 < f.v.size(); ++i) length += (f.v[i + 1].x - f.v[i].x).norm();
-  if (f.closed && f.v.size() > 1) length += (f.v.front().x - f.v.back().x).norm();
-  return length;
+bool front_shorter_than(const Front<N>& f, double length) {
+  double sum = 0;
+  for (std::size_t i = 0; i + 1 < f.v.size(); ++i) {
+    sum += (f.v[i + 1].x - f.v[i].x).norm();
+    if (sum >= length) return false;
+  }
+  if (f.closed && f.v.size() > 1) sum += (f.v.front().x - f.v.back().x).norm();
+  return sum < length;
 }
 
 /// Whether a front vertex moved away from its mesh vertex (one whose α was clamped to 0 did not:
