@@ -76,6 +76,9 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
   c.add_flag("!--no-shots-ahead", o.shots_ahead,
              "Integrate seed shots only when an insertion needs them, not a step ahead on an "
              "idle thread (the same surface, for timing)");
+  c.add_flag("!--no-samples-ahead", o.samples_ahead,
+             "Sample each front when its step begins, not while the previous strip is stitched "
+             "on an idle thread (the same surface, for timing)");
   c.add_option("--shot-evaluations", o.shot_evaluations,
                "The most field evaluations an insertion's stream line from the seed may cost; "
                "from the first that runs out, insertions on longer ones start from the previous "

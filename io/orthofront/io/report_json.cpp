@@ -36,6 +36,7 @@ nlohmann::json to_json(const StreamSurfaceOptions& o) {
       {"rip_sharpness", o.rip_sharpness},
       {"rip_speed_fraction", o.rip_speed_fraction},
       {"shots_ahead", o.shots_ahead},
+      {"samples_ahead", o.samples_ahead},
       {"shot_evaluations", o.shot_evaluations},
       {"integrator", to_string(o.integrator)},
       {"tolerance", o.tolerance},
@@ -116,6 +117,8 @@ nlohmann::json to_json(const SurfaceReport& r) {
                                      ? nlohmann::json(r.seed_shot_time_limit)
                                      : nlohmann::json(nullptr)},
         {"seed_legs_ahead", {{"started", r.legs_started_ahead}, {"used", r.legs_used_ahead}}},
+        {"front_samples_ahead",
+         {{"started", r.samples_started_ahead}, {"used", r.samples_used_ahead}}},
         {"insertion_fallbacks", r.insertion_fallbacks},
         {"insertion_fallbacks_by_cause",
          {{"left_domain_or_no_data", r.fallback_left_domain},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace orthofront {
 
@@ -14,20 +15,26 @@ FrontAdvect<N>::FrontAdvect(const Field<N>& field, const StreamSurfaceOptions& o
       report_(report) {}
 
 template <int N>
-bool FrontAdvect<N>::sample(const Front<N>& f, std::vector<char>& keep, std::size_t& exits) {
+bool FrontAdvect<N>::sample(const Front<N>& f, std::vector<char>& keep, std::size_t& exits,
+                           VertexSamples<N>* ahead) {
   const std::size_t n = f.v.size();
-  vel_.resize(n);
-  speed_.resize(n);
-  state_.assign(n, VertexState::ok);
-  velocity_loop_.run(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const FieldStatus st = field_.velocity(f.v[i].x, vel_[i]);
-      state_[i] = st == FieldStatus::inside    ? VertexState::ok
-                  : st == FieldStatus::outside ? VertexState::outside
-                                               : VertexState::no_data;
-      speed_[i] = st == FieldStatus::inside ? vel_[i].norm() : 0.0;
-    }
-  });
+  if (ahead) {
+    std::swap(samples_, *ahead);
+  } else {
+    samples_.resize(n);
+    const auto at = [&f](std::size_t i) -> const Vec<N>& { return f.v[i].x; };
+    velocity_loop_.run(n, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+      sample_vertices(field_, at, b, e, samples_);
+    });
+  }
+  const std::vector<double>& speed = samples_.speed;
+  state_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const FieldStatus st = samples_.status[i];
+    state_[i] = st == FieldStatus::inside    ? VertexState::ok
+                : st == FieldStatus::outside ? VertexState::outside
+                                             : VertexState::no_data;
+  }
   report_.field_evaluations += n;
   // No speed is below the zero-speed share of the median where none is below that share of the
   // largest (the median is no larger; a share >= 0 keeps the order): the median, a copy and a
@@ -35,17 +42,17 @@ bool FrontAdvect<N>::sample(const Front<N>& f, std::vector<char>& keep, std::siz
   double slowest = std::numeric_limits<double>::infinity(), fastest = 0;
   bool comparable = true;  // no NaN (which the median's test marks as no flow)
   for (std::size_t i = 0; i < n; ++i) {
-    comparable = comparable && !std::isnan(speed_[i]);
-    fastest = std::max(fastest, speed_[i]);
-    if (state_[i] == VertexState::ok) slowest = std::min(slowest, speed_[i]);
+    comparable = comparable && !std::isnan(speed[i]);
+    fastest = std::max(fastest, speed[i]);
+    if (state_[i] == VertexState::ok) slowest = std::min(slowest, speed[i]);
   }
   const bool all_fast = comparable && std::isfinite(fastest) && opt_.zero_speed_fraction >= 0 &&
                         slowest > opt_.zero_speed_fraction * fastest;
-  const double median = all_fast ? 0.0 : median_of(speed_);
+  const double median = all_fast ? 0.0 : median_of(speed);
   bool usable = true;
   for (std::size_t i = 0; i < n; ++i) {
     if (state_[i] == VertexState::ok && !all_fast &&
-        !(speed_[i] > opt_.zero_speed_fraction * median)) {
+        !(speed[i] > opt_.zero_speed_fraction * median)) {
       state_[i] = VertexState::zero_speed;
       ++report_.zero_velocity_cuts;
     }

@@ -9,6 +9,7 @@
 #include "orthofront/engine/for_range.h"
 #include "orthofront/engine/front.h"
 #include "orthofront/engine/front_integrator.h"
+#include "orthofront/engine/front_samples.h"
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
 #include "orthofront/field/field.h"
@@ -33,11 +34,13 @@ class FrontAdvect {
 
   /// v and |v| at every vertex of `f` (velocities(), speeds()); marks (keep[i] = 0) those without
   /// usable flow: outside, no data, or a speed below zero_speed_fraction of the median. Returns
-  /// false when any was marked; `exits` counts those outside.
-  bool sample(const Front<N>& f, std::vector<char>& keep, std::size_t& exits);
+  /// false when any was marked; `exits` counts those outside. `ahead`: the same samples taken
+  /// already (samples_ahead.h), whose vectors this trades with its own.
+  bool sample(const Front<N>& f, std::vector<char>& keep, std::size_t& exits,
+              VertexSamples<N>* ahead = nullptr);
   /// What sample() found (the α step may rotate them with a closed front).
-  std::vector<Vec<N>>& velocities() { return vel_; }
-  std::vector<double>& speeds() { return speed_; }
+  std::vector<Vec<N>>& velocities() { return samples_.vel; }
+  std::vector<double>& speeds() { return samples_.speed; }
   VertexState state(std::size_t i) const { return state_[i]; }
 
   /// `f` with every vertex moved along its stream line by α_i h; a vertex whose stream line ended
@@ -59,8 +62,7 @@ class FrontAdvect {
   SurfaceReport& report_;
   FrontIntegrator<N>* front_integrator_ = nullptr;
   // Scratch, reused between fronts and steps.
-  std::vector<Vec<N>> vel_;
-  std::vector<double> speed_;
+  VertexSamples<N> samples_;
   std::vector<VertexState> state_;
   std::vector<int> evaluations_;
   std::vector<Vec<N>> batch_x_;  ///< the bulk backend's arrays

@@ -47,45 +47,36 @@ template <int N>
 typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<N>>& vel,
                                                   std::vector<double>& speed,
                                                   std::vector<double>& alpha,
-                                                  std::vector<char>& cut) {
+                                                  std::vector<char>& cut,
+                                                  SegmentTerms<N>* ahead) {
   damping_infeasible_ = false;
   const std::size_t n = f.v.size();
   const std::size_t segments = f.closed ? n : n - 1;
-  p_.resize(segments);
-  q_.resize(segments);
-  r_.resize(segments);
-  seg_ok_.assign(segments, 1);
-  seg_err_.resize(segments);
-  segment_loop_.run(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
-    Vec<N> vm;
-    Mat<N> jm;
-    for (std::size_t i = b; i < e; ++i) {
-      const std::size_t j = next_index(i, n);
-      const Vec<N> d = f.v[j].x - f.v[i].x;
-      const Vec<N> mid = 0.5 * (f.v[i].x + f.v[j].x);
-      if (field_.velocity_jacobian(mid, vm, jm) != FieldStatus::inside) {
-        seg_ok_[i] = 0;
-        continue;
-      }
-      p_[i] = 0.5 * d.dot(jm * vel[i]) - vel[i].dot(vm);
-      q_[i] = 0.5 * d.dot(jm * vel[j]) + vel[j].dot(vm);
-      r_[i] = d.dot(vm);
-      const double denom = d.norm() * vm.norm();
-      seg_err_[i] = denom > 0 ? std::abs(r_[i]) / denom : 0.0;
-    }
-  });
+  if (ahead) {
+    std::swap(terms_, *ahead);
+  } else {
+    terms_.resize(segments);
+    const auto at = [&f](std::size_t i) -> const Vec<N>& { return f.v[i].x; };
+    segment_loop_.run(segments, opt_.parallel_threshold, [&](std::size_t b, std::size_t e) {
+      segment_terms(field_, at, n, vel, b, e, terms_);
+    });
+  }
+  std::vector<double>& p = terms_.p;
+  std::vector<double>& q = terms_.q;
+  std::vector<double>& r = terms_.r;
+  const std::vector<double>& err = terms_.err;
   report_.field_evaluations += segments;
   // One pass: the orthogonality sums count only when every segment had flow.
   bool any_bad = false;
   double sum = ortho_sum_, largest = record_.orthogonality_max;
   for (std::size_t i = 0; i < segments; ++i) {
-    if (!seg_ok_[i]) {
+    if (!terms_.ok[i]) {
       cut[i] = 1;
       any_bad = true;
       continue;
     }
-    sum += seg_err_[i];
-    largest = std::max(largest, seg_err_[i]);
+    sum += err[i];
+    largest = std::max(largest, err[i]);
   }
   if (any_bad) return Outcome::cut;
   ortho_sum_ = sum;
@@ -96,14 +87,14 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
       // Vertex error: mean |cos| of the adjacent segments.
       const std::size_t a = f.closed ? previous_index(i, n) : (i == 0 ? 0 : i - 1);
       const std::size_t b = f.closed ? i : std::min(i, segments - 1);
-      mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (seg_err_[a] + seg_err_[b]);
+      mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (err[a] + err[b]);
     }
 
   if (f.closed) {
     double log_product = 0;
     bool negative = false;
     for (std::size_t i = 0; i < n; ++i) {
-      const double ratio = -p_[i] / q_[i];
+      const double ratio = -p[i] / q[i];
       negative = negative != (ratio < 0);
       log_product += std::log(std::abs(ratio));
     }
@@ -111,15 +102,15 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
       report_.closed_log_product = log_product;
     std::size_t drop = 0;
     for (std::size_t i = 1; i < n; ++i)
-      if (std::abs(r_[i]) < std::abs(r_[drop])) drop = i;
+      if (std::abs(r[i]) < std::abs(r[drop])) drop = i;
     // Rotate so the dropped equation joins the last and the first vertex.
     const std::size_t shift = (drop + 1) % n;
     rotate_by_copy(f.v, shift, front_scratch_);
     rotate_by_copy(vel, shift, vel_scratch_);
     rotate_by_copy(speed, shift, value_scratch_);
-    rotate_by_copy(p_, shift, value_scratch_);
-    rotate_by_copy(q_, shift, value_scratch_);
-    rotate_by_copy(r_, shift, value_scratch_);
+    rotate_by_copy(p, shift, value_scratch_);
+    rotate_by_copy(q, shift, value_scratch_);
+    rotate_by_copy(r, shift, value_scratch_);
     if (negative || std::abs(log_product) > opt_.closed_log_product_limit) {
       // No closed orthogonal front exists here (e.g. a spiral): open the front at the
       // dropped segment instead of folding the mesh.
@@ -134,8 +125,8 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
   aln_.resize(n);
   kernel_.resize(n);
   const AlphaSolver::Result res =
-      solver_.solve(std::span<const double>(p_.data(), m), std::span<const double>(q_.data(), m),
-                    std::span<const double>(r_.data(), m), aln_, kernel_);
+      solver_.solve(std::span<const double>(p.data(), m), std::span<const double>(q.data(), m),
+                    std::span<const double>(r.data(), m), aln_, kernel_);
   if (!res.ok) {
     // Singular system (e.g. a segment of zero length): fall back to uniform advance.
     std::fill(alpha.begin(), alpha.end(), 1.0);

@@ -7,6 +7,7 @@
 
 #include "orthofront/engine/for_range.h"
 #include "orthofront/engine/front.h"
+#include "orthofront/engine/front_samples.h"
 #include "orthofront/engine/options.h"
 #include "orthofront/engine/report.h"
 #include "orthofront/field/field.h"
@@ -38,9 +39,11 @@ class AlphaStep {
   /// returns `cut`. A closed front drops its equation of smallest |r| and is rotated (with `vel`
   /// and `speed`) so that it becomes the closing segment; where no closed orthogonal front exists
   /// it is opened there. The rotation trades the storage of f.v, `vel` and `speed` with this
-  /// object's scratch: pointers into them do not survive the call.
+  /// object's scratch: pointers into them do not survive the call. `ahead`: the equations'
+  /// terms taken already (samples_ahead.h), whose vectors this trades with its own.
   Outcome solve(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>& speed,
-                std::vector<double>& alpha, std::vector<char>& cut);
+                std::vector<double>& alpha, std::vector<char>& cut,
+                SegmentTerms<N>* ahead = nullptr);
 
   /// The timeline baseline's orthogonality figures (it solves nothing).
   void measure_orthogonality(const Front<N>& f, const std::vector<Vec<N>>& vel);
@@ -69,8 +72,8 @@ class AlphaStep {
   AlphaSolver solver_;
   CheapLoop segment_loop_;  ///< v and J at the segments' midpoints
   // Scratch, reused between fronts and steps.
-  std::vector<double> p_, q_, r_, aln_, kernel_, seg_err_;
-  std::vector<char> seg_ok_;
+  SegmentTerms<N> terms_;
+  std::vector<double> aln_, kernel_;
   // Room for rotating a closed front and its per-vertex arrays.
   std::vector<FrontVertex<N>> front_scratch_;
   std::vector<Vec<N>> vel_scratch_;

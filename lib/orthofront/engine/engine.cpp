@@ -10,6 +10,7 @@
 #include "orthofront/engine/discretization.h"
 #include "orthofront/engine/link.h"
 #include "orthofront/engine/rip.h"
+#include "orthofront/engine/samples_ahead.h"
 #include "orthofront/engine/surface_builder.h"
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
@@ -158,6 +159,7 @@ class Engine {
     step_record_.h_min = std::numeric_limits<double>::infinity();
     discretization_->begin_step();
     adapter_.begin_step();
+    samples_ahead_.begin_step();
     exits_this_step_ = 0;
     std::vector<Front<N>> next;
     std::vector<Front<N>> queue = std::move(fronts_);
@@ -206,6 +208,8 @@ class Engine {
     report_.steps = step_;
     report_.legs_started_ahead = adapter_.legs_started_ahead();
     report_.legs_used_ahead = adapter_.legs_used_ahead();
+    report_.samples_started_ahead = samples_ahead_.started();
+    report_.samples_used_ahead = samples_ahead_.used();
     report_.vertices = mesh_.vertex_count();
     report_.faces = mesh_.face_count();
     report_.quads = static_cast<std::size_t>(std::count_if(
@@ -232,9 +236,12 @@ class Engine {
     if (find_stalled(f, step, keep)) return requeue();
     {
       StageTimer timer(report_.times.alpha);
-      if (!advect_.sample(f, keep, exits_this_step_)) return requeue();
+      auto* ahead = samples_ahead_.take(f);
+      if (!advect_.sample(f, keep, exits_this_step_, ahead ? &ahead->vertices : nullptr))
+        return requeue();
       alpha_.assign(n, 1.0);
-      if (!discretization_->alpha(f, advect_.velocities(), advect_.speeds(), alpha_, cut))
+      if (!discretization_->alpha(f, advect_.velocities(), advect_.speeds(), alpha_, cut,
+                                  ahead && ahead->has_segments ? &ahead->segments : nullptr))
         return requeue();
     }
     if (discretization_->safeguarded() && opt_.rip) {
@@ -314,6 +321,11 @@ class Engine {
         parts.push_back(std::move(f));
       }
     }
+    // The next step samples these fronts first: an idle thread can do it while they are
+    // stitched (only large ones: a task costs more than sampling a few dozen vertices).
+    if (step < opt_.max_steps)
+      for (const Front<N>& part : parts)
+        if (part.v.size() >= opt_.parallel_threshold) samples_ahead_.start(part);
     StageTimer timer(report_.times.stitch);
     if (!old) return parts;
     return linker_.link(std::move(parts), *old, step, first_inserted);
@@ -449,6 +461,8 @@ class Engine {
   std::unique_ptr<Discretization<N>> discretization_ =
       make_discretization(field_, opt_, mesh_, report_, step_record_);
   FrontAdvect<N> advect_{field_, opt_, tol_, integration_stop_, stopping_, report_};
+  // The timeline baseline solves no α system: sampling ahead would save it little.
+  SamplesAhead<N> samples_ahead_{field_, opt_.samples_ahead && discretization_->safeguarded()};
   FrontAdapter<N> adapter_{field_, seed_, opt_, tol_, integration_stop_, mesh_, report_};
   // The paper's baseline keeps every row (no row skipping) and has no fold guard.
   StripLinker<N> linker_{

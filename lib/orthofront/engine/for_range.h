@@ -1,6 +1,7 @@
 #pragma once
 /// One loop body for the serial and the parallel path of the engine's per-vertex stages.
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -8,6 +9,13 @@
 #include <cstddef>
 
 namespace orthofront {
+
+/// Whether TBB may run a task on another thread than the caller's (the arena has room and no
+/// global limit allows one thread only): work started ahead on an idle thread can run at all.
+inline bool another_thread_may_run() {
+  return tbb::this_task_arena::max_concurrency() > 1 &&
+         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+}
 
 /// Runs body(begin, end) over [0, n): serially below `threshold` items, else in TBB tasks of at
 /// least `grain` items (64 cheap vertex updates; 1 for costly items such as insertions).

@@ -105,6 +105,11 @@ struct StreamSurfaceOptions {
   /// previous front's time; a step starts the legs of the next step's likely insertions on
   /// TBB's idle worker (engine/seed_shot_legs.h). The mesh is the same either way, bit for bit.
   bool shots_ahead = true;
+  /// The link stage starts sampling each front it stitches (v at its vertices, the α system's
+  /// terms at its segments) on TBB's idle worker; the next step takes the samples where its front
+  /// has the same positions (engine/samples_ahead.h). The mesh is the same either way, bit for
+  /// bit.
+  bool samples_ahead = true;
   /// The most field evaluations an insertion's stream line from the seed may cost (its first
   /// leg). A shot costs the surface's age in integration: one that runs out sets a time (its
   /// leg's) from which this surface's insertions start from the previous row instead, one

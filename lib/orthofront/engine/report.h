@@ -77,6 +77,10 @@ struct SurfaceReport {
   /// First legs of seed shots integrated ahead on an idle thread (seed_shot_legs.h), and those
   /// an insertion then used. This process's run only: a saved state does not keep them.
   std::size_t legs_started_ahead = 0, legs_used_ahead = 0;
+  /// Fronts whose samples were queued for an idle thread while their strip was stitched
+  /// (samples_ahead.h), and those a task had sampled (or was sampling) when the next step asked.
+  /// Depends on thread timing; this process's run only: a saved state does not keep them.
+  std::size_t samples_started_ahead = 0, samples_used_ahead = 0;
   /// Why a stream-line insertion fell back to the cubic point (the two add up to
   /// insertion_fallbacks): its stream line left the domain or met no data, or it ended a
   /// quarter of the segment or more away from the front.

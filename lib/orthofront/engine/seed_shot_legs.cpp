@@ -1,9 +1,8 @@
 #include "orthofront/engine/seed_shot_legs.h"
 
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
-
 #include <cmath>
+
+#include "orthofront/engine/for_range.h"
 
 namespace orthofront {
 
@@ -94,8 +93,7 @@ IntegrationResult<N> SeedShotLegs<N>::leg(double s, double t1) const {
 
 template <int N>
 bool SeedShotLegs<N>::can_run_ahead() const {
-  return tbb::this_task_arena::max_concurrency() > 1 &&
-         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+  return another_thread_may_run();
 }
 
 template <int N>

@@ -239,8 +239,9 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     engine.stall_steps = 0;
     engine.close_gaps = false;
     // The flow notes the time band of every evaluation in the step that makes it: seed-shot
-    // legs run ahead, between steps, would land in another step's band.
+    // legs and front samples taken ahead, between steps, would land in another step's band.
     engine.shots_ahead = false;
+    engine.samples_ahead = false;
     if (o.max_band > 0) {
       engine.lag_axis = N - 1;  // the lifted time coordinate τ = c t
       engine.max_lag = c_ * o.max_band;
