@@ -23,13 +23,60 @@ void rotate_by_copy(std::vector<T>& v, std::size_t shift, std::vector<T>& scratc
   v.swap(scratch);
 }
 
+/// `v` rotated left by `shift` into `out`.
+void rotated_copy(const std::vector<double>& v, std::size_t shift, std::vector<double>& out) {
+  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(shift);
+  out.resize(v.size());
+  std::copy(v.begin(), middle, std::copy(middle, v.end(), out.begin()));
+}
+
 }  // namespace
+
+void solve_alpha_system(const std::vector<double>& p, const std::vector<double>& q,
+                        const std::vector<double>& r, const std::vector<double>& speed,
+                        std::size_t n, bool closed, bool damping, double speed_limit,
+                        AlphaSolver& solver, AlphaSolution& out) {
+  out.log_product = 0;
+  out.negative = false;
+  out.shift = 0;
+  out.ok = false;
+  out.damped = false;
+  const std::vector<double>*rp = &p, *rq = &q, *rr = &r, *rs = &speed;
+  if (closed) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double ratio = -p[i] / q[i];
+      out.negative = out.negative != (ratio < 0);
+      out.log_product += std::log(std::abs(ratio));
+    }
+    std::size_t drop = 0;
+    for (std::size_t i = 1; i < n; ++i)
+      if (std::abs(r[i]) < std::abs(r[drop])) drop = i;
+    // Rotated so that the dropped equation joins the last and the first vertex.
+    out.shift = (drop + 1) % n;
+    rotated_copy(p, out.shift, out.p);
+    rotated_copy(q, out.shift, out.q);
+    rotated_copy(r, out.shift, out.r);
+    rotated_copy(speed, out.shift, out.speed);
+    rp = &out.p, rq = &out.q, rr = &out.r, rs = &out.speed;
+  }
+  const std::size_t m = n - 1;
+  out.aln.resize(n);
+  out.kernel.resize(n);
+  out.ok = solver
+               .solve(std::span<const double>(rp->data(), m), std::span<const double>(rq->data(), m),
+                      std::span<const double>(rr->data(), m), out.aln, out.kernel)
+               .ok;
+  if (!out.ok || !damping) return;
+  out.damped = true;
+  out.choice =
+      choose_damping_mu(out.aln, out.kernel, std::span<const double>(rs->data(), n), speed_limit);
+}
 
 template <int N>
 AlphaStep<N>::AlphaStep(const Field<N>& field, const StreamSurfaceOptions& options, Mesh& mesh,
                         SurfaceReport& report, StepRecord& record)
     : field_(field), opt_(options), mesh_(mesh), report_(report), record_(record) {
-  h_star_ = -std::log(1.0 - opt_.damping);
+  h_star_ = damping_step(opt_.damping);
 }
 
 template <int N>
@@ -47,13 +94,13 @@ template <int N>
 typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<N>>& vel,
                                                   std::vector<double>& speed,
                                                   std::vector<double>& alpha,
-                                                  std::vector<char>& cut,
-                                                  SegmentTerms<N>* ahead) {
+                                                  std::vector<char>& cut, SegmentTerms<N>* terms,
+                                                  AlphaSolution* solution) {
   damping_infeasible_ = false;
   const std::size_t n = f.v.size();
   const std::size_t segments = f.closed ? n : n - 1;
-  if (ahead) {
-    std::swap(terms_, *ahead);
+  if (terms) {
+    std::swap(terms_, *terms);
   } else {
     terms_.resize(segments);
     const auto at = [&f](std::size_t i) -> const Vec<N>& { return f.v[i].x; };
@@ -61,9 +108,6 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
       segment_terms(field_, at, n, vel, b, e, terms_);
     });
   }
-  std::vector<double>& p = terms_.p;
-  std::vector<double>& q = terms_.q;
-  std::vector<double>& r = terms_.r;
   const std::vector<double>& err = terms_.err;
   report_.field_evaluations += segments;
   // One pass: the orthogonality sums count only when every segment had flow.
@@ -90,58 +134,43 @@ typename AlphaStep<N>::Outcome AlphaStep<N>::solve(Front<N>& f, std::vector<Vec<
       mesh_.error[static_cast<std::size_t>(f.v[i].mesh)] = 0.5 * (err[a] + err[b]);
     }
 
+  if (solution) {
+    std::swap(solution_, *solution);
+  } else {
+    solve_alpha_system(terms_.p, terms_.q, terms_.r, speed, n, f.closed,
+                       opt_.mu_mode == MuMode::damping, opt_.edge / h_star_, solver_, solution_);
+  }
+  const AlphaSolution& sol = solution_;
   if (f.closed) {
-    double log_product = 0;
-    bool negative = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double ratio = -p[i] / q[i];
-      negative = negative != (ratio < 0);
-      log_product += std::log(std::abs(ratio));
-    }
-    if (std::abs(log_product) > std::abs(report_.closed_log_product))
-      report_.closed_log_product = log_product;
-    std::size_t drop = 0;
-    for (std::size_t i = 1; i < n; ++i)
-      if (std::abs(r[i]) < std::abs(r[drop])) drop = i;
-    // Rotate so the dropped equation joins the last and the first vertex.
-    const std::size_t shift = (drop + 1) % n;
-    rotate_by_copy(f.v, shift, front_scratch_);
-    rotate_by_copy(vel, shift, vel_scratch_);
-    rotate_by_copy(speed, shift, value_scratch_);
-    rotate_by_copy(p, shift, value_scratch_);
-    rotate_by_copy(q, shift, value_scratch_);
-    rotate_by_copy(r, shift, value_scratch_);
-    if (negative || std::abs(log_product) > opt_.closed_log_product_limit) {
+    if (std::abs(sol.log_product) > std::abs(report_.closed_log_product))
+      report_.closed_log_product = sol.log_product;
+    rotate_by_copy(f.v, sol.shift, front_scratch_);
+    rotate_by_copy(vel, sol.shift, vel_scratch_);
+    rotate_by_copy(speed, sol.shift, value_scratch_);
+    if (sol.negative || std::abs(sol.log_product) > opt_.closed_log_product_limit) {
       // No closed orthogonal front exists here (e.g. a spiral): open the front at the
       // dropped segment instead of folding the mesh.
       f.closed = false;
       report_.closed_front_opened = true;
-      report_.message = "closed front opened: ln|prod(-p/q)| = " + std::to_string(log_product) +
-                        (negative ? " (negative product)" : "") +
+      report_.message = "closed front opened: ln|prod(-p/q)| = " +
+                        std::to_string(sol.log_product) +
+                        (sol.negative ? " (negative product)" : "") +
                         "; no closed flow-orthogonal front exists for this seed";
     }
   }
-  const std::size_t m = n - 1;
-  aln_.resize(n);
-  kernel_.resize(n);
-  const AlphaSolver::Result res =
-      solver_.solve(std::span<const double>(p.data(), m), std::span<const double>(q.data(), m),
-                    std::span<const double>(r.data(), m), aln_, kernel_);
-  if (!res.ok) {
+  if (!sol.ok) {
     // Singular system (e.g. a segment of zero length): fall back to uniform advance.
     std::fill(alpha.begin(), alpha.end(), 1.0);
     return Outcome::solved;
   }
   double mu = opt_.mu;
-  if (opt_.mu_mode == MuMode::damping) {
-    const DampingChoice choice = choose_damping_mu(
-        aln_, kernel_, std::span<const double>(speed.data(), n), opt_.edge / h_star_);
-    damping_infeasible_ = !choice.feasible;
-    if (!choice.feasible) ++report_.infeasible_damping_steps;
+  if (sol.damped) {
+    damping_infeasible_ = !sol.choice.feasible;
+    if (!sol.choice.feasible) ++report_.infeasible_damping_steps;
     // An unbounded μ means the kernel vanishes on every moving vertex: advance along α^L.
-    mu = std::isfinite(choice.mu) ? choice.mu : 0.0;
+    mu = std::isfinite(sol.choice.mu) ? sol.choice.mu : 0.0;
   }
-  for (std::size_t i = 0; i < n; ++i) alpha[i] = aln_[i] + mu * kernel_[i];
+  for (std::size_t i = 0; i < n; ++i) alpha[i] = sol.aln[i] + mu * sol.kernel[i];
   return Outcome::solved;
 }
 

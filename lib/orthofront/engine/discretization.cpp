@@ -17,9 +17,9 @@ class OrthogonalFronts final : public Discretization<N> {
   using Discretization<N>::Discretization;
   void begin(const std::vector<Front<N>>&) override {}
   bool alpha(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>& speed,
-             std::vector<double>& alpha, std::vector<char>& cut,
-             SegmentTerms<N>* ahead) override {
-    return this->alpha_step_.solve(f, vel, speed, alpha, cut, ahead) ==
+             std::vector<double>& alpha, std::vector<char>& cut, SegmentTerms<N>* terms,
+             AlphaSolution* solution) override {
+    return this->alpha_step_.solve(f, vel, speed, alpha, cut, terms, solution) ==
            AlphaStep<N>::Outcome::solved;
   }
   double step(const Front<N>& f, std::vector<double>& alpha,
@@ -48,7 +48,7 @@ class TimelineFronts final : public Discretization<N> {
     this->report_.timeline_step = time_step(fronts);
   }
   bool alpha(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>&, std::vector<double>&,
-             std::vector<char>&, SegmentTerms<N>*) override {
+             std::vector<char>&, SegmentTerms<N>*, AlphaSolution*) override {
     this->alpha_step_.measure_orthogonality(f, vel);
     return true;
   }

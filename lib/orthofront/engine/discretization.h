@@ -29,11 +29,12 @@ class Discretization {
 
   /// α per vertex into `alpha` (sized to the front and filled with 1 by the caller) from the
   /// velocities `vel` and speeds `speed` at the front's vertices; false when the segments it
-  /// marked in `cut` must be cut first. `ahead`: the α system's terms taken already
-  /// (samples_ahead.h), traded for the discretization's own scratch; null: computed here.
+  /// marked in `cut` must be cut first. `terms`, `solution`: the α system's terms and solution
+  /// taken already (samples_ahead.h), traded for the discretization's own scratch; null:
+  /// computed here.
   virtual bool alpha(Front<N>& f, std::vector<Vec<N>>& vel, std::vector<double>& speed,
-                     std::vector<double>& alpha, std::vector<char>& cut,
-                     SegmentTerms<N>* ahead) = 0;
+                     std::vector<double>& alpha, std::vector<char>& cut, SegmentTerms<N>* terms,
+                     AlphaSolution* solution) = 0;
 
   /// The front step h in α-time once α is final; negative when no vertex moves.
   virtual double step(const Front<N>& f, std::vector<double>& alpha,

@@ -240,8 +240,10 @@ class Engine {
       if (!advect_.sample(f, keep, exits_this_step_, ahead ? &ahead->vertices : nullptr))
         return requeue();
       alpha_.assign(n, 1.0);
+      const bool solved = ahead && ahead->has_segments;
       if (!discretization_->alpha(f, advect_.velocities(), advect_.speeds(), alpha_, cut,
-                                  ahead && ahead->has_segments ? &ahead->segments : nullptr))
+                                  solved ? &ahead->segments : nullptr,
+                                  solved ? &ahead->solution : nullptr))
         return requeue();
     }
     if (discretization_->safeguarded() && opt_.rip) {
@@ -462,7 +464,7 @@ class Engine {
       make_discretization(field_, opt_, mesh_, report_, step_record_);
   FrontAdvect<N> advect_{field_, opt_, tol_, integration_stop_, stopping_, report_};
   // The timeline baseline solves no α system: sampling ahead would save it little.
-  SamplesAhead<N> samples_ahead_{field_, opt_.samples_ahead && discretization_->safeguarded()};
+  SamplesAhead<N> samples_ahead_{field_, opt_, opt_.samples_ahead && discretization_->safeguarded()};
   FrontAdapter<N> adapter_{field_, seed_, opt_, tol_, integration_stop_, mesh_, report_};
   // The paper's baseline keeps every row (no row skipping) and has no fold guard.
   StripLinker<N> linker_{

@@ -78,7 +78,7 @@ struct SurfaceReport {
   /// an insertion then used. This process's run only: a saved state does not keep them.
   std::size_t legs_started_ahead = 0, legs_used_ahead = 0;
   /// Fronts whose samples were queued for an idle thread while their strip was stitched
-  /// (samples_ahead.h), and those a task had sampled (or was sampling) when the next step asked.
+  /// (samples_ahead.h), and those a task had finished when the next step asked.
   /// Depends on thread timing; this process's run only: a saved state does not keep them.
   std::size_t samples_started_ahead = 0, samples_used_ahead = 0;
   /// Why a stream-line insertion fell back to the cubic point (the two add up to

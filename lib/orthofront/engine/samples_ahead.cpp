@@ -14,8 +14,9 @@ constexpr std::size_t kMostSpare = 8;
 }  // namespace
 
 template <int N>
-SamplesAhead<N>::SamplesAhead(const Field<N>& field, bool enabled)
-    : field_(field), enabled_(enabled && another_thread_may_run()) {}
+SamplesAhead<N>::SamplesAhead(const Field<N>& field, const StreamSurfaceOptions& options,
+                              bool enabled)
+    : field_(field), opt_(options), enabled_(enabled && another_thread_may_run()) {}
 
 template <int N>
 SamplesAhead<N>::~SamplesAhead() {
@@ -37,10 +38,19 @@ void SamplesAhead<N>::sample(Job& job) const {
   sample_vertices(field_, at, 0, n, s.vertices);
   s.has_segments = std::all_of(s.vertices.status.begin(), s.vertices.status.end(),
                                [](FieldStatus st) { return st == FieldStatus::inside; });
-  if (!s.has_segments || n < 2) return;
+  if (!s.has_segments || n < 2) {
+    s.has_segments = false;
+    return;
+  }
   const std::size_t segments = job.closed ? n : n - 1;
   s.segments.resize(segments);
   segment_terms(field_, at, n, s.vertices.vel, 0, segments, s.segments);
+  s.has_segments = std::all_of(s.segments.ok.begin(), s.segments.ok.end(),
+                               [](char ok) { return ok != 0; });
+  if (!s.has_segments) return;
+  solve_alpha_system(s.segments.p, s.segments.q, s.segments.r, s.vertices.speed, n, job.closed,
+                     opt_.mu_mode == MuMode::damping, opt_.edge / damping_step(opt_.damping),
+                     job.solver, s.solution);
 }
 
 template <int N>
@@ -129,10 +139,8 @@ typename SamplesAhead<N>::Samples* SamplesAhead<N>::take(const Front<N>& f) {
       job.state.store(done);
       return &job.samples;
     }
-    while (state == running) {
-      job.state.wait(running);
-      state = job.state.load(std::memory_order_acquire);
-    }
+    // Being taken: the task's thread may have been held up (a machine shared with others), and
+    // waiting could then cost more than the work; the caller does it in place.
     if (state != done) return nullptr;
     ++used_;
     return &job.samples;
