@@ -1,12 +1,16 @@
 #pragma once
 /// Checks engine tests make of finished surfaces: a valid mesh, and two runs that must agree
 /// bit for bit.
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <vector>
 
 #include "orthofront/engine/stream_surface.h"
+#include "orthofront/field/analytic.h"
+#include "orthofront/seed/seed.h"
 #include "orthofront/seed/seed_curve.h"
 
 namespace orthofront::test_support {
@@ -30,6 +34,27 @@ struct SurfaceCase {
   double edge;
   int steps;
 };
+
+/// Work ahead (seed-shot legs, front samples) on and off: the surface of `c` with 20 seeds built
+/// with `o` as given and again with `o.*ahead` false, both in an arena of two threads (so an idle
+/// thread exists).
+struct BuiltWithAndWithout {
+  SurfaceResult ahead, in_place;
+};
+inline BuiltWithAndWithout built_with_and_without(const SurfaceCase& c, StreamSurfaceOptions o,
+                                                  bool StreamSurfaceOptions::*ahead) {
+  const auto field = make_analytic_field(c.field);
+  o.edge = c.edge;
+  o.max_steps = c.steps;
+  BuiltWithAndWithout out;
+  tbb::task_arena arena(2);
+  arena.execute([&] {
+    out.ahead = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
+    o.*ahead = false;
+    out.in_place = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
+  });
+  return out;
+}
 
 template <typename T, typename A>
 bool same_bits(const std::vector<T, A>& a, const std::vector<T, A>& b) {

@@ -208,21 +208,13 @@ TEST_CASE("a surface built with samples ahead is the one built without",
       {"saddle3d", SeedCurve::line(Vec3(-1, 2, 0.1), Vec3(1, 2, 0.1)), 0.01, 60},
       {"abc", SeedCurve::line(Vec3(1, 1, 0), Vec3(1, 1, 6)), 0.2, 150},
   };
-  tbb::task_arena arena(2);
   for (const test_support::SurfaceCase& c : cases) {
     INFO(c.field);
-    const auto field = make_analytic_field(c.field);
     StreamSurfaceOptions o;
-    o.edge = c.edge;
-    o.max_steps = c.steps;
     o.parallel_threshold = 32;  // fronts of a few dozen vertices are sampled ahead too
     o.shots_ahead = false;      // (legs ahead move chaotic surfaces by rounding: abc)
-    SurfaceResult ahead, in_place_run;
-    arena.execute([&] {
-      ahead = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
-      o.samples_ahead = false;
-      in_place_run = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
-    });
+    const auto [ahead, in_place_run] =
+        test_support::built_with_and_without(c, o, &StreamSurfaceOptions::samples_ahead);
     INFO(ahead.report.samples_started_ahead << " fronts sampled ahead, "
                                             << ahead.report.samples_used_ahead << " used");
     // The next step took each front's samples from the idle thread's task, or sampled it in

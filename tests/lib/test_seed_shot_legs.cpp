@@ -206,19 +206,10 @@ TEST_CASE("a surface built with seed-shot legs ahead is the one built without",
       {"saddle3d", SeedCurve::line(Vec3(-1, 2, 0.1), Vec3(1, 2, 0.1)), 0.05, 60},
       {"abc", SeedCurve::line(Vec3(0, 0, 1), Vec3(3, 3, 1)), 0.1, 120},
   };
-  tbb::task_arena arena(2);
   for (const test_support::SurfaceCase& c : cases) {
     INFO(c.field);
-    const auto field = make_analytic_field(c.field);
-    StreamSurfaceOptions o;
-    o.edge = c.edge;
-    o.max_steps = c.steps;
-    SurfaceResult ahead, in_place;
-    arena.execute([&] {
-      ahead = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
-      o.shots_ahead = false;
-      in_place = build_stream_surface<3>(*field, make_seed(c.seed, 20), o);
-    });
+    const auto [ahead, in_place] =
+        test_support::built_with_and_without(c, {}, &StreamSurfaceOptions::shots_ahead);
     INFO(ahead.report.legs_started_ahead << " legs started ahead, "
                                          << ahead.report.legs_used_ahead << " used, of "
                                          << ahead.report.streamline_insertions

@@ -20,8 +20,8 @@ SamplesAhead<N>::SamplesAhead(const Field<N>& field, const StreamSurfaceOptions&
 
 template <int N>
 SamplesAhead<N>::~SamplesAhead() {
-  retire(current_);
-  retire(next_);
+  for (auto& job : current_) retire(std::move(job));
+  for (auto& job : next_) retire(std::move(job));
   try {
     group_.wait();  // queued tasks find their jobs retired
   } catch (...) {
@@ -68,16 +68,14 @@ std::shared_ptr<typename SamplesAhead<N>::Job> SamplesAhead<N>::fresh_job() {
 }
 
 template <int N>
-void SamplesAhead<N>::retire(std::vector<std::shared_ptr<Job>>& jobs) {
-  for (auto& job : jobs) {
-    int expected = pending;
-    job->state.compare_exchange_strong(expected, failed);  // a queued task leaves it alone
-    // Reused only once no task holds it: the one that ran it has finished with its vectors.
-    const int state = job->state.load(std::memory_order_acquire);
-    if (state != running && job.use_count() == 1 && spare_.size() < kMostSpare)
-      spare_.push_back(std::move(job));
-  }
-  jobs.clear();
+void SamplesAhead<N>::retire(std::shared_ptr<Job> job) {
+  if (!job) return;
+  int expected = pending;
+  job->state.compare_exchange_strong(expected, failed);  // a queued task leaves it alone
+  // Reused only once no task holds it: the one that ran it has finished with its vectors.
+  const int state = job->state.load(std::memory_order_acquire);
+  if (state != running && job.use_count() == 1 && spare_.size() < kMostSpare)
+    spare_.push_back(std::move(job));
 }
 
 template <int N>
@@ -96,28 +94,22 @@ void SamplesAhead<N>::start(const Front<N>& f) {
       sample(*job);
       job->state.store(done, std::memory_order_release);
     } catch (...) {
-      job->state.store(failed, std::memory_order_release);  // take() samples in place
+      job->state.store(failed, std::memory_order_release);  // the step works in place
     }
-    job->state.notify_all();
   });
 }
 
 template <int N>
 void SamplesAhead<N>::begin_step() {
-  if (taken_) {
-    std::vector<std::shared_ptr<Job>> last{std::move(taken_)};
-    retire(last);
-  }
-  retire(current_);
+  retire(std::move(taken_));
+  for (auto& job : current_) retire(std::move(job));
+  current_.clear();
   current_.swap(next_);
 }
 
 template <int N>
 typename SamplesAhead<N>::Samples* SamplesAhead<N>::take(const Front<N>& f) {
-  if (taken_) {
-    std::vector<std::shared_ptr<Job>> last{std::move(taken_)};
-    retire(last);
-  }
+  retire(std::move(taken_));
   const std::size_t n = f.v.size();
   for (auto it = current_.begin(); it != current_.end(); ++it) {
     Job& job = **it;

@@ -76,8 +76,9 @@ class SamplesAhead {
   void sample(Job& job) const;
   /// A job for start(), with the vectors of one done with.
   std::shared_ptr<Job> fresh_job();
-  /// Jobs no longer looked at: pending ones never start, the others' vectors are reused.
-  void retire(std::vector<std::shared_ptr<Job>>& jobs);
+  /// A job no longer looked at: if pending it never starts; its vectors are reused once no
+  /// task holds it.
+  void retire(std::shared_ptr<Job> job);
 
   const Field<N>& field_;
   const StreamSurfaceOptions& opt_;
