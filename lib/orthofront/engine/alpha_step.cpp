@@ -12,22 +12,22 @@ namespace orthofront {
 
 namespace {
 
-/// std::rotate(v.begin(), v.begin() + shift, v.end()) as two block copies into `scratch`, which
-/// then trades places with v: std::rotate swaps element by element, several times slower on a
-/// front's vertices, and a closed front is rotated every step.
+/// `v` rotated left by `shift` (std::rotate(v.begin(), v.begin() + shift, v.end())) into
+/// `out`, as two block copies.
 template <class T>
-void rotate_by_copy(std::vector<T>& v, std::size_t shift, std::vector<T>& scratch) {
-  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(shift);
-  scratch.resize(v.size());
-  std::copy(v.begin(), middle, std::copy(middle, v.end(), scratch.begin()));
-  v.swap(scratch);
-}
-
-/// `v` rotated left by `shift` into `out`.
-void rotated_copy(const std::vector<double>& v, std::size_t shift, std::vector<double>& out) {
+void rotated_copy(const std::vector<T>& v, std::size_t shift, std::vector<T>& out) {
   const auto middle = v.begin() + static_cast<std::ptrdiff_t>(shift);
   out.resize(v.size());
   std::copy(v.begin(), middle, std::copy(middle, v.end(), out.begin()));
+}
+
+/// `v` rotated in place through `scratch`, which then trades places with v: std::rotate swaps
+/// element by element, several times slower on a front's vertices, and a closed front is
+/// rotated every step.
+template <class T>
+void rotate_by_copy(std::vector<T>& v, std::size_t shift, std::vector<T>& scratch) {
+  rotated_copy(v, shift, scratch);
+  v.swap(scratch);
 }
 
 }  // namespace

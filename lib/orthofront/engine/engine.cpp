@@ -240,10 +240,10 @@ class Engine {
       if (!advect_.sample(f, keep, exits_this_step_, ahead ? &ahead->vertices : nullptr))
         return requeue();
       alpha_.assign(n, 1.0);
-      const bool solved = ahead && ahead->has_segments;
+      const bool system_ahead = ahead && ahead->has_segments;  // its terms and solution
       if (!discretization_->alpha(f, advect_.velocities(), advect_.speeds(), alpha_, cut,
-                                  solved ? &ahead->segments : nullptr,
-                                  solved ? &ahead->solution : nullptr))
+                                  system_ahead ? &ahead->segments : nullptr,
+                                  system_ahead ? &ahead->solution : nullptr))
         return requeue();
     }
     if (discretization_->safeguarded() && opt_.rip) {

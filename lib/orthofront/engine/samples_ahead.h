@@ -27,10 +27,10 @@ class SamplesAhead {
  public:
   struct Samples {
     VertexSamples<N> vertices;
-    /// Left empty where a vertex is not inside or a midpoint has no flow (the step cuts the
-    /// front before its α).
     SegmentTerms<N> segments;
     AlphaSolution solution;
+    /// Whether `segments` and `solution` are the front's: not where a vertex is not inside or a
+    /// midpoint has no flow (the step cuts the front before its α, or finds the cut in place).
     bool has_segments = false;
   };
 
