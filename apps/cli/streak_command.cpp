@@ -121,7 +121,9 @@ nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
   const QualityReport& q = f.quality;
   return {{"index", f.index},       {"time", f.time},       {"vertices", f.vertices},
           {"faces", f.faces},       {"rows", f.rows},       {"stopped_particles", f.dead_particles},
-          {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"quality", io::to_json(q)}};
+          {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"area", f.area},
+          {"boundary_length", f.boundary_length}, {"vertex_estimate", f.vertex_estimate},
+          {"pieces", f.pieces}, {"quality", io::to_json(q)}};
 }
 
 nlohmann::json report_json(const spacetime::StreakReport& r) {
@@ -133,6 +135,7 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
       {"complete", r.complete},
       {"message", r.message},
       {"insertion", spacetime::to_string(r.insertion)},
+      {"mesh", r.mesh},
       {"release",
        {{"begin", r.release_begin},
         {"end", r.release_end},
@@ -152,7 +155,13 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
         {"exact_insertions", r.exact_insertions},
         {"interpolated_insertions", r.interpolated_insertions},
         {"s_removals", r.s_removals},
-        {"rows_removed", r.rows_removed}}},
+        {"rows_removed", r.rows_removed},
+        {"splits", r.splits},
+        {"collapses", r.collapses},
+        {"flips", r.flips},
+        {"steered_insertions", r.steered_insertions},
+        {"faces_removed_at_stops", r.faces_removed_at_stops},
+        {"strip_faces_skipped", r.strip_faces_skipped}}},
       {"particles",
        {{"max", r.max_particles}, {"left_domain", r.left_domain}, {"no_data", r.no_data}}},
       {"frames", frames},
@@ -349,6 +358,17 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
       ->capture_default_str();
   command.add_option("--point", args.point, "--route spacetime: the release point x,y");
   command.add_option("--edge", args.edge, "Target edge length")->capture_default_str();
+  command
+      .add_option("--mesh", args.mesh,
+                  "remeshed: a triangle mesh whose vertices keep their release labels (s, tau), "
+                  "adapted by split, collapse and flip so its size follows the surface's area; "
+                  "rows: rows of particles over (s, tau), refined by whole rows and columns")
+      ->check(CLI::IsMember({"remeshed", "rows"}))
+      ->capture_default_str();
+  command
+      .add_option("--collapse", args.collapse,
+                  "--mesh remeshed: collapse edges shorter than this many edge lengths")
+      ->capture_default_str();
   command.add_option("--split", args.split, "Split edges longer than this many edge lengths")
       ->capture_default_str();
   command
@@ -402,6 +422,8 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.edge = args.edge;
   o.split = args.split;
   o.merge = args.merge;
+  o.mesh = args.mesh == "rows" ? spacetime::StreakMesh::rows : spacetime::StreakMesh::remeshed;
+  o.collapse = args.collapse;
   o.release_step = args.release_step;
   o.releases_per_break = args.releases_per_break;
   o.seed_count = args.seed_count;

@@ -56,6 +56,7 @@ nlohmann::json to_json(const QualityReport& q) {
       {"edge_spread_median", q.edge_spread_median},
       {"edge_spread_mean", q.edge_spread_mean},
       {"triangle_min_angle_median_deg", q.triangle_min_angle_median},
+      {"triangle_min_angle_p05_deg", q.triangle_min_angle_p05},
       {"triangles_below_10deg", q.triangles_below_10deg},
       {"folds", q.folds},
       {"non_manifold_edges", q.non_manifold_edges},

@@ -51,6 +51,9 @@ class VtiParser {
       g.size[a] = whole_[2 * a + 1] - whole_[2 * a] + 1;
       g.origin[static_cast<int>(a)] = origin_[a] + static_cast<double>(whole_[2 * a]) * spacing_[a];
       g.spacing[static_cast<int>(a)] = spacing_[a];
+      // An axis with one sample has no spacing to speak of: ParaView writes 0 there (a slice
+      // saved from ResampleToImage). Any positive value describes the same grid.
+      if (g.size[a] == 1 && spacing_[a] == 0.0) g.spacing[static_cast<int>(a)] = 1.0;
     }
     const std::string name = choose_array();
     const ArrayRef* first = find(pieces_.front(), name);

@@ -649,7 +649,10 @@ QualityReport measure_quality(const Mesh& mesh, const QualityOptions& options) {
                            r.edge_spread_median = quantile(spread, 0.5);
                            r.edge_spread_p90 = quantile(spread, 0.9);
                          },
-                         [&] { r.triangle_min_angle_median = quantile(tri_min, 0.5); });
+                         [&] {
+                           r.triangle_min_angle_median = quantile(tri_min, 0.5);
+                           r.triangle_min_angle_p05 = quantile(tri_min, 0.05);
+                         });
     if (triangles > 0) {
       r.triangles_below_10deg = static_cast<double>(below_10) / static_cast<double>(triangles);
     }

@@ -36,6 +36,7 @@ struct QualityReport {
   double edge_spread_mean = 0;
   double edge_spread_p90 = 0;             ///< 90th percentile of |1 - l_i / l_avg|
   double triangle_min_angle_median = 0;   ///< degrees
+  double triangle_min_angle_p05 = 0;      ///< 5th percentile of the triangles' minimum angles, degrees
   double triangles_below_10deg = 0;       ///< share of triangles whose min angle < 10°
   std::size_t folds = 0;                  ///< interior edges whose two faces have opposite normals
   std::size_t non_manifold_edges = 0;     ///< edges with more than two faces

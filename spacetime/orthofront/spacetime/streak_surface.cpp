@@ -20,12 +20,18 @@
 #include "orthofront/error.h"
 #include "orthofront/seed/seed_check.h"
 #include "orthofront/spacetime/bulk_flow_map.h"
+#include "orthofront/spacetime/remeshed_streak.h"
+#include "orthofront/spacetime/streak_flow_access.h"
 #include "orthofront/spacetime/streamed_field.h"
 
 namespace orthofront::spacetime {
 
 const char* to_string(ParticleInsertion insertion) {
   return insertion == ParticleInsertion::exact ? "exact" : "interpolate";
+}
+
+const char* to_string(StreakMesh mesh) {
+  return mesh == StreakMesh::remeshed ? "remeshed" : "rows";
 }
 
 namespace {
@@ -143,21 +149,9 @@ bool removable(const Particle& a, const Particle& m, const Particle& b,
          short_limit.shorter(m.x - b.x) && long_limit.shorter(a.x - b.x);
 }
 
-// What the driver needs from where the data lives: the field, and (streamed) a hook that makes
-// the data of [t_a, t_b] resident before particles are moved across it.
-struct FlowAccess {
-  const UnsteadyField& flow;
-  // Makes [t_a, t_b] resident; returns a read error (empty: none). May be empty.
-  std::function<std::string(double, double)> prepare;
-  std::function<std::string()> read_error;      // empty string: no error
-  std::vector<double> step_times;               // streamed: the series' times (break points)
-  const FlowMap* map = nullptr;                 // bulk advection; null: integrate `flow`
-  const BulkFlowMap* bulk = nullptr;            // the same map, for particles kept on its backend
-};
-
 class StreakBuilder {
  public:
-  StreakBuilder(const FlowAccess& access, const SeedCurve& seed, const StreakOptions& options,
+  StreakBuilder(const StreakFlowAccess& access, const SeedCurve& seed, const StreakOptions& options,
                 const StreakFrameSink& sink)
       : access_(access), flow_(access.flow), seed_(seed), o_(options), sink_(sink),
         integrated_(access.flow, options.tolerance),
@@ -309,7 +303,7 @@ class StreakBuilder {
   std::string seed_name() const { return o_.seed_name.empty() ? "the seed curve" : "seed '" + o_.seed_name + "'"; }
   std::string field_name() const { return o_.field_name.empty() ? flow_.describe() : o_.field_name; }
 
-  const FlowAccess& access_;
+  const StreakFlowAccess& access_;
   const UnsteadyField& flow_;
   const SeedCurve& seed_;
   StreakOptions o_;
@@ -367,39 +361,14 @@ class StreakBuilder {
 };
 
 void StreakBuilder::validate() {
-  const auto bad = [](const std::string& what) { throw InvalidArgument(what); };
-  if (!(std::isfinite(o_.edge) && o_.edge > 0)) bad("edge length must be finite and > 0, got " + number(o_.edge));
-  if (!(o_.split > 1)) bad("split factor must be > 1, got " + number(o_.split));
+  check_streak_options(o_, flow_, field_name());
   if (!(o_.merge > 0 && o_.merge <= 0.5 * o_.split))
-    bad("merge factor must lie in (0, split/2] (so a merge never makes an edge that splits), got " +
+    throw InvalidArgument(
+        "merge factor must lie in (0, split/2] (so a merge never makes an edge that splits), got " +
         number(o_.merge));
-  if (!(std::isfinite(o_.release_begin) && std::isfinite(o_.release_end) &&
-        o_.release_end > o_.release_begin))
-    bad("release interval " + number(o_.release_begin) + ":" + number(o_.release_end) +
-        " must be finite with its end after its begin");
-  if (o_.frames.empty()) bad("no observation times (frames) were given");
-  for (std::size_t i = 0; i < o_.frames.size(); ++i) {
-    const double f = o_.frames[i];
-    if (!std::isfinite(f)) bad("observation time " + std::to_string(i) + " is not finite");
-    if (!(f > o_.release_begin))
-      bad("observation time " + number(f) + " is not after the release begin " +
-          number(o_.release_begin));
-    if (i > 0 && !(f > o_.frames[i - 1]))
-      bad("observation times must increase: " + number(f) + " after " + number(o_.frames[i - 1]));
-  }
-  const TimeRange range = flow_.time_range();
-  const auto outside = [&](double t) { return !range.contains(t); };
-  if (outside(o_.release_begin) || outside(o_.release_end) || outside(o_.frames.back()))
-    bad("the release interval " + number(o_.release_begin) + ":" + number(o_.release_end) +
-        " and the observation times up to " + number(o_.frames.back()) +
-        " must lie in the time range of " + field_name() + ", [" + number(range.begin) + ", " +
-        number(range.end) + "]");
-  if (!(o_.release_step >= 0 && std::isfinite(o_.release_step)))
-    bad("release step must be finite and >= 0, got " + number(o_.release_step));
   if (o_.releases_per_break < 1)
-    bad("releases per break must be at least 1, got " + std::to_string(o_.releases_per_break));
-  if (o_.seed_count < 0 || o_.seed_count == 1)
-    bad("seed count must be at least 2 (or 0 for automatic), got " + std::to_string(o_.seed_count));
+    throw InvalidArgument("releases per break must be at least 1, got " +
+                          std::to_string(o_.releases_per_break));
 }
 
 double StreakBuilder::seed_speed_median(const std::vector<double>& params) const {
@@ -897,53 +866,13 @@ Vec3 cubic_middle(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3
 
 }  // namespace
 
-// Moves particles released at from[i] (x[i] on the seed) to the current time. A streamed series
-// is swept forward one step interval at a time from the earliest release, all particles together,
-// so a batch reads each step once (per batch) instead of once per particle; then the current
-// interval is made resident again.
+// Moves particles released at from[i] (x[i] on the seed) to the current time.
 bool StreakBuilder::release_and_advect(std::vector<Vec3>& x, const std::vector<double>& from,
                                        std::vector<ParticleStatus>& status) {
-  if (!access_.prepare) {
-    report_.evaluations += map_.advect_all(x, from, t_, status);
-    return true;
-  }
-  // The sweep below moves the field's band and reads earlier steps: not while the set moves on
+  // A streamed sweep moves the field's band and reads earlier steps: not while the set moves on
   // (it lands later; the particles inserted here are fresh and catch up then).
-  wait_flight();
-  std::vector<std::size_t> order(x.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return from[a] < from[b]; });
-  std::fill(status.begin(), status.end(), ParticleStatus::moving);
-  double c = order.empty() ? t_ : from[order.front()];
-  std::vector<double> stops;
-  for (const double b : access_.step_times)
-    if (b > c && b < t_) stops.push_back(b);
-  stops.push_back(t_);
-  std::size_t started = 0;  // particles of `order` already moving
-  std::vector<Vec3> bx;
-  std::vector<double> bfrom;
-  std::vector<ParticleStatus> bst;
-  std::vector<std::size_t> which;
-  for (const double b : stops) {
-    if (!no_error(access_.prepare(c, b))) return false;
-    while (started < order.size() && from[order[started]] < b) ++started;
-    bx.clear(), bfrom.clear(), bst.clear(), which.clear();
-    for (std::size_t k = 0; k < started; ++k) {
-      const std::size_t i = order[k];
-      if (status[i] != ParticleStatus::moving) continue;
-      which.push_back(i);
-      bx.push_back(x[i]);
-      bfrom.push_back(std::max(from[i], c));
-    }
-    bst.resize(bx.size());
-    report_.evaluations += map_.advect_all(bx, bfrom, b, bst);
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      x[which[k]] = bx[k];
-      status[which[k]] = bst[k];
-    }
-    c = b;
-  }
-  return no_error(access_.prepare(t_, t_));
+  if (access_.prepare) wait_flight();
+  return no_error(advect_from_release(access_, map_, x, from, t_, status, report_.evaluations));
 }
 
 bool StreakBuilder::refine_once(std::vector<RowChange>& change, std::vector<double>& gap) {
@@ -1435,6 +1364,7 @@ void StreakBuilder::for_each_strip_face(std::size_t r, const std::vector<std::in
 StreakReport StreakBuilder::run() {
   start_ = Clock::now();
   validate();
+  report_.mesh = to_string(StreakMesh::rows);
   report_.dimension = flow_.dimension();
   report_.insertion = o_.insertion;
   report_.release_begin = o_.release_begin;
@@ -1572,14 +1502,15 @@ StreakReport StreakBuilder::run() {
 
 StreakReport build_streak_surface(const UnsteadyField& flow, const SeedCurve& seed,
                                   const StreakOptions& options, const StreakFrameSink& sink) {
-  const FlowAccess access{flow, {}, {}, {}};
+  const StreakFlowAccess access{flow, {}, {}, {}};
+  if (options.mesh == StreakMesh::remeshed) return build_remeshed_streak(access, seed, options, sink);
   return StreakBuilder(access, seed, options, sink).run();
 }
 
 StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
                                   const StreakOptions& options, const StreakFrameSink& sink) {
   StreamedField field(cache);
-  FlowAccess access{field, {}, {}, cache.times()};
+  StreakFlowAccess access{field, {}, {}, cache.times()};
   // One past the last step the run reads: the one after the last frame's interval.
   std::size_t steps_needed = cache.times().size();
   {
@@ -1629,7 +1560,9 @@ StreakReport build_streak_surface(BrickCache& cache, const SeedCurve& seed,
     access.map = bulk.get();
     access.bulk = bulk.get();
   }
-  StreakReport report = StreakBuilder(access, seed, options, sink).run();
+  StreakReport report = options.mesh == StreakMesh::remeshed
+                            ? build_remeshed_streak(access, seed, options, sink)
+                            : StreakBuilder(access, seed, options, sink).run();
   if (bulk) {
     report.device = bulk->backend_name();
     report.bulk = bulk->statistics();

@@ -31,6 +31,18 @@ enum class ParticleInsertion {
 };
 const char* to_string(ParticleInsertion insertion);
 
+/// How the streak mesh is kept.
+enum class StreakMesh {
+  /// A triangle mesh whose vertices carry (s, τ) as labels: long edges are split (the new
+  /// particle released at the label midpoint), short ones collapsed onto a neighbour, edges
+  /// flipped to the Delaunay criterion; so the vertex count follows the surface's area and
+  /// boundary rather than the history of its stretching.
+  remeshed,
+  /// Rows of particles over (s, τ), refined and coarsened by whole rows and columns.
+  rows,
+};
+const char* to_string(StreakMesh mesh);
+
 struct StreakProgress {
   double t = 0, t_end = 0;          ///< simulated time and the last observation time
   std::size_t frames_written = 0, frames = 0;
@@ -56,6 +68,10 @@ struct StreakOptions {
   int releases_per_break = 1;
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
   ParticleInsertion insertion = ParticleInsertion::exact;
+  StreakMesh mesh = StreakMesh::remeshed;
+  /// Remeshed: edges shorter than collapse·ℓ are collapsed (and, as for rows, edges longer
+  /// than split·ℓ split). At most split/2, so a collapse never makes an edge that splits.
+  double collapse = 0.75;
   Tolerance tolerance{1e-10, 1e-10};
   /// Gridded series only: move particles by bulk advection (advect::BatchAdvector, DOPRI5 at
   /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
@@ -100,6 +116,10 @@ struct StreakFrameRecord {
   std::size_t vertices = 0, faces = 0, rows = 0, dead_particles = 0;
   QualityReport quality;
   double max_edge = 0;              ///< longest mesh edge
+  /// The frame's area and boundary length, and the size a mesh of well-shaped triangles with
+  /// edges ℓ needs for them: 1.155 · area / ℓ² + boundary / ℓ vertices.
+  double area = 0, boundary_length = 0, vertex_estimate = 0;
+  std::size_t pieces = 0;           ///< connected pieces of the frame's mesh
   double seconds = 0;               ///< building and handing over the frame (both parts)
   double build_seconds = 0;         ///< its vertices and faces alone (the particles wait for these)
   double finish_seconds = 0;        ///< its quality, longest edge and sink
@@ -125,6 +145,16 @@ struct StreakReport {
   std::size_t rows_inserted = 0, row_particles = 0;  ///< rows inserted between rows, their particles
   std::size_t exact_insertions = 0, interpolated_insertions = 0;
   std::size_t s_removals = 0, rows_removed = 0;
+  /// Remeshed: edges split (exact_insertions and interpolated_insertions say how their particles
+  /// were placed), collapsed and flipped; faces removed where a particle stopped (left the
+  /// domain, no data) and with them (a fan that would have met another at a point); strip faces
+  /// not made at release because a corner had stopped.
+  std::size_t splits = 0, collapses = 0, flips = 0;
+  /// Remeshed, exact insertion: particles released again at a label moved toward the one whose
+  /// path passes through the split edge's midpoint (counted per try).
+  std::size_t steered_insertions = 0;
+  std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
+  std::string mesh;                 ///< "remeshed" or "rows"
   std::size_t left_domain = 0, no_data = 0;  ///< particles that stopped
   std::size_t max_particles = 0;
   std::vector<StreakFrameRecord> frames;

@@ -1,0 +1,828 @@
+#include "orthofront/spacetime/remeshed_streak.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "orthofront/error.h"
+#include "orthofront/mesh/triangle_topology.h"
+
+namespace orthofront::spacetime {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Topology = TriangleTopology;
+constexpr std::int32_t none = Topology::none;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+std::size_t idx(std::int32_t i) { return static_cast<std::size_t>(i); }
+
+// Interior angle at p of the triangle (p, q, r).
+double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
+  const Vec3 a = q - p, b = r - p;
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+class RemeshedStreakBuilder {
+ public:
+  RemeshedStreakBuilder(const StreakFlowAccess& access, const SeedCurve& seed,
+                        const StreakOptions& options, const StreakFrameSink& sink)
+      : access_(access), flow_(access.flow), seed_(seed), o_(options), sink_(sink),
+        integrated_(access.flow, options.tolerance),
+        map_(access.map ? *access.map : integrated_), two_d_(access.flow.dimension() == 2) {}
+
+  StreakReport run();
+
+ private:
+  struct Split {
+    std::int32_t face = none;
+    int edge = 0;
+    double length = 0;
+  };
+
+  std::string field_name() const {
+    return o_.field_name.empty() ? flow_.describe() : o_.field_name;
+  }
+  Vec3 seed_point(double s) const {
+    Vec3 p = seed_.point(s);
+    if (two_d_) p.z() = 0;
+    return p;
+  }
+  std::int32_t add_particle(const Vec3& x, double s, double tau, ParticleStatus status) {
+    const std::int32_t v = topo_.add_vertex();
+    x_.push_back(x);
+    previous_x_.push_back(x);
+    s_.push_back(s);
+    tau_.push_back(tau);
+    status_.push_back(status);
+    id_.push_back(next_id_++);
+    on_chain_.push_back(0);
+    return v;
+  }
+  bool alive(std::int32_t v) const { return status_[idx(v)] == ParticleStatus::moving; }
+  // Signed double area of (a, b, c) along the surface's orientation (2D) or its normal (3D).
+  Vec3 normal(std::int32_t a, std::int32_t b, std::int32_t c) const {
+    return (x_[idx(b)] - x_[idx(a)]).cross(x_[idx(c)] - x_[idx(a)]);
+  }
+  Vec3 normal_with(std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t u,
+                   std::int32_t w) const {
+    const auto at = [&](std::int32_t v) -> const Vec3& { return x_[idx(v == u ? w : v)]; };
+    return (at(b) - at(a)).cross(at(c) - at(a));
+  }
+  // 2D: the faces are stored counter-clockwise in (x, y), so a face keeps its side while this
+  // stays positive.
+  double oriented(const Vec3& n) const { return two_d_ ? n.z() : n.norm(); }
+
+  void release(double tau);
+  bool advance(double t_to);
+  bool adapt();
+  bool split_pass(std::size_t& splits);
+  // Exact particles of a split land where the path of their label midpoint goes, which in a
+  // sheared parametrization can lie well off the edge (and fold the faces beside it). One
+  // chord step of Gauss-Newton on the label, with the derivative of the faces beside the edge,
+  // moves those farther than ℓ/20 from the edge's midpoint toward the particle whose path passes
+  // through it (along the edge's labels for a boundary edge, which keeps it on the boundary).
+  // Returns whether there was no read error.
+  bool steer_to_midpoints(const std::vector<Split>& chosen, const std::vector<std::size_t>& which,
+                          std::vector<Vec3>& x, std::vector<ParticleStatus>& status,
+                          std::vector<double>& ms, std::vector<double>& mtau);
+  void collapse_pass();
+  void flip_pass();
+  bool collapsible(std::int32_t u, std::int32_t w) const;
+  void stop_particle(std::int32_t v);
+  void compact();
+  void emit_frame(int index);
+  void stop(const std::string& why) {
+    report_.complete = false;
+    if (report_.message.empty()) report_.message = why;
+  }
+  bool no_error(const std::string& error) {
+    if (error.empty()) return true;
+    stop("stopped at t = " + number(t_) + ": " + error);
+    return false;
+  }
+
+  const StreakFlowAccess& access_;
+  const UnsteadyField& flow_;
+  const SeedCurve& seed_;
+  const StreakOptions& o_;
+  const StreakFrameSink& sink_;
+  IntegratedFlowMap integrated_;
+  const FlowMap& map_;
+  const bool two_d_;
+  double orientation_ = 0;  // 2D: +1 or -1 once the first strip says which way its quads turn
+
+  Topology topo_;
+  std::vector<Vec3> x_, previous_x_;  // positions now and at the previous break
+  std::vector<double> s_, tau_;
+  std::vector<ParticleStatus> status_;
+  std::vector<std::int32_t> id_;
+  std::vector<char> on_chain_;
+  std::vector<std::int32_t> chain_;  // the newest row, by s: the next strip's first side
+  std::int32_t next_id_ = 0;
+  double t_ = 0, previous_t_ = 0;
+  StreakReport report_;
+  Clock::time_point start_;
+};
+
+void RemeshedStreakBuilder::release(double tau) {
+  std::vector<double> params;
+  if (chain_.empty()) {
+    const int n = o_.seed_count > 0
+                      ? o_.seed_count
+                      : std::max(2, static_cast<int>(std::ceil(seed_.length() / o_.edge)) + 1);
+    params = seed_.sample(n);
+  } else {
+    for (const std::int32_t v : chain_) params.push_back(s_[idx(v)]);
+  }
+  std::vector<std::int32_t> row;
+  row.reserve(params.size());
+  for (const double s : params) {
+    Vec3 v;
+    const Vec3 x = seed_point(s);
+    const FieldStatus st = flow_.velocity(x, tau, v);
+    row.push_back(add_particle(x, s, tau,
+                               st == FieldStatus::inside    ? ParticleStatus::moving
+                               : st == FieldStatus::outside ? ParticleStatus::left_domain
+                                                            : ParticleStatus::no_data));
+  }
+  ++report_.rows_released;
+  if (!chain_.empty()) {
+    const std::size_t n = chain_.size() - (seed_.closed() ? 0 : 1);
+    // Which way the faces turn in 2D: the first strip's quads decide, once.
+    if (two_d_ && orientation_ == 0) {
+      double sum = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t j = (i + 1) % chain_.size();
+        sum += normal(chain_[i], chain_[j], row[j]).z() + normal(chain_[i], row[j], row[i]).z();
+      }
+      orientation_ = sum < 0 ? -1 : 1;
+    }
+    const bool reverse = orientation_ < 0;
+    using Corners = std::array<std::int32_t, 3>;
+    const auto oriented_face = [&](Corners f) {
+      if (reverse) std::swap(f[1], f[2]);
+      return f;
+    };
+    const auto addable = [&](const Corners& f) {
+      if (!alive(f[0]) || !alive(f[1]) || !alive(f[2])) return false;
+      return topo_.can_add_face(f[0], f[1], f[2]);
+    };
+    // The quad c0, c1, r1, r0, cut along its shorter diagonal. Its two faces go in the order
+    // that joins the mesh along an edge (a face that met the mesh at a corner only would make
+    // two fans meet there).
+    const auto add_quad = [&](Corners first, Corners second) {
+      first = oriented_face(first);
+      second = oriented_face(second);
+      if (addable(first)) {
+        topo_.add_face(first[0], first[1], first[2]);
+        if (addable(second))
+          topo_.add_face(second[0], second[1], second[2]);
+        else
+          ++report_.strip_faces_skipped;
+      } else if (addable(second)) {
+        topo_.add_face(second[0], second[1], second[2]);
+        if (addable(first))
+          topo_.add_face(first[0], first[1], first[2]);
+        else
+          ++report_.strip_faces_skipped;
+      } else {
+        report_.strip_faces_skipped += 2;
+      }
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t j = (i + 1) % chain_.size();
+      const std::int32_t c0 = chain_[i], c1 = chain_[j], r0 = row[i], r1 = row[j];
+      if ((x_[idx(c0)] - x_[idx(r1)]).squaredNorm() <= (x_[idx(c1)] - x_[idx(r0)]).squaredNorm())
+        add_quad({c0, r1, r0}, {c0, c1, r1});
+      else
+        add_quad({c0, c1, r0}, {c1, r1, r0});
+    }
+  }
+  for (const std::int32_t v : chain_) on_chain_[idx(v)] = 0;
+  chain_ = std::move(row);
+  for (const std::int32_t v : chain_) on_chain_[idx(v)] = 1;
+}
+
+void RemeshedStreakBuilder::stop_particle(std::int32_t v) {
+  if (status_[idx(v)] == ParticleStatus::left_domain) ++report_.left_domain;
+  if (status_[idx(v)] == ParticleStatus::no_data) ++report_.no_data;
+  report_.faces_removed_at_stops += topo_.remove_faces_of(v);
+}
+
+bool RemeshedStreakBuilder::advance(double t_to) {
+  const auto start = Clock::now();
+  std::vector<std::int32_t> moving;
+  for (std::size_t v = 0; v < x_.size(); ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    if (alive(i) && (topo_.has_faces(i) || on_chain_[v])) moving.push_back(i);
+  }
+  std::vector<Vec3> x(moving.size());
+  std::vector<double> from(moving.size(), t_);
+  std::vector<ParticleStatus> status(moving.size());
+  for (std::size_t k = 0; k < moving.size(); ++k) x[k] = x_[idx(moving[k])];
+  if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return false;
+  report_.evaluations += map_.advect_all(x, from, t_to, status);
+  if (access_.read_error && !no_error(access_.read_error())) return false;
+  for (std::size_t k = 0; k < moving.size(); ++k) {
+    const std::size_t v = idx(moving[k]);
+    previous_x_[v] = x_[v];
+    x_[v] = x[k];
+    status_[v] = status[k];
+  }
+  for (std::size_t k = 0; k < moving.size(); ++k)
+    if (status[k] != ParticleStatus::moving) stop_particle(moving[k]);
+  report_.particle_steps += moving.size();
+  report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
+  ++report_.intervals;
+  previous_t_ = t_;
+  t_ = t_to;
+  report_.advect_seconds += seconds_since(start);
+  return true;
+}
+
+bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
+  const double limit = o_.split * o_.edge;
+  std::vector<Split> long_edges;
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    const auto& c = topo_.face(fi);
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(fi, e);
+      if (g != none && g < fi) continue;  // each edge once
+      const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+      if (length > limit) long_edges.push_back({fi, e, length});
+    }
+  }
+  if (long_edges.empty()) return true;
+  std::sort(long_edges.begin(), long_edges.end(),
+            [](const Split& a, const Split& b) { return a.length > b.length; });
+  // Longest first, no two in one face: each split sees the faces it was chosen from.
+  std::vector<char> used(topo_.face_slots(), 0);
+  std::vector<Split> chosen;
+  for (const Split& sp : long_edges) {
+    const std::int32_t g = topo_.neighbor(sp.face, sp.edge);
+    if (used[idx(sp.face)] || (g != none && used[idx(g)])) continue;
+    used[idx(sp.face)] = 1;
+    if (g != none) used[idx(g)] = 1;
+    chosen.push_back(sp);
+  }
+  // The new particles: label midpoints, released there and moved to now; or (interpolated)
+  // placed at the edge's midpoint one break ago and moved from there. Particles a few breaks old
+  // are released either way (their paths are short).
+  const std::size_t n = chosen.size();
+  std::vector<Vec3> exact_x, near_x;
+  std::vector<double> exact_from, exact_s, exact_tau;
+  std::vector<std::size_t> exact_of, near_of;
+  std::vector<Vec3> x(n);
+  std::vector<double> ms(n), mtau(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& c = topo_.face(chosen[k].face);
+    const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
+    double sa = s_[idx(a)], sb = s_[idx(b)];
+    if (seed_.closed() && std::abs(sa - sb) > 0.5) (sa < sb ? sa : sb) += 1;  // across s = 0
+    ms[k] = 0.5 * (sa + sb);
+    if (seed_.closed() && ms[k] >= 1) ms[k] -= 1;
+    mtau[k] = 0.5 * (tau_[idx(a)] + tau_[idx(b)]);
+    const bool young = t_ - mtau[k] <= 4 * (t_ - previous_t_);
+    if (o_.insertion == ParticleInsertion::exact || young || previous_t_ >= t_ ||
+        mtau[k] > previous_t_) {
+      exact_of.push_back(k);
+      exact_x.push_back(seed_point(ms[k]));
+      exact_from.push_back(mtau[k]);
+    } else {
+      near_of.push_back(k);
+      near_x.push_back(0.5 * (previous_x_[idx(a)] + previous_x_[idx(b)]));
+    }
+  }
+  std::vector<ParticleStatus> exact_status(exact_x.size()), near_status(near_x.size());
+  if (!exact_x.empty() &&
+      !no_error(advect_from_release(access_, map_, exact_x, exact_from, t_, exact_status,
+                                    report_.evaluations)))
+    return false;
+  if (!near_x.empty()) {
+    if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
+    const std::vector<double> from(near_x.size(), previous_t_);
+    report_.evaluations += map_.advect_all(near_x, from, t_, near_status);
+    if (access_.prepare && !no_error(access_.prepare(t_, t_))) return false;
+  }
+  std::vector<ParticleStatus> status(n);
+  std::vector<Vec3> before(n);
+  for (std::size_t k = 0; k < exact_of.size(); ++k) {
+    x[exact_of[k]] = exact_x[k];
+    status[exact_of[k]] = exact_status[k];
+  }
+  for (std::size_t k = 0; k < near_of.size(); ++k) {
+    x[near_of[k]] = near_x[k];
+    status[near_of[k]] = near_status[k];
+  }
+  for (int round = 0; round < 2; ++round)
+    if (!steer_to_midpoints(chosen, exact_of, x, status, ms, mtau)) return false;
+  report_.exact_insertions += exact_of.size();
+  report_.interpolated_insertions += near_of.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& c = topo_.face(chosen[k].face);
+    const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
+    const Vec3 was = 0.5 * (previous_x_[idx(a)] + previous_x_[idx(b)]);
+    const bool chain_edge = on_chain_[idx(a)] && on_chain_[idx(b)] &&
+                            topo_.neighbor(chosen[k].face, chosen[k].edge) == none;
+    const std::int32_t m = topo_.split(chosen[k].face, chosen[k].edge);
+    x_.push_back(x[k]);
+    previous_x_.push_back(was);
+    s_.push_back(ms[k]);
+    tau_.push_back(mtau[k]);
+    status_.push_back(status[k]);
+    id_.push_back(next_id_++);
+    on_chain_.push_back(0);
+    if (chain_edge) {
+      // The newest row gains the particle between a and b.
+      const auto ia = std::find(chain_.begin(), chain_.end(), a);
+      const auto ib = std::find(chain_.begin(), chain_.end(), b);
+      const auto later = std::max(ia, ib);
+      const bool wraps = seed_.closed() && std::abs(ia - ib) + 1 ==
+                                               static_cast<std::ptrdiff_t>(chain_.size());
+      if (ia != chain_.end() && ib != chain_.end() && (std::abs(ia - ib) == 1 || wraps)) {
+        chain_.insert(wraps ? chain_.end() : later, m);  // closed seed: after the last
+        on_chain_[idx(m)] = 1;
+      }
+    }
+    if (status[k] != ParticleStatus::moving) stop_particle(m);
+  }
+  splits += n;
+  report_.splits += n;
+  return true;
+}
+
+bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
+                                               const std::vector<std::size_t>& which,
+                                               std::vector<Vec3>& x,
+                                               std::vector<ParticleStatus>& status,
+                                               std::vector<double>& ms, std::vector<double>& mtau) {
+  const double tolerance = 0.05 * o_.edge;
+  const double tau_hi = std::min(t_, o_.release_end);
+  std::vector<std::size_t> redo;
+  std::vector<Vec3> rx;
+  std::vector<double> rfrom, rs;
+  const auto label = [&](std::int32_t v, double near_s) {
+    double sv = s_[idx(v)];
+    if (seed_.closed() && sv - near_s > 0.5) sv -= 1;
+    if (seed_.closed() && near_s - sv > 0.5) sv += 1;
+    return Eigen::Vector2d(sv, tau_[idx(v)]);
+  };
+  for (const std::size_t k : which) {
+    if (status[k] != ParticleStatus::moving) continue;
+    const std::int32_t f = chosen[k].face;
+    const int e = chosen[k].edge;
+    const auto& c = topo_.face(f);
+    const std::int32_t a = c[e], b = c[(e + 1) % 3], o = c[(e + 2) % 3];
+    const Vec3 target = 0.5 * (x_[idx(a)] + x_[idx(b)]);
+    const Vec3 error = x[k] - target;
+    if (error.norm() <= tolerance) continue;
+    const Eigen::Vector2d l0(ms[k], mtau[k]);
+    const Eigen::Vector2d la = label(a, ms[k]), lb = label(b, ms[k]), lo = label(o, ms[k]);
+    Eigen::Vector2d l1;
+    const Vec3 d = x_[idx(b)] - x_[idx(a)];
+    if (topo_.neighbor(f, e) == none) {
+      const double lambda = std::clamp(-d.dot(error) / d.squaredNorm(), -0.4, 0.4);
+      l1 = l0 + lambda * (lb - la);
+    } else {
+      Eigen::Matrix2d dl;
+      dl.col(0) = lb - la;
+      dl.col(1) = lo - la;
+      const double det = dl.determinant();
+      if (!(std::abs(det) > 1e-9 * dl.col(0).norm() * dl.col(1).norm())) continue;
+      Eigen::Matrix<double, 3, 2> dx;
+      dx.col(0) = d;
+      dx.col(1) = x_[idx(o)] - x_[idx(a)];
+      const Eigen::Matrix<double, 3, 2> jacobian = dx * dl.inverse();
+      const Eigen::Matrix2d normal = jacobian.transpose() * jacobian;
+      if (!(std::abs(normal.determinant()) > 0)) continue;
+      l1 = l0 - normal.ldlt().solve(jacobian.transpose() * error);
+      // A chord step is trusted only inside the labels of the two faces beside the edge.
+      const auto inside = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q,
+                              const Eigen::Vector2d& r) {
+        Eigen::Matrix2d m;
+        m.col(0) = q - p;
+        m.col(1) = r - p;
+        const Eigen::Vector2d w = m.inverse() * (l1 - p);
+        return w.x() >= 0 && w.y() >= 0 && w.x() + w.y() <= 1;
+      };
+      const std::int32_t g = topo_.neighbor(f, e);
+      std::int32_t other = none;
+      for (const std::int32_t v : topo_.face(g))
+        if (v != a && v != b) other = v;
+      const Eigen::Vector2d ld = label(other, ms[k]);
+      if (!(inside(la, lb, lo) || (std::abs((la - ld).x() * (lb - ld).y() - (la - ld).y() * (lb - ld).x()) > 0 &&
+                                   inside(lb, la, ld))))
+        continue;
+    }
+    if (!seed_.closed()) l1.x() = std::clamp(l1.x(), 0.0, 1.0);
+    l1.x() -= std::floor(l1.x()) * (seed_.closed() ? 1.0 : 0.0);
+    l1.y() = std::clamp(l1.y(), o_.release_begin, tau_hi);
+    if (!l1.allFinite()) continue;
+    redo.push_back(k);
+    rx.push_back(seed_point(l1.x()));
+    rfrom.push_back(l1.y());
+    rs.push_back(l1.x());
+  }
+  if (redo.empty()) return true;
+  std::vector<ParticleStatus> rst(redo.size());
+  if (!no_error(advect_from_release(access_, map_, rx, rfrom, t_, rst, report_.evaluations)))
+    return false;
+  report_.steered_insertions += redo.size();
+  for (std::size_t i = 0; i < redo.size(); ++i) {
+    const std::size_t k = redo[i];
+    const auto& c = topo_.face(chosen[k].face);
+    const Vec3 target =
+        0.5 * (x_[idx(c[chosen[k].edge])] + x_[idx(c[(chosen[k].edge + 1) % 3])]);
+    if (rst[i] != ParticleStatus::moving || (rx[i] - target).norm() >= (x[k] - target).norm())
+      continue;
+    x[k] = rx[i];
+    ms[k] = rs[i];
+    mtau[k] = rfrom[i];
+  }
+  return true;
+}
+
+bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
+  if (on_chain_[idx(u)]) {
+    if (!on_chain_[idx(w)]) return false;
+    // Along the newest row only, never its ends.
+    const auto iu = std::find(chain_.begin(), chain_.end(), u);
+    const auto iw = std::find(chain_.begin(), chain_.end(), w);
+    if (std::abs(iu - iw) != 1) return false;
+    if (!seed_.closed() && (iu == chain_.begin() || iu + 1 == chain_.end())) return false;
+  }
+  if (!topo_.can_collapse(u, w)) return false;
+  std::vector<Topology::HalfEdge> ring;
+  const bool boundary = topo_.fan(u, ring);
+  const Vec3& xu = x_[idx(u)];
+  const Vec3& xw = x_[idx(w)];
+  if (boundary) {
+    // A boundary vertex goes only where its boundary is straight (its shape is kept).
+    const std::int32_t p = topo_.to(ring.front());
+    const std::int32_t q = topo_.opposite(ring.back().face, ring.back().edge);
+    const double straight = angle_at(xu, x_[idx(p)], x_[idx(q)]);
+    if (straight < 160.0 * M_PI / 180.0) return false;
+  }
+  const double limit2 = std::pow(o_.split * o_.edge, 2);
+  for (const Topology::HalfEdge& h : ring) {
+    const auto& c = topo_.face(h.face);
+    if (c[0] == w || c[1] == w || c[2] == w) continue;
+    const Vec3 before = normal(c[0], c[1], c[2]);
+    const Vec3 after = normal_with(c[0], c[1], c[2], u, w);
+    // The face keeps its side and does not become a sliver.
+    if (two_d_) {
+      if (!(oriented(after) > 0)) return false;
+    } else if (!(after.dot(before) > 0.5 * after.norm() * before.norm())) {
+      return false;
+    }
+    const std::int32_t other1 = c[(h.edge + 1) % 3], other2 = c[(h.edge + 2) % 3];
+    const Vec3& p1 = x_[idx(other1)];
+    const Vec3& p2 = x_[idx(other2)];
+    if ((p1 - xw).squaredNorm() > limit2 || (p2 - xw).squaredNorm() > limit2) return false;
+    const double area = after.norm();
+    const double longest = std::max({(p1 - xw).squaredNorm(), (p2 - xw).squaredNorm(),
+                                     (p1 - p2).squaredNorm()});
+    if (area < 0.1 * longest) return false;  // smallest angle below about 6°
+  }
+  return true;
+}
+
+void RemeshedStreakBuilder::collapse_pass() {
+  const auto start = Clock::now();
+  const double limit = o_.collapse * o_.edge;
+  std::vector<Split> short_edges;
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    const auto& c = topo_.face(fi);
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(fi, e);
+      if (g != none && g < fi) continue;
+      const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+      if (length < limit) short_edges.push_back({fi, e, length});
+    }
+  }
+  std::sort(short_edges.begin(), short_edges.end(),
+            [](const Split& a, const Split& b) { return a.length < b.length; });
+  std::vector<char> touched(x_.size(), 0);
+  std::vector<Topology::HalfEdge> ring;
+  for (const Split& sp : short_edges) {
+    if (!topo_.face_alive(sp.face)) continue;
+    const auto& c = topo_.face(sp.face);
+    const std::int32_t a = c[sp.edge], b = c[(sp.edge + 1) % 3];
+    if (touched[idx(a)] || touched[idx(b)]) continue;
+    if ((x_[idx(a)] - x_[idx(b)]).norm() >= limit) continue;
+    // The younger particle goes first: the older one has travelled further on its label.
+    std::int32_t u = tau_[idx(a)] >= tau_[idx(b)] ? a : b, w = u == a ? b : a;
+    if (!collapsible(u, w)) {
+      std::swap(u, w);
+      if (!collapsible(u, w)) continue;
+    }
+    topo_.fan(u, ring);
+    for (const Topology::HalfEdge& h : ring)
+      for (const std::int32_t v : topo_.face(h.face)) touched[idx(v)] = 1;
+    if (on_chain_[idx(u)]) {
+      chain_.erase(std::find(chain_.begin(), chain_.end(), u));
+      on_chain_[idx(u)] = 0;
+    }
+    topo_.collapse(u, w);  // u has no face left: it is no longer moved, and compact() drops it
+    ++report_.collapses;
+  }
+  report_.coarsen_seconds += seconds_since(start);
+}
+
+void RemeshedStreakBuilder::flip_pass() {
+  const double split2 = std::pow(o_.split * o_.edge, 2);
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(fi, e);
+      if (g == none || g < fi) continue;
+      const auto& c = topo_.face(fi);
+      const std::int32_t a = c[e], b = c[(e + 1) % 3], p = c[(e + 2) % 3];
+      const auto& gc = topo_.face(g);
+      std::int32_t q = none;
+      for (const std::int32_t v : gc)
+        if (v != a && v != b) q = v;
+      const Vec3 &xa = x_[idx(a)], &xb = x_[idx(b)], &xp = x_[idx(p)], &xq = x_[idx(q)];
+      // Delaunay: the angles opposite the edge sum to more than π; and no edge that splits.
+      if (angle_at(xp, xa, xb) + angle_at(xq, xb, xa) <= M_PI + 1e-9) continue;
+      if ((xp - xq).squaredNorm() > split2) continue;
+      // The new faces (a, q, p) and (q, b, p) keep the side of the old ones.
+      const Vec3 n1 = normal(a, q, p), n2 = normal(q, b, p);
+      if (two_d_) {
+        if (!(oriented(n1) > 0 && oriented(n2) > 0)) continue;
+      } else {
+        const Vec3 nf = normal(a, b, p), ng = normal(b, a, q);
+        const double lf = nf.norm(), lg = ng.norm();
+        // Nearly flat across the edge only: a flip across a crease would change the surface.
+        if (!(nf.dot(ng) > 0.9 * lf * lg)) continue;
+        const Vec3 mean = nf / lf + ng / lg;
+        if (!(n1.dot(mean) > 0 && n2.dot(mean) > 0)) continue;
+      }
+      if (topo_.flip(fi, e)) ++report_.flips;
+    }
+  }
+}
+
+bool RemeshedStreakBuilder::adapt() {
+  const auto start = Clock::now();
+  for (int round = 0; round < o_.max_refinement_rounds; ++round) {
+    std::size_t splits = 0;
+    if (!split_pass(splits)) return false;
+    if (splits == 0) break;
+    flip_pass();
+  }
+  collapse_pass();
+  flip_pass();
+  flip_pass();
+  report_.refine_seconds += seconds_since(start);
+  return true;
+}
+
+void RemeshedStreakBuilder::compact() {
+  std::vector<char> keep(x_.size(), 0);
+  for (std::size_t v = 0; v < x_.size(); ++v)
+    keep[v] = on_chain_[v] && status_[v] == ParticleStatus::moving ? 1 : 0;
+  const std::vector<std::int32_t> index = topo_.compact(keep);
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < index.size(); ++v) {
+    if (index[v] == none) continue;
+    const std::size_t to = idx(index[v]);
+    x_[to] = x_[v];
+    previous_x_[to] = previous_x_[v];
+    s_[to] = s_[v];
+    tau_[to] = tau_[v];
+    status_[to] = status_[v];
+    id_[to] = id_[v];
+    on_chain_[to] = on_chain_[v];
+    kept = std::max(kept, to + 1);
+  }
+  x_.resize(kept), previous_x_.resize(kept), s_.resize(kept), tau_.resize(kept);
+  status_.resize(kept), id_.resize(kept), on_chain_.resize(kept);
+  std::vector<std::int32_t> chain;
+  for (const std::int32_t v : chain_)
+    if (index[idx(v)] != none) chain.push_back(index[idx(v)]);
+  chain_ = std::move(chain);
+}
+
+void RemeshedStreakBuilder::emit_frame(int index) {
+  const auto start = Clock::now();
+  compact();
+  StreakFrame frame;
+  frame.index = index;
+  frame.time = t_;
+  frame.rows = report_.rows_released;
+  Mesh& mesh = frame.mesh;
+  const std::size_t nv = x_.size();
+  mesh.positions.reserve(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    Vec3 p = x_[v];
+    if (two_d_) p.z() = 0;
+    mesh.add_vertex(p, t_, 0, s_[v], 0, 0, 0);
+    mesh.release_time.push_back(tau_[v]);
+    mesh.age.push_back(t_ - tau_[v]);
+    mesh.particle_id.push_back(id_[v]);
+  }
+  mesh.speed.resize(nv);
+  tbb::parallel_for(std::size_t{0}, nv, [&](std::size_t v) {
+    Vec3 u;
+    mesh.speed[v] = flow_.velocity(x_[v], t_, u) == FieldStatus::inside ? u.norm() : 0.0;
+  });
+  double area = 0, boundary = 0;
+  // Pieces: faces joined across shared edges (union-find).
+  std::vector<std::int32_t> parent(topo_.face_slots());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto root = [&](std::int32_t f) {
+    while (parent[idx(f)] != f) f = parent[idx(f)] = parent[idx(parent[idx(f)])];
+    return f;
+  };
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    const auto& c = topo_.face(fi);
+    mesh.add_triangle(c[0], c[1], c[2]);
+    area += 0.5 * normal(c[0], c[1], c[2]).norm();
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(fi, e);
+      if (g == none)
+        boundary += (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+      else
+        parent[idx(root(fi))] = root(g);
+    }
+  }
+  std::size_t pieces = 0;
+  for (std::size_t f = 0; f < parent.size(); ++f)
+    if (root(static_cast<std::int32_t>(f)) == static_cast<std::int32_t>(f)) ++pieces;
+  report_.frame_seconds += seconds_since(start);
+
+  StreakFrameRecord record;
+  record.index = index;
+  record.time = t_;
+  record.vertices = mesh.vertex_count();
+  record.faces = mesh.face_count();
+  record.rows = report_.rows_released;
+  record.dead_particles = report_.left_domain + report_.no_data;
+  record.build_seconds = seconds_since(start);
+  const auto finish = Clock::now();
+  frame.quality = measure_quality(mesh);
+  record.quality = frame.quality;
+  record.max_edge = frame.quality.longest_edge;
+  record.area = area;
+  record.boundary_length = boundary;
+  record.vertex_estimate = 1.155 * area / (o_.edge * o_.edge) + boundary / o_.edge;
+  record.pieces = pieces;
+  if (sink_) sink_(frame);
+  record.finish_seconds = seconds_since(finish);
+  record.seconds = seconds_since(start);
+  report_.frame_finish_seconds += record.finish_seconds;
+  report_.frames.push_back(record);
+}
+
+StreakReport RemeshedStreakBuilder::run() {
+  start_ = Clock::now();
+  check_streak_options(o_, flow_, field_name());
+  if (!(o_.collapse > 0 && o_.collapse <= 0.5 * o_.split))
+    throw InvalidArgument("collapse factor must lie in (0, split/2] (so a collapse never makes "
+                          "an edge that splits), got " + number(o_.collapse));
+  report_.dimension = flow_.dimension();
+  report_.insertion = o_.insertion;
+  report_.mesh = to_string(StreakMesh::remeshed);
+  report_.release_begin = o_.release_begin;
+  report_.release_end = o_.release_end;
+  // Release step: ℓ over the median speed on the seed, unless given.
+  const int probe = std::max(3, static_cast<int>(std::ceil(seed_.length() / o_.edge)) + 1);
+  std::vector<double> speeds;
+  std::size_t inside = 0;
+  for (const double s : seed_.sample(std::min(probe, 10001))) {
+    Vec3 v;
+    if (flow_.velocity(seed_point(s), o_.release_begin, v) != FieldStatus::inside) continue;
+    ++inside;
+    if (two_d_) v.z() = 0;
+    speeds.push_back(v.norm());
+  }
+  if (inside == 0)
+    throw InvalidArgument("seed " + o_.seed_name + " has no point inside the domain of " +
+                          field_name() + " with flow at t = " + number(o_.release_begin));
+  std::nth_element(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2),
+                   speeds.end());
+  const double median_speed = speeds[speeds.size() / 2];
+  double step = o_.release_step;
+  if (step == 0) {
+    if (!(median_speed > 0))
+      throw InvalidArgument("the flow of " + field_name() + " is at rest on seed " + o_.seed_name +
+                            " at t = " + number(o_.release_begin) +
+                            " (median speed 0): give --release-step");
+    step = o_.edge / median_speed;
+  }
+  report_.release_step = step;
+
+  // Breaks: every release (and the release end) and every frame, in order.
+  std::vector<double> releases;
+  for (std::size_t k = 0;; ++k) {
+    const double tau = o_.release_begin + static_cast<double>(k) * step;
+    if (tau >= o_.release_end - 1e-9 * step) break;
+    releases.push_back(tau);
+  }
+  releases.push_back(o_.release_end);
+  // A frame inside the release interval sees the dye released up to its time: a row leaves the
+  // seed then too (a regular release a moment later is dropped: it would make a sliver strip).
+  for (const double f : o_.frames)
+    if (f > o_.release_begin && f < o_.release_end) releases.push_back(f);
+  std::sort(releases.begin(), releases.end());
+  std::vector<double> spaced;
+  for (std::size_t k = 0; k < releases.size(); ++k) {
+    const bool frame = std::binary_search(o_.frames.begin(), o_.frames.end(), releases[k]) ||
+                       releases[k] == o_.release_end;
+    if (!spaced.empty() && releases[k] - spaced.back() < 0.25 * step) {
+      if (frame) spaced.back() = releases[k];
+      continue;
+    }
+    spaced.push_back(releases[k]);
+  }
+  releases = std::move(spaced);
+  std::size_t next_release = 0, next_frame = 0;
+  t_ = previous_t_ = o_.release_begin;
+  const double t_last = o_.frames.back();
+  while (next_frame < o_.frames.size()) {
+    // The mesh adapts every release step, after the release ends too (stretching goes on).
+    const double r = next_release < releases.size() ? releases[next_release] : t_ + step;
+    const double f = o_.frames[next_frame];
+    const double b = std::min(r, f);
+    if (b > t_ && !advance(b)) break;
+    if (next_release < releases.size() && releases[next_release] <= t_) {
+      release(releases[next_release]);
+      ++next_release;
+      if (report_.seed_count == 0) report_.seed_count = chain_.size();
+    }
+    if (!adapt()) break;  // the new strip too: a frame sees an adapted mesh
+    std::size_t particles = 0;
+    for (std::size_t v = 0; v < x_.size(); ++v) {
+      const auto i = static_cast<std::int32_t>(v);
+      particles += alive(i) && (topo_.has_faces(i) || on_chain_[v]) ? 1 : 0;
+    }
+    report_.max_particles = std::max(report_.max_particles, particles);
+    if (particles > o_.max_vertices) {
+      stop("stopped at t = " + number(t_) + ": " + std::to_string(particles) +
+           " particles exceed the cap of " + std::to_string(o_.max_vertices) + " after " +
+           std::to_string(next_frame) + " of " + std::to_string(o_.frames.size()) + " frames");
+      break;
+    }
+    if (o_.frames[next_frame] <= t_) {
+      emit_frame(static_cast<int>(next_frame));
+      ++next_frame;
+    }
+    if (x_.size() > 2 * particles + 1024) compact();
+    if (o_.progress) {
+      StreakProgress p;
+      p.t = t_;
+      p.t_end = t_last;
+      p.frames_written = next_frame;
+      p.frames = o_.frames.size();
+      p.particles = particles;
+      p.rows = report_.rows_released;
+      p.elapsed_seconds = seconds_since(start_);
+      p.advect_seconds = report_.advect_seconds;
+      p.refine_seconds = report_.refine_seconds;
+      p.frame_seconds = report_.frame_seconds;
+      p.streamed = static_cast<bool>(access_.prepare);
+      if (!o_.progress(p)) {
+        stop("interrupted at t = " + number(t_) + " after " + std::to_string(next_frame) + " of " +
+             std::to_string(o_.frames.size()) + " frames");
+        break;
+      }
+    }
+  }
+  report_.time_reached = t_;
+  report_.total_seconds = seconds_since(start_);
+  return report_;
+}
+
+}  // namespace
+
+StreakReport build_remeshed_streak(const StreakFlowAccess& access, const SeedCurve& seed,
+                                   const StreakOptions& options, const StreakFrameSink& sink) {
+  return RemeshedStreakBuilder(access, seed, options, sink).run();
+}
+
+}  // namespace orthofront::spacetime

@@ -1,0 +1,182 @@
+// The remeshed streak surface (StreakMesh::remeshed): vertices exactly on their path lines,
+// a valid triangle mesh, sizes that follow the surface's area, and removal where dye leaves.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "orthofront/field/unsteady.h"
+#include "orthofront/quality/quality.h"
+#include "orthofront/spacetime/streak_surface.h"
+#include "spacetime/reference_path.h"
+
+using namespace orthofront;
+using namespace orthofront::spacetime;
+using streak_test::reference_path;
+
+namespace {
+
+// Steady simple shear v = (y, 0) on [x_lo, x_hi] x [0, 1]: path lines are straight, so the dyed
+// region of a seed across the flow is a polygon whose area grows exactly by the flux.
+class ShearFlow final : public UnsteadyField {
+ public:
+  explicit ShearFlow(double x_hi = 1e9) : x_hi_(x_hi) {}
+  int dimension() const override { return 2; }
+  FieldStatus velocity(const Vec3& x, double, Vec3& v) const override {
+    if (!(x.x() >= -1 && x.x() <= x_hi_ && x.y() >= 0 && x.y() <= 1)) return FieldStatus::outside;
+    v = Vec3(x.y(), 0, 0);
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J,
+                                Vec3& dvdt) const override {
+    J.setZero();
+    J(0, 1) = 1;
+    dvdt.setZero();
+    return velocity(x, t, v);
+  }
+  Box<3> domain() const override {
+    Box<3> b;
+    b.lo = Vec3(-1, 0, -1);
+    b.hi = Vec3(x_hi_, 1, 1);
+    return b;
+  }
+  TimeRange time_range() const override { return {}; }
+  std::string describe() const override { return "shear"; }
+
+ private:
+  double x_hi_;
+};
+
+std::vector<StreakFrame> collect(const UnsteadyField& flow, const SeedCurve& seed,
+                                 const StreakOptions& o, StreakReport& report) {
+  std::vector<StreakFrame> frames;
+  report = build_streak_surface(flow, seed, o, [&](const StreakFrame& f) { frames.push_back(f); });
+  return frames;
+}
+
+void require_valid(const StreakFrame& f) {
+  INFO("frame " << f.index << " at t = " << f.time);
+  CHECK(f.quality.non_manifold_edges == 0);
+  CHECK(f.quality.inconsistent_edges == 0);
+  CHECK(f.quality.t_junctions == 0);
+  CHECK(f.quality.degenerate_faces == 0);
+  CHECK(f.quality.folds == 0);
+  CHECK(f.quality.quads == 0);
+  const Mesh& m = f.mesh;
+  REQUIRE(m.release_time.size() == m.vertex_count());
+  REQUIRE(m.age.size() == m.vertex_count());
+  REQUIRE(m.speed.size() == m.vertex_count());
+  REQUIRE(m.particle_id.size() == m.vertex_count());
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    CHECK(m.age[i] == Approx(f.time - m.release_time[i]).margin(1e-12));
+    CHECK(m.age[i] >= 0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own path line",
+          "[spacetime][streak][remeshed]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 4;
+  o.frames = {1, 3, 6};
+  o.edge = 0.02;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(*flow, seed, o, r);
+  REQUIRE(r.complete);
+  CHECK(r.mesh == "remeshed");
+  REQUIRE(frames.size() == 3);
+  CHECK(r.splits > 0);
+  CHECK(r.collapses > 0);
+  CHECK(r.flips > 0);
+  CHECK(r.exact_insertions == r.splits);
+  for (const StreakFrame& f : frames) {
+    require_valid(f);
+    INFO("t = " << f.time);
+    // Every edge within split·ℓ once the frame is adapted (the first frame included).
+    CHECK(r.frames[static_cast<std::size_t>(f.index)].max_edge <= o.split * o.edge * (1 + 1e-9));
+    double worst = 0;
+    for (std::size_t i = 0; i < f.mesh.vertex_count(); i += 7) {
+      const Vec3 start = seed.point(f.mesh.s[i]);
+      const Vec3 x = reference_path(*flow, Vec3(start.x(), start.y(), 0), f.mesh.release_time[i],
+                                    f.time);
+      worst = std::max(worst, (x - f.mesh.positions[i]).norm());
+    }
+    // The domain is 2 x 1: 1e-6 relative.
+    CHECK(worst < 2e-6);
+  }
+}
+
+TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, good shapes",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow;
+  // Across the flow from y = 0.2 to 0.8: flux 0.3 per time unit; the rows route's mesh grows
+  // with the shear, the area does not.
+  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 4;
+  o.frames = {1, 2, 4, 8};
+  o.edge = 0.05;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 4);
+  for (const StreakFrame& f : frames) {
+    require_valid(f);
+    const StreakFrameRecord& rec = r.frames[static_cast<std::size_t>(f.index)];
+    INFO("t = " << f.time << ": " << rec.vertices << " vertices, estimate " << rec.vertex_estimate
+                << ", p05 min angle " << rec.quality.triangle_min_angle_p05);
+    const double released = std::min(f.time, o.release_end) - o.release_begin;
+    // Straight path lines, straight boundary: the triangles cover the polygon exactly.
+    CHECK(rec.area == Approx(0.3 * released).epsilon(1e-9));
+    CHECK(rec.pieces == 1);
+    CHECK(static_cast<double>(rec.vertices) <= 3 * rec.vertex_estimate);
+    CHECK(rec.max_edge <= o.split * o.edge * (1 + 1e-9));
+    CHECK(rec.quality.triangle_min_angle_p05 >= 20);
+  }
+  // After the release ends the dye is only sheared: the vertex count stays about the same.
+  CHECK(static_cast<double>(frames[3].mesh.vertex_count()) <=
+        1.5 * static_cast<double>(frames[2].mesh.vertex_count()));
+}
+
+TEST_CASE("remeshed streaks: dye that leaves the domain takes its faces with it",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow(1.0);  // outflow at x = 1
+  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
+  StreakOptions o;
+  o.release_begin = 0;
+  o.release_end = 6;
+  o.frames = {6};
+  o.edge = 0.05;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 1);
+  require_valid(frames[0]);
+  CHECK(r.left_domain > 0);
+  CHECK(r.faces_removed_at_stops > 0);
+  for (const Vec3& p : frames[0].mesh.positions) CHECK(p.x() <= 1.0);
+  // What is left lies between the seed and the outflow: area at most the strip's 0.6.
+  CHECK(r.frames[0].area <= 0.6 + 1e-9);
+  CHECK(r.frames[0].area > 0.4);
+}
+
+TEST_CASE("remeshed streaks refuse a collapse factor that would make edges split",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow;
+  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
+  StreakOptions o;
+  o.release_end = 1;
+  o.frames = {1};
+  o.collapse = 0.9;  // > split / 2
+  StreakReport r;
+  CHECK_THROWS_WITH(collect(flow, seed, o, r), Catch::Contains("collapse factor"));
+}
+
