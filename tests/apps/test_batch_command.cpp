@@ -420,7 +420,8 @@ TEST_CASE("batch: a surface's seed-shot budget is the one `stream --shot-evaluat
 TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte for byte",
           "[batch]") {
   TempDir dir("batch-streak");
-  // As `streak` defaults, and with three releases a break (`--releases-per-break 3`).
+  // As `streak --mesh rows` (batch jobs build row meshes) defaults, and with three releases a
+  // break (`--releases-per-break 3`).
   for (const int k : {1, 3}) {
     INFO(k << " releases per break");
     const std::string tag = std::to_string(k);
@@ -434,7 +435,7 @@ TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte 
     REQUIRE(r.status == 0);
     fs::create_directories(alone);
     const auto a = run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
-                       "0:2 --frames 0.5:3:4 --edge 0.03 --quiet --releases-per-break " + tag + " --out " +
+                       "0:2 --frames 0.5:3:4 --edge 0.03 --mesh rows --quiet --releases-per-break " + tag + " --out " +
                        quoted(alone / "dye.pvd"));
     INFO(a.output);
     REQUIRE(a.status == 0);

@@ -101,3 +101,55 @@ TEST_CASE("a streak surface through the 6 POP steps, land as no data", "[apps][s
                5);
 }
 #endif
+
+TEST_CASE("a remeshed streak surface of the backward-facing step (ParaView's .pvd as written)",
+          "[apps][streak][realdata]") {
+  const fs::path pvd_in = fs::path(ORTHOFRONT_DATASETS_DIR) / "pitzdaily-les" / "step.pvd";
+  if (!fs::exists(pvd_in)) {
+    WARN("skipped: " << pvd_in.string() << " not found");
+    return;
+  }
+  const fs::path dir = fresh_dir("streak-step");
+  const fs::path pvd = dir / "streak.pvd", report = dir / "report.json", log = dir / "log.txt";
+  // A 6 mm line across the inlet's boundary layer 2 mm before the step's edge; ℓ two cells.
+  const double edge = 0.001;
+  const int status =
+      run(std::string(ORTHOFRONT_BINARY) + " streak --field '" + pvd_in.string() +
+              "' --seed line:-0.002,0.0003,0:-0.002,0.0063,0 --release 0.03:0.04 "
+              "--frames 0.032:0.04:5 --edge 0.001 --out '" + pvd.string() + "' --report '" +
+              report.string() + "'",
+          log);
+  INFO(text_of(log));
+  REQUIRE(status == 0);
+  const auto r = nlohmann::json::parse(text_of(report));
+  CHECK(r["complete"].get<bool>());
+  CHECK(r["mesh"].get<std::string>() == "remeshed");
+  REQUIRE(r["frames"].size() == 5);
+  for (std::size_t f = 0; f < 5; ++f) {
+    const auto& fr = r["frames"][f];
+    INFO("frame " << f << ": " << fr.dump());
+    char name[32];
+    std::snprintf(name, sizeof name, "streak_%04zu.vtp", f);
+    const orthofront::Mesh mesh = orthofront::io::read_mesh(dir / "streak" / name);
+    REQUIRE(mesh.face_count() > 0);
+    // Measured independently on the file as written.
+    const orthofront::QualityReport q = orthofront::measure_quality(mesh);
+    CHECK(q.folds == 0);
+    CHECK(q.non_manifold_edges == 0);
+    CHECK(q.t_junctions == 0);
+    CHECK(q.degenerate_faces == 0);
+    CHECK(q.inconsistent_edges == 0);
+    CHECK(q.longest_edge <= 2 * edge);
+    // Bounded by the area: within 3 x what well-shaped triangles of edge ℓ need.
+    CHECK(static_cast<double>(mesh.vertex_count()) <= 3 * fr["vertex_estimate"].get<double>());
+    for (const auto& p : mesh.positions) {
+      CHECK(p.x() >= -0.0207);
+      CHECK(p.x() <= 0.2901);
+    }
+  }
+  const auto& last = r["frames"].back();
+  WARN("step streak surface, last frame: " << last["vertices"] << " vertices (estimate "
+                                           << last["vertex_estimate"] << "), p05 min angle "
+                                           << last["quality"]["triangle_min_angle_p05_deg"]
+                                           << ", " << r["seconds"]["total"] << " s");
+}

@@ -270,7 +270,7 @@ TEST_CASE(
   const auto streak = [&](const std::string& name, const std::string& extra) {
     return cli_test::run("streak --field " + h5.string() +
                          " --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:2 --frames 1:4:3 "
-                         "--edge 0.03 --insert interpolate --out " +
+                         "--edge 0.03 --insert interpolate --mesh rows --out " +
                          (dir.path() / (name + ".pvd")).string() + " --report " +
                          (dir.path() / (name + ".json")).string() + " " + extra);
   };

@@ -83,6 +83,7 @@ TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own pa
   const auto flow = make_unsteady_field("double-gyre");
   const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
   StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;
   o.release_end = 4;
   o.frames = {1, 3, 6};
@@ -120,6 +121,7 @@ TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, 
   // with the shear, the area does not.
   const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
   StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;
   o.release_end = 4;
   o.frames = {1, 2, 4, 8};
@@ -132,7 +134,8 @@ TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, 
     require_valid(f);
     const StreakFrameRecord& rec = r.frames[static_cast<std::size_t>(f.index)];
     INFO("t = " << f.time << ": " << rec.vertices << " vertices, estimate " << rec.vertex_estimate
-                << ", p05 min angle " << rec.quality.triangle_min_angle_p05);
+                << ", p05 min angle " << rec.quality.triangle_min_angle_p05 << ", strip faces skipped "
+                << r.strip_faces_skipped << ", faces removed " << r.faces_removed_at_stops);
     const double released = std::min(f.time, o.release_end) - o.release_begin;
     // Straight path lines, straight boundary: the triangles cover the polygon exactly.
     CHECK(rec.area == Approx(0.3 * released).epsilon(1e-9));
@@ -151,6 +154,7 @@ TEST_CASE("remeshed streaks: dye that leaves the domain takes its faces with it"
   const ShearFlow flow(1.0);  // outflow at x = 1
   const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
   StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;
   o.release_end = 6;
   o.frames = {6};
@@ -173,6 +177,7 @@ TEST_CASE("remeshed streaks refuse a collapse factor that would make edges split
   const ShearFlow flow;
   const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
   StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
   o.release_end = 1;
   o.frames = {1};
   o.collapse = 0.9;  // > split / 2

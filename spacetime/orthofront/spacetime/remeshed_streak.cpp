@@ -86,12 +86,14 @@ class RemeshedStreakBuilder {
     const auto at = [&](std::int32_t v) -> const Vec3& { return x_[idx(v == u ? w : v)]; };
     return (at(b) - at(a)).cross(at(c) - at(a));
   }
-  // 2D: the faces are stored counter-clockwise in (x, y), so a face keeps its side while this
-  // stays positive.
-  double oriented(const Vec3& n) const { return two_d_ ? n.z() : n.norm(); }
 
   void release(double tau);
-  bool advance(double t_to);
+  enum class Move { done, retry, failed };
+  // Moves every particle from t_ to t_to; retry (nothing changed) where a face would turn over
+  // and may_retry; failed on a read error.
+  Move advance(double t_to, bool may_retry);
+  // Moves to t_to in steps that keep every face on its side, adapting the mesh between them.
+  bool advance_to(double t_to);
   bool adapt();
   bool split_pass(std::size_t& splits);
   // Exact particles of a split land where the path of their label midpoint goes, which in a
@@ -138,6 +140,8 @@ class RemeshedStreakBuilder {
   std::vector<std::int32_t> chain_;  // the newest row, by s: the next strip's first side
   std::int32_t next_id_ = 0;
   double t_ = 0, previous_t_ = 0;
+  double step_ = 0, step_now_ = 0;  // the release step; the next move's (shortened) step
+  double last_move_ = 0;            // the farthest a particle went in the last move
   StreakReport report_;
   Clock::time_point start_;
 };
@@ -155,8 +159,8 @@ void RemeshedStreakBuilder::release(double tau) {
   std::vector<std::int32_t> row;
   row.reserve(params.size());
   for (const double s : params) {
-    Vec3 v;
     const Vec3 x = seed_point(s);
+    Vec3 v;
     const FieldStatus st = flow_.velocity(x, tau, v);
     row.push_back(add_particle(x, s, tau,
                                st == FieldStatus::inside    ? ParticleStatus::moving
@@ -227,7 +231,7 @@ void RemeshedStreakBuilder::stop_particle(std::int32_t v) {
   report_.faces_removed_at_stops += topo_.remove_faces_of(v);
 }
 
-bool RemeshedStreakBuilder::advance(double t_to) {
+RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may_retry) {
   const auto start = Clock::now();
   std::vector<std::int32_t> moving;
   for (std::size_t v = 0; v < x_.size(); ++v) {
@@ -238,9 +242,38 @@ bool RemeshedStreakBuilder::advance(double t_to) {
   std::vector<double> from(moving.size(), t_);
   std::vector<ParticleStatus> status(moving.size());
   for (std::size_t k = 0; k < moving.size(); ++k) x[k] = x_[idx(moving[k])];
-  if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return false;
+  if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return Move::failed;
   report_.evaluations += map_.advect_all(x, from, t_to, status);
-  if (access_.read_error && !no_error(access_.read_error())) return false;
+  if (access_.read_error && !no_error(access_.read_error())) return Move::failed;
+  report_.particle_steps += moving.size();
+  report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
+  // A face that turns over during the move (its particles crossed) would fold the surface: the
+  // move is taken back and made in shorter steps, with the mesh adapted between them.
+  std::vector<Vec3> moved = x_;
+  for (std::size_t k = 0; k < moving.size(); ++k) moved[idx(moving[k])] = x[k];
+  std::vector<char> stopped(x_.size(), 0);
+  for (std::size_t k = 0; k < moving.size(); ++k)
+    stopped[idx(moving[k])] = status[k] != ParticleStatus::moving ? 1 : 0;
+  double largest_move = 0;
+  for (std::size_t k = 0; k < moving.size(); ++k)
+    if (status[k] == ParticleStatus::moving)
+      largest_move = std::max(largest_move, (x[k] - x_[idx(moving[k])]).norm());
+  last_move_ = largest_move;
+  std::size_t turned = 0;
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    const auto& c = topo_.face(fi);
+    if (stopped[idx(c[0])] || stopped[idx(c[1])] || stopped[idx(c[2])]) continue;
+    const Vec3 before = normal(c[0], c[1], c[2]);
+    const Vec3 after = (moved[idx(c[1])] - moved[idx(c[0])]).cross(moved[idx(c[2])] - moved[idx(c[0])]);
+    if (!(after.dot(before) > 0)) ++turned;
+  }
+  if (turned > 0 && may_retry) {
+    report_.advect_seconds += seconds_since(start);
+    return Move::retry;
+  }
+  report_.faces_turned += turned;
   for (std::size_t k = 0; k < moving.size(); ++k) {
     const std::size_t v = idx(moving[k]);
     previous_x_[v] = x_[v];
@@ -249,12 +282,32 @@ bool RemeshedStreakBuilder::advance(double t_to) {
   }
   for (std::size_t k = 0; k < moving.size(); ++k)
     if (status[k] != ParticleStatus::moving) stop_particle(moving[k]);
-  report_.particle_steps += moving.size();
-  report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
   ++report_.intervals;
   previous_t_ = t_;
   t_ = t_to;
   report_.advect_seconds += seconds_since(start);
+  return Move::done;
+}
+
+bool RemeshedStreakBuilder::advance_to(double t_to) {
+  // Steps of at most the release step, shortened where particles move further than about ℓ or
+  // a face would turn over; at most 1/64 of the release step (then a turned face is counted).
+  while (t_ < t_to) {
+    double dt = std::min(t_to - t_, step_now_);
+    if (t_to - t_ - dt < 1e-9 * step_) dt = t_to - t_;
+    const bool may_retry = dt > step_ / 64;
+    const Move m = advance(t_ + dt, may_retry);
+    if (m == Move::failed) return false;
+    if (m == Move::retry) {
+      step_now_ = 0.5 * dt;
+      ++report_.steps_shortened;
+      continue;
+    }
+    if (t_ < t_to && !adapt()) return false;
+    // The next step: as long as its particles move about ℓ, never longer than the release step.
+    const double grow = last_move_ > 0 ? o_.edge / last_move_ : 2.0;
+    step_now_ = std::min(step_, dt * std::clamp(grow, 0.5, 2.0));
+  }
   return true;
 }
 
@@ -336,8 +389,39 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   }
   for (int round = 0; round < 2; ++round)
     if (!steer_to_midpoints(chosen, exact_of, x, status, ms, mtau)) return false;
-  report_.exact_insertions += exact_of.size();
-  report_.interpolated_insertions += near_of.size();
+  // Where even the steered particle lands far from the edge (its label's path went elsewhere:
+  // the edge spans labels whose paths parted), it would bridge to another part of the surface.
+  // It is placed as interpolated insertion places it instead: at the edge's midpoint one break
+  // ago, moved from there (counted as interpolated).
+  std::vector<std::size_t> far;
+  for (const std::size_t k : exact_of) {
+    const auto& c = topo_.face(chosen[k].face);
+    const Vec3& xa = x_[idx(c[chosen[k].edge])];
+    const Vec3& xb = x_[idx(c[(chosen[k].edge + 1) % 3])];
+    if (status[k] == ParticleStatus::moving && (x[k] - 0.5 * (xa + xb)).norm() > 0.25 * (xb - xa).norm() &&
+        previous_t_ < t_)
+      far.push_back(k);
+  }
+  if (!far.empty()) {
+    std::vector<Vec3> fx(far.size());
+    std::vector<ParticleStatus> fst(far.size());
+    for (std::size_t i = 0; i < far.size(); ++i) {
+      const auto& c = topo_.face(chosen[far[i]].face);
+      fx[i] = 0.5 * (previous_x_[idx(c[chosen[far[i]].edge])] +
+                     previous_x_[idx(c[(chosen[far[i]].edge + 1) % 3])]);
+    }
+    if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
+    const std::vector<double> from(far.size(), previous_t_);
+    report_.evaluations += map_.advect_all(fx, from, t_, fst);
+    if (access_.prepare && !no_error(access_.prepare(t_, t_))) return false;
+    for (std::size_t i = 0; i < far.size(); ++i) {
+      x[far[i]] = fx[i];
+      status[far[i]] = fst[i];
+    }
+    report_.diverged_insertions += far.size();
+  }
+  report_.exact_insertions += exact_of.size() - far.size();
+  report_.interpolated_insertions += near_of.size() + far.size();
   for (std::size_t k = 0; k < n; ++k) {
     const auto& c = topo_.face(chosen[k].face);
     const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
@@ -489,12 +573,10 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
     if (c[0] == w || c[1] == w || c[2] == w) continue;
     const Vec3 before = normal(c[0], c[1], c[2]);
     const Vec3 after = normal_with(c[0], c[1], c[2], u, w);
-    // The face keeps its side and does not become a sliver.
-    if (two_d_) {
-      if (!(oriented(after) > 0)) return false;
-    } else if (!(after.dot(before) > 0.5 * after.norm() * before.norm())) {
-      return false;
-    }
+    // The face keeps its side (within 60°: in 2D exactly its sign, which is the sheet's: where
+    // the flow crosses the seed both ways, the dye on either side lies face down) and does not
+    // become a sliver.
+    if (!(after.dot(before) > 0.5 * after.norm() * before.norm())) return false;
     const std::int32_t other1 = c[(h.edge + 1) % 3], other2 = c[(h.edge + 2) % 3];
     const Vec3& p1 = x_[idx(other1)];
     const Vec3& p2 = x_[idx(other2)];
@@ -569,18 +651,14 @@ void RemeshedStreakBuilder::flip_pass() {
       // Delaunay: the angles opposite the edge sum to more than π; and no edge that splits.
       if (angle_at(xp, xa, xb) + angle_at(xq, xb, xa) <= M_PI + 1e-9) continue;
       if ((xp - xq).squaredNorm() > split2) continue;
-      // The new faces (a, q, p) and (q, b, p) keep the side of the old ones.
+      // The new faces (a, q, p) and (q, b, p) keep the side of the old ones, which lie nearly
+      // flat across the edge (a flip across a crease would change the surface).
       const Vec3 n1 = normal(a, q, p), n2 = normal(q, b, p);
-      if (two_d_) {
-        if (!(oriented(n1) > 0 && oriented(n2) > 0)) continue;
-      } else {
-        const Vec3 nf = normal(a, b, p), ng = normal(b, a, q);
-        const double lf = nf.norm(), lg = ng.norm();
-        // Nearly flat across the edge only: a flip across a crease would change the surface.
-        if (!(nf.dot(ng) > 0.9 * lf * lg)) continue;
-        const Vec3 mean = nf / lf + ng / lg;
-        if (!(n1.dot(mean) > 0 && n2.dot(mean) > 0)) continue;
-      }
+      const Vec3 nf = normal(a, b, p), ng = normal(b, a, q);
+      const double lf = nf.norm(), lg = ng.norm();
+      if (!(nf.dot(ng) > 0.9 * lf * lg)) continue;
+      const Vec3 mean = nf / lf + ng / lg;
+      if (!(n1.dot(mean) > 0 && n2.dot(mean) > 0)) continue;
       if (topo_.flip(fi, e)) ++report_.flips;
     }
   }
@@ -710,7 +788,6 @@ StreakReport RemeshedStreakBuilder::run() {
   report_.mesh = to_string(StreakMesh::remeshed);
   report_.release_begin = o_.release_begin;
   report_.release_end = o_.release_end;
-  // Release step: ℓ over the median speed on the seed, unless given.
   const int probe = std::max(3, static_cast<int>(std::ceil(seed_.length() / o_.edge)) + 1);
   std::vector<double> speeds;
   std::size_t inside = 0;
@@ -724,18 +801,18 @@ StreakReport RemeshedStreakBuilder::run() {
   if (inside == 0)
     throw InvalidArgument("seed " + o_.seed_name + " has no point inside the domain of " +
                           field_name() + " with flow at t = " + number(o_.release_begin));
-  std::nth_element(speeds.begin(), speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2),
-                   speeds.end());
-  const double median_speed = speeds[speeds.size() / 2];
+  // Release step: ℓ over the largest speed on the seed, so no particle leaves it further than
+  // about ℓ before the next row (slower parts make narrow strips, which collapses thin out).
+  const double top_speed = *std::max_element(speeds.begin(), speeds.end());
   double step = o_.release_step;
   if (step == 0) {
-    if (!(median_speed > 0))
+    if (!(top_speed > 0))
       throw InvalidArgument("the flow of " + field_name() + " is at rest on seed " + o_.seed_name +
-                            " at t = " + number(o_.release_begin) +
-                            " (median speed 0): give --release-step");
-    step = o_.edge / median_speed;
+                            " at t = " + number(o_.release_begin) + ": give --release-step");
+    step = o_.edge / top_speed;
   }
   report_.release_step = step;
+  step_ = step_now_ = step;
 
   // Breaks: every release (and the release end) and every frame, in order.
   std::vector<double> releases;
@@ -769,7 +846,7 @@ StreakReport RemeshedStreakBuilder::run() {
     const double r = next_release < releases.size() ? releases[next_release] : t_ + step;
     const double f = o_.frames[next_frame];
     const double b = std::min(r, f);
-    if (b > t_ && !advance(b)) break;
+    if (b > t_ && !advance_to(b)) break;
     if (next_release < releases.size() && releases[next_release] <= t_) {
       release(releases[next_release]);
       ++next_release;

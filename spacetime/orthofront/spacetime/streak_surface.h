@@ -68,7 +68,9 @@ struct StreakOptions {
   int releases_per_break = 1;
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
   ParticleInsertion insertion = ParticleInsertion::exact;
-  StreakMesh mesh = StreakMesh::remeshed;
+  /// rows here (the baselines of bench-streak and bench-gpu-streak, and batch jobs); the
+  /// `streak` command and Python choose remeshed unless told otherwise.
+  StreakMesh mesh = StreakMesh::rows;
   /// Remeshed: edges shorter than collapse·ℓ are collapsed (and, as for rows, edges longer
   /// than split·ℓ split). At most split/2, so a collapse never makes an edge that splits.
   double collapse = 0.75;
@@ -153,7 +155,13 @@ struct StreakReport {
   /// Remeshed, exact insertion: particles released again at a label moved toward the one whose
   /// path passes through the split edge's midpoint (counted per try).
   std::size_t steered_insertions = 0;
+  /// Remeshed, exact insertion: particles whose exact path still ended farther than a quarter
+  /// of the edge from its midpoint, placed by interpolation instead (of interpolated_insertions).
+  std::size_t diverged_insertions = 0;
   std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
+  /// Remeshed: moves taken back and made in two because a face would have turned over, and
+  /// faces that turned over all the same (in a move already 1/64 of the release step).
+  std::size_t steps_shortened = 0, faces_turned = 0;
   std::string mesh;                 ///< "remeshed" or "rows"
   std::size_t left_domain = 0, no_data = 0;  ///< particles that stopped
   std::size_t max_particles = 0;
