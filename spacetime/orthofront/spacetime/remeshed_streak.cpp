@@ -95,6 +95,9 @@ class RemeshedStreakBuilder {
   // Moves to t_to in steps that keep every face on its side, adapting the mesh between them.
   bool advance_to(double t_to);
   bool adapt();
+  // Every edge (once) whose length `keep` accepts.
+  template <class Keep>
+  std::vector<Split> edges_where(const Keep& keep) const;
   bool split_pass(std::size_t& splits);
   // Exact particles of a split land where the path of their label midpoint goes, which in a
   // sheared parametrization can lie well off the edge (and fold the faces beside it). One
@@ -311,9 +314,9 @@ bool RemeshedStreakBuilder::advance_to(double t_to) {
   return true;
 }
 
-bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
-  const double limit = o_.split * o_.edge;
-  std::vector<Split> long_edges;
+template <class Keep>
+std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_where(const Keep& keep) const {
+  std::vector<Split> edges;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
     if (!topo_.face_alive(fi)) continue;
@@ -322,9 +325,15 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
       const std::int32_t g = topo_.neighbor(fi, e);
       if (g != none && g < fi) continue;  // each edge once
       const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
-      if (length > limit) long_edges.push_back({fi, e, length});
+      if (keep(length)) edges.push_back({fi, e, length});
     }
   }
+  return edges;
+}
+
+bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
+  const double limit = o_.split * o_.edge;
+  std::vector<Split> long_edges = edges_where([&](double length) { return length > limit; });
   if (long_edges.empty()) return true;
   std::sort(long_edges.begin(), long_edges.end(),
             [](const Split& a, const Split& b) { return a.length > b.length; });
@@ -592,18 +601,7 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
 void RemeshedStreakBuilder::collapse_pass() {
   const auto start = Clock::now();
   const double limit = o_.collapse * o_.edge;
-  std::vector<Split> short_edges;
-  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
-    const auto fi = static_cast<std::int32_t>(f);
-    if (!topo_.face_alive(fi)) continue;
-    const auto& c = topo_.face(fi);
-    for (int e = 0; e < 3; ++e) {
-      const std::int32_t g = topo_.neighbor(fi, e);
-      if (g != none && g < fi) continue;
-      const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
-      if (length < limit) short_edges.push_back({fi, e, length});
-    }
-  }
+  std::vector<Split> short_edges = edges_where([&](double length) { return length < limit; });
   std::sort(short_edges.begin(), short_edges.end(),
             [](const Split& a, const Split& b) { return a.length < b.length; });
   std::vector<char> touched(x_.size(), 0);
