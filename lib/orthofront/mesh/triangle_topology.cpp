@@ -33,7 +33,8 @@ bool TriangleTopology::fan(std::int32_t v, std::vector<HalfEdge>& out) const {
   if (start == none) return false;
   // Backward (across the edge that leaves v) to the first face of the fan, or once round.
   std::int32_t first = start;
-  for (;;) {
+  for (std::size_t steps = 0;; ++steps) {
+    if (steps > faces_.size()) throw Error("TriangleTopology: a vertex fan does not close");
     const HalfEdge h = leaving(v, first);
     const std::int32_t g = neighbors_[idx(first)][h.edge];
     if (g == none) break;
