@@ -6,12 +6,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <numeric>
 #include <string>
 #include <vector>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_spec.h"
 #include "orthofront/mesh/triangle_topology.h"
 
 namespace orthofront::spacetime {
@@ -26,11 +26,7 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-std::string number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
-}
+std::string number(double value) { return format_parameter(value); }
 
 std::size_t idx(std::int32_t i) { return static_cast<std::size_t>(i); }
 

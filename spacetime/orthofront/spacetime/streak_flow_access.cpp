@@ -1,20 +1,16 @@
 #include "orthofront/spacetime/streak_flow_access.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
 #include <numeric>
 
 #include "orthofront/error.h"
+#include "orthofront/field/field_spec.h"
 
 namespace orthofront::spacetime {
 
 namespace {
-std::string number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", value);
-  return text;
-}
+std::string number(double value) { return format_parameter(value); }
 }  // namespace
 
 void check_streak_options(const StreakOptions& o, const UnsteadyField& flow,
