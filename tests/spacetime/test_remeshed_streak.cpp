@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "orthofront/field/unsteady.h"
+#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/spacetime/sampled_series.h"
 #include "orthofront/quality/quality.h"
 #include "orthofront/spacetime/streak_surface.h"
 #include "spacetime/reference_path.h"
@@ -185,3 +188,43 @@ TEST_CASE("remeshed streaks refuse a collapse factor that would make edges split
   CHECK_THROWS_WITH(collect(flow, seed, o, r), Catch::Contains("collapse factor"));
 }
 
+
+TEST_CASE("remeshed streaks: streamed under a small budget give the frames of a resident series, "
+          "bit for bit",
+          "[spacetime][streak][remeshed]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const GridGeometry grid = uniform_grid(flow->domain(), 2, 81);
+  const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));
+  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+  StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
+  o.release_end = 3;
+  o.frames = {1.5, 3, 4.5};
+  o.edge = 0.03;
+  std::vector<std::vector<StreakFrame>> runs;
+  // All of the series resident, then little more than the band.
+  for (const std::size_t budget : {std::size_t{1} << 30, std::size_t{1400} << 10}) {
+    CacheOptions co;
+    co.budget_bytes = budget;
+    co.whole_steps = true;
+    BrickCache cache(series, co);
+    std::vector<StreakFrame> frames;
+    const StreakReport r =
+        build_streak_surface(cache, seed, o, [&](const StreakFrame& f) { frames.push_back(f); });
+    REQUIRE(r.complete);
+    REQUIRE(r.streamed);
+    CHECK(r.cache.peak_bytes <= budget);
+    runs.push_back(std::move(frames));
+  }
+  REQUIRE(runs[0].size() == 3);
+  REQUIRE(runs[1].size() == 3);
+  for (std::size_t f = 0; f < 3; ++f) {
+    const Mesh& a = runs[0][f].mesh;
+    const Mesh& b = runs[1][f].mesh;
+    require_valid(runs[1][f]);
+    REQUIRE(a.vertex_count() == b.vertex_count());
+    CHECK(a.faces == b.faces);
+    CHECK(std::memcmp(a.positions.data(), b.positions.data(), a.vertex_count() * sizeof(Vec3)) == 0);
+    CHECK(a.particle_id == b.particle_id);
+  }
+}
