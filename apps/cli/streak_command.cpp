@@ -123,7 +123,7 @@ nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
           {"faces", f.faces},       {"rows", f.rows},       {"stopped_particles", f.dead_particles},
           {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"area", f.area},
           {"boundary_length", f.boundary_length}, {"vertex_estimate", f.vertex_estimate},
-          {"pieces", f.pieces}, {"quality", io::to_json(q)}};
+          {"pieces", f.pieces}, {"area_pruned", f.area_pruned}, {"quality", io::to_json(q)}};
 }
 
 nlohmann::json report_json(const spacetime::StreakReport& r) {
@@ -164,7 +164,9 @@ nlohmann::json report_json(const spacetime::StreakReport& r) {
         {"steps_shortened", r.steps_shortened},
         {"faces_turned", r.faces_turned},
         {"faces_removed_at_stops", r.faces_removed_at_stops},
-        {"strip_faces_skipped", r.strip_faces_skipped}}},
+        {"strip_faces_skipped", r.strip_faces_skipped},
+        {"faces_pruned", r.faces_pruned},
+        {"area_pruned", r.area_pruned}}},
       {"particles",
        {{"max", r.max_particles}, {"left_domain", r.left_domain}, {"no_data", r.no_data}}},
       {"frames", frames},
@@ -372,6 +374,12 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
       .add_option("--collapse", args.collapse,
                   "--mesh remeshed: collapse edges shorter than this many edge lengths")
       ->capture_default_str();
+  command
+      .add_option("--prune", args.prune,
+                  "--mesh remeshed: remove filaments of dye narrower than this many edge lengths "
+                  "(a mesh with edges of one edge length cannot resolve them; 0 keeps them all)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command.add_option("--split", args.split, "Split edges longer than this many edge lengths")
       ->capture_default_str();
   command
@@ -427,6 +435,7 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.merge = args.merge;
   o.mesh = args.mesh == "rows" ? spacetime::StreakMesh::rows : spacetime::StreakMesh::remeshed;
   o.collapse = args.collapse;
+  o.prune = args.prune;
   o.release_step = args.release_step;
   o.releases_per_break = args.releases_per_break;
   o.seed_count = args.seed_count;
@@ -528,14 +537,28 @@ void add_streak_command(CLI::App& app) {
           result.refine_seconds, result.frame_seconds);
       if (!result.frames.empty()) {
         const auto& f = result.frames.back();
+        char shape[160];
+        if (f.quality.quad_share > 0)
+          std::snprintf(shape, sizeof shape, "%.1f%% quads, %.1f%% of quad angles within 90±10°",
+                        100 * f.quality.quad_share, 100 * f.quality.quad_angles_within_10);
+        else
+          std::snprintf(shape, sizeof shape,
+                        "triangles, smallest angle %.1f° (5th percentile) / %.1f° (median)",
+                        f.quality.triangle_min_angle_p05, f.quality.triangle_min_angle_median);
         std::printf(
-            "Last frame (t = %g): %zu vertices, %zu faces, %.1f%% quads, %.1f%% of quad "
-            "angles within 90±10°, edge spread %.3f, max edge %.3g (%.2f edge lengths), "
-            "%zu folds, %zu T-junctions, %zu degenerate faces, %zu non-manifold edges.\n",
-            f.time, f.vertices, f.faces, 100 * f.quality.quad_share,
-            100 * f.quality.quad_angles_within_10, f.quality.edge_spread_median, f.max_edge,
+            "Last frame (t = %g): %zu vertices (%zu pieces), %zu faces, %s, edge spread %.3f, "
+            "max edge %.3g (%.2f edge lengths), %zu folds, %zu T-junctions, %zu degenerate "
+            "faces, %zu non-manifold edges.\n",
+            f.time, f.vertices, f.pieces, f.faces, shape, f.quality.edge_spread_median, f.max_edge,
             f.max_edge / args->edge, f.quality.folds, f.quality.t_junctions,
             f.quality.degenerate_faces, f.quality.non_manifold_edges);
+      }
+      if (result.faces_pruned > 0 && !result.frames.empty()) {
+        const auto& f = result.frames.back();
+        std::printf("Pruned %zu faces of filaments thinner than %g edge lengths: %.3g (%.1f%%) of "
+                    "the dye's area by the last frame (--prune 0 keeps them).\n",
+                    result.faces_pruned, o.prune, f.area_pruned,
+                    100 * f.area_pruned / std::max(f.area + f.area_pruned, 1e-300));
       }
       if (result.streamed)
         std::printf("Cache: %s read (%.3fx needed), at most %zu reads of a unit, waited %.3f s.\n",

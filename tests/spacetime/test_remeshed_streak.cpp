@@ -53,6 +53,35 @@ class ShearFlow final : public UnsteadyField {
   double x_hi_;
 };
 
+// Steady strain v = (x, -y) on [0, 3] x [-1, 1]. Dye released across the flow at x = 0.25,
+// |y| <= 0.2, reaches x = 0.25 e^a at age a with |y| <= 0.05 / x: a filament of width 0.1 / x,
+// flux 0.1 per time unit through the seed and every later cross-section.
+class StrainFlow final : public UnsteadyField {
+ public:
+  int dimension() const override { return 2; }
+  FieldStatus velocity(const Vec3& x, double, Vec3& v) const override {
+    if (!(x.x() >= 0 && x.x() <= 3 && x.y() >= -1 && x.y() <= 1)) return FieldStatus::outside;
+    v = Vec3(x.x(), -x.y(), 0);
+    return FieldStatus::inside;
+  }
+  FieldStatus velocity_jacobian(const Vec3& x, double t, Vec3& v, Mat3& J,
+                                Vec3& dvdt) const override {
+    J.setZero();
+    J(0, 0) = 1;
+    J(1, 1) = -1;
+    dvdt.setZero();
+    return velocity(x, t, v);
+  }
+  Box<3> domain() const override {
+    Box<3> b;
+    b.lo = Vec3(0, -1, -1);
+    b.hi = Vec3(3, 1, 1);
+    return b;
+  }
+  TimeRange time_range() const override { return {}; }
+  std::string describe() const override { return "strain"; }
+};
+
 std::vector<StreakFrame> collect(const UnsteadyField& flow, const SeedCurve& seed,
                                  const StreakOptions& o, StreakReport& report) {
   std::vector<StreakFrame> frames;
@@ -129,10 +158,12 @@ TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, 
   o.release_end = 4;
   o.frames = {1, 2, 4, 8};
   o.edge = 0.05;
+  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
   StreakReport r;
   const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
   REQUIRE(r.complete);
   REQUIRE(frames.size() == 4);
+  CHECK(r.faces_pruned == 0);
   for (const StreakFrame& f : frames) {
     require_valid(f);
     const StreakFrameRecord& rec = r.frames[static_cast<std::size_t>(f.index)];
@@ -150,6 +181,45 @@ TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, 
   // After the release ends the dye is only sheared: the vertex count stays about the same.
   CHECK(static_cast<double>(frames[3].mesh.vertex_count()) <=
         1.5 * static_cast<double>(frames[2].mesh.vertex_count()));
+}
+
+TEST_CASE("remeshed streaks prune exactly the part of a filament thinner than the prune width",
+          "[spacetime][streak][remeshed]") {
+  const StrainFlow flow;
+  const SeedCurve seed = SeedCurve::line(Vec3(0.25, -0.2, 0), Vec3(0.25, 0.2, 0));
+  StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
+  o.release_begin = 0;
+  o.release_end = 4;
+  o.frames = {1.5, 4};
+  o.edge = 0.1;
+  o.prune = 0.5;  // w = 0.05: the filament (width 0.1 / x) is thinner beyond x = 2
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 2);
+  const auto reach = [](const StreakFrame& f) {
+    double x = 0;
+    for (const Vec3& p : f.mesh.positions) x = std::max(x, p.x());
+    return x;
+  };
+  // t = 1.5: the tip (x = 0.25 e^1.5 = 1.12) is wider than w everywhere: nothing pruned.
+  const StreakFrameRecord& early = r.frames[0];
+  CHECK(early.area_pruned == 0);
+  CHECK(early.pieces == 1);
+  CHECK(reach(frames[0]) == Approx(0.25 * std::exp(1.5)).epsilon(1e-6));
+  // t = 4: the dye is eaten back to x = 2 (one edge either way), in one piece; what it lost is
+  // the flux past x = 2 since the tip got there (t = ln 8), less nothing else.
+  const StreakFrameRecord& late = r.frames[1];
+  require_valid(frames[1]);
+  INFO("reach " << reach(frames[1]) << ", area " << late.area << ", pruned " << late.area_pruned
+                << ", faces pruned " << r.faces_pruned << ", stopped " << late.dead_particles);
+  CHECK(std::abs(reach(frames[1]) - 2.0) <= o.edge);
+  CHECK(late.pieces == 1);
+  CHECK(late.dead_particles == 0);  // pruned before it reached the outflow at x = 3
+  CHECK(late.area == Approx(0.1 * std::log(2.0 / 0.25)).epsilon(0.05));
+  CHECK(late.area_pruned == Approx(0.1 * (4 - std::log(8.0))).epsilon(0.05));
+  CHECK(late.area + late.area_pruned == Approx(0.1 * 4).epsilon(0.01));
 }
 
 TEST_CASE("remeshed streaks: dye that leaves the domain takes its faces with it",

@@ -331,7 +331,8 @@ void TriangleTopology::kill(std::int32_t f) {
   --live_faces_;
 }
 
-std::size_t TriangleTopology::remove_face(std::int32_t f) {
+std::size_t TriangleTopology::remove_face(std::int32_t f,
+                                          std::vector<std::array<std::int32_t, 3>>* corners) {
   std::size_t removed = 0;
   std::vector<std::int32_t> work{f};
   std::vector<HalfEdge> ring;
@@ -359,6 +360,7 @@ std::size_t TriangleTopology::remove_face(std::int32_t f) {
         vertex_face_[idx(v)] = ring[before - 1].face;
       }
     }
+    if (corners != nullptr) corners->push_back(faces_[idx(g)]);
     kill(g);
     ++removed;
   }

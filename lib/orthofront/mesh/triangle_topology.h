@@ -63,8 +63,10 @@ class TriangleTopology {
   void collapse(std::int32_t u, std::int32_t w);
   /// Removes face f (its neighbours get a boundary edge there). Where that would leave a corner
   /// with two fans (f in the middle of a boundary vertex's fan), the smaller fan goes too, so
-  /// the mesh stays manifold. Returns the faces removed.
-  std::size_t remove_face(std::int32_t f);
+  /// the mesh stays manifold. Returns the faces removed; appends their corners to `corners`
+  /// when given.
+  std::size_t remove_face(std::int32_t f,
+                          std::vector<std::array<std::int32_t, 3>>* corners = nullptr);
   /// Removes every face of v (and what remove_face removes with them). Returns the faces removed.
   std::size_t remove_faces_of(std::int32_t v);
   /// Whether add_face(a, b, c) would keep the mesh manifold and oriented: distinct corners, no

@@ -95,6 +95,13 @@ class RemeshedStreakBuilder {
   template <class Keep>
   std::vector<Split> edges_where(const Keep& keep) const;
   bool split_pass(std::size_t& splits);
+  // Signed area of f's labels (s, τ), in its corners' order.
+  double label_area(std::int32_t f) const;
+  // Whether a face beside the edge has its labels turned against its corners, which an
+  // untangled mesh never has (all label triangles turn one way): collapses and flips in a
+  // mixing flow join particles whose labels lie far apart, and the path of their label
+  // midpoint goes elsewhere. Such an edge's particle is placed by interpolation at once.
+  bool labels_tangled(const Split& edge) const;
   // Exact particles of a split land where the path of their label midpoint goes, which in a
   // sheared parametrization can lie well off the edge (and fold the faces beside it). One
   // chord step of Gauss-Newton on the label, with the derivative of the faces beside the edge,
@@ -105,7 +112,13 @@ class RemeshedStreakBuilder {
                           std::vector<Vec3>& x, std::vector<ParticleStatus>& status,
                           std::vector<double>& ms, std::vector<double>& mtau);
   void collapse_pass();
-  void flip_pass();
+  std::size_t flip_pass();  // returns the flips made
+  // How wide the filament is at face f, or infinity where f is not on one: f has a boundary
+  // edge, every corner on the boundary and none on the newest row (the youngest strip is thin
+  // where the flow is slow).
+  double filament_width(std::int32_t f) const;
+  void prune(std::int32_t f);
+  void prune_pass();
   bool collapsible(std::int32_t u, std::int32_t w) const;
   void stop_particle(std::int32_t v);
   void compact();
@@ -129,6 +142,7 @@ class RemeshedStreakBuilder {
   const FlowMap& map_;
   const bool two_d_;
   double orientation_ = 0;  // 2D: +1 or -1 once the first strip says which way its quads turn
+  double label_sign_ = 0;   // the sign of every label triangle's area while labels are untangled
 
   Topology topo_;
   std::vector<Vec3> x_, previous_x_;  // positions now and at the previous break
@@ -136,10 +150,13 @@ class RemeshedStreakBuilder {
   std::vector<ParticleStatus> status_;
   std::vector<std::int32_t> id_;
   std::vector<char> on_chain_;
+  mutable std::vector<Topology::HalfEdge> ring_;  // scratch for fans
+  std::vector<std::array<std::int32_t, 3>> removed_;  // scratch: corners of removed faces
   std::vector<std::int32_t> chain_;  // the newest row, by s: the next strip's first side
   std::int32_t next_id_ = 0;
   double t_ = 0, previous_t_ = 0;
   double step_ = 0, step_now_ = 0;  // the release step; the next move's (shortened) step
+  double width_ = 0;                // prune·ℓ
   double last_move_ = 0;            // the farthest a particle went in the last move
   StreakReport report_;
   Clock::time_point start_;
@@ -195,7 +212,8 @@ void RemeshedStreakBuilder::release(double tau) {
       first = oriented_face(first);
       second = oriented_face(second);
       if (addable(first)) {
-        topo_.add_face(first[0], first[1], first[2]);
+        const std::int32_t f = topo_.add_face(first[0], first[1], first[2]);
+        if (label_sign_ == 0) label_sign_ = label_area(f) > 0 ? 1 : -1;
         if (addable(second))
           topo_.add_face(second[0], second[1], second[2]);
         else
@@ -258,7 +276,10 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     if (status[k] == ParticleStatus::moving)
       largest_move = std::max(largest_move, (x[k] - x_[idx(moving[k])]).norm());
   last_move_ = largest_move;
+  // Faces of thin filaments that turn over are pruned (they would be anyway); any other face
+  // that turns makes the move shorter.
   std::size_t turned = 0;
+  std::vector<std::int32_t> turned_filament;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
     if (!topo_.face_alive(fi)) continue;
@@ -266,12 +287,18 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     if (stopped[idx(c[0])] || stopped[idx(c[1])] || stopped[idx(c[2])]) continue;
     const Vec3 before = normal(c[0], c[1], c[2]);
     const Vec3 after = (moved[idx(c[1])] - moved[idx(c[0])]).cross(moved[idx(c[2])] - moved[idx(c[0])]);
-    if (!(after.dot(before) > 0)) ++turned;
+    if (after.dot(before) > 0) continue;
+    if (filament_width(fi) < width_)
+      turned_filament.push_back(fi);
+    else
+      ++turned;
   }
   if (turned > 0 && may_retry) {
     report_.advect_seconds += seconds_since(start);
     return Move::retry;
   }
+  for (const std::int32_t f : turned_filament)
+    if (topo_.face_alive(f)) prune(f);
   report_.faces_turned += turned;
   for (std::size_t k = 0; k < moving.size(); ++k) {
     const std::size_t v = idx(moving[k]);
@@ -361,8 +388,8 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     if (seed_.closed() && ms[k] >= 1) ms[k] -= 1;
     mtau[k] = 0.5 * (tau_[idx(a)] + tau_[idx(b)]);
     const bool young = t_ - mtau[k] <= 4 * (t_ - previous_t_);
-    if (o_.insertion == ParticleInsertion::exact || young || previous_t_ >= t_ ||
-        mtau[k] > previous_t_) {
+    const bool exact = o_.insertion == ParticleInsertion::exact && !labels_tangled(chosen[k]);
+    if (exact || young || previous_t_ >= t_ || mtau[k] > previous_t_) {
       exact_of.push_back(k);
       exact_x.push_back(seed_point(ms[k]));
       exact_from.push_back(mtau[k]);
@@ -371,6 +398,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
       near_x.push_back(0.5 * (previous_x_[idx(a)] + previous_x_[idx(b)]));
     }
   }
+  if (o_.insertion == ParticleInsertion::exact) report_.diverged_insertions += near_of.size();
   std::vector<ParticleStatus> exact_status(exact_x.size()), near_status(near_x.size());
   if (!exact_x.empty() &&
       !no_error(advect_from_release(access_, map_, exact_x, exact_from, t_, exact_status,
@@ -458,6 +486,26 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   splits += n;
   report_.splits += n;
   return true;
+}
+
+double RemeshedStreakBuilder::label_area(std::int32_t f) const {
+  const auto& c = topo_.face(f);
+  const auto label = [&](std::int32_t v) {
+    double sv = s_[idx(v)];
+    const double s0 = s_[idx(c[0])];
+    if (seed_.closed() && sv - s0 > 0.5) sv -= 1;
+    if (seed_.closed() && s0 - sv > 0.5) sv += 1;
+    return Eigen::Vector2d(sv, tau_[idx(v)]);
+  };
+  const Eigen::Vector2d p = label(c[0]), q = label(c[1]) - p, r = label(c[2]) - p;
+  return q.x() * r.y() - q.y() * r.x();
+}
+
+bool RemeshedStreakBuilder::labels_tangled(const Split& edge) const {
+  if (label_sign_ == 0) return false;
+  if (!(label_area(edge.face) * label_sign_ > 0)) return true;
+  const std::int32_t g = topo_.neighbor(edge.face, edge.edge);
+  return g != none && !(label_area(g) * label_sign_ > 0);
 }
 
 bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
@@ -627,7 +675,8 @@ void RemeshedStreakBuilder::collapse_pass() {
   report_.coarsen_seconds += seconds_since(start);
 }
 
-void RemeshedStreakBuilder::flip_pass() {
+std::size_t RemeshedStreakBuilder::flip_pass() {
+  const std::size_t before = report_.flips;
   const double split2 = std::pow(o_.split * o_.edge, 2);
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
@@ -642,8 +691,13 @@ void RemeshedStreakBuilder::flip_pass() {
       for (const std::int32_t v : gc)
         if (v != a && v != b) q = v;
       const Vec3 &xa = x_[idx(a)], &xb = x_[idx(b)], &xp = x_[idx(p)], &xq = x_[idx(q)];
-      // Delaunay: the angles opposite the edge sum to more than π; and no edge that splits.
-      if (angle_at(xp, xa, xb) + angle_at(xq, xb, xa) <= M_PI + 1e-9) continue;
+      // Delaunay: the angles opposite the edge sum to more than π, i.e. the sine of their sum
+      // is negative (times the four edge lengths: no trigonometry); and no edge that splits.
+      const Vec3 pa = xa - xp, pb = xb - xp, qa = xa - xq, qb = xb - xq;
+      const double sine_sum = pa.cross(pb).norm() * qa.dot(qb) + pa.dot(pb) * qa.cross(qb).norm();
+      if (!(sine_sum < -1e-9 * std::sqrt(pa.squaredNorm() * pb.squaredNorm() *
+                                         qa.squaredNorm() * qb.squaredNorm())))
+        continue;
       if ((xp - xq).squaredNorm() > split2) continue;
       // The new faces (a, q, p) and (q, b, p) keep the side of the old ones, which lie nearly
       // flat across the edge (a flip across a crease would change the surface).
@@ -656,10 +710,92 @@ void RemeshedStreakBuilder::flip_pass() {
       if (topo_.flip(fi, e)) ++report_.flips;
     }
   }
+  return report_.flips - before;
+}
+
+double RemeshedStreakBuilder::filament_width(std::int32_t f) const {
+  constexpr double wide = std::numeric_limits<double>::infinity();
+  const auto& c = topo_.face(f);
+  for (const std::int32_t v : c)
+    if (on_chain_[idx(v)]) return wide;
+  int boundary = 0, inner = -1, outer = -1;
+  for (int e = 0; e < 3; ++e) {
+    if (topo_.neighbor(f, e) == none) {
+      ++boundary;
+      outer = e;
+    } else {
+      inner = e;
+    }
+  }
+  const auto length = [&](int e) { return (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm(); };
+  const double area2 = normal(c[0], c[1], c[2]).norm();
+  switch (boundary) {
+    case 0:
+      return wide;
+    case 1:
+      // The face's height over its boundary edge, where the corner across lies on the boundary
+      // too (on the filament's other side).
+      return topo_.fan(c[(outer + 2) % 3], ring_) ? area2 / length(outer) : wide;
+    case 2: {
+      // A loose end. Where one of its boundary edges caps the filament (the boundary turns by
+      // more than 45° at both its ends), the filament is as wide as the face's smallest height;
+      // otherwise (a pointed end) its one inner edge runs across the filament.
+      const int e1 = (inner + 1) % 3, e2 = (inner + 2) % 3;  // boundary edges, meeting at c[e2]
+      const int cap = length(e1) <= length(e2) ? e1 : e2;
+      const std::int32_t far = cap == e1 ? c[e1] : c[(e2 + 1) % 3];  // the cap's other end
+      if (topo_.fan(far, ring_)) {
+        const std::int32_t p = topo_.to(ring_.front());
+        const std::int32_t q = topo_.opposite(ring_.back().face, ring_.back().edge);
+        if (angle_at(x_[idx(far)], x_[idx(p)], x_[idx(q)]) < 0.75 * M_PI)
+          return area2 / std::max({length(0), length(1), length(2)});
+      }
+      return length(inner);
+    }
+    default:
+      return area2 / std::max({length(0), length(1), length(2)});  // a face on its own
+  }
+}
+
+void RemeshedStreakBuilder::prune(std::int32_t f) {
+  removed_.clear();
+  report_.faces_pruned += topo_.remove_face(f, &removed_);
+  for (const auto& c : removed_) report_.area_pruned += 0.5 * normal(c[0], c[1], c[2]).norm();
+}
+
+void RemeshedStreakBuilder::prune_pass() {
+  if (!(o_.prune > 0)) return;
+  // Filaments are eaten from their loose ends (a thin face with two boundary edges), face by
+  // face along the filament, which never cuts the surface in two. A filament between two wider
+  // parts is cut only where it is thinner than half the width (or where a face of it turns
+  // over, see advance()): fewer pieces and less dye lost than cutting at the full width, for
+  // slightly thinner faces.
+  const auto loose_end = [&](std::int32_t f) {
+    if (!topo_.face_alive(f) || !(filament_width(f) < width_)) return false;
+    int boundary = 0;
+    for (int e = 0; e < 3; ++e) boundary += topo_.neighbor(f, e) == none ? 1 : 0;
+    return boundary >= 2;
+  };
+  std::vector<std::int32_t> work;
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    work.assign(1, static_cast<std::int32_t>(f));
+    while (!work.empty()) {
+      const std::int32_t g = work.back();
+      work.pop_back();
+      if (!loose_end(g)) continue;
+      for (int e = 0; e < 3; ++e)
+        if (topo_.neighbor(g, e) != none) work.push_back(topo_.neighbor(g, e));
+      prune(g);
+    }
+  }
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (topo_.face_alive(fi) && filament_width(fi) < 0.5 * width_) prune(fi);
+  }
 }
 
 bool RemeshedStreakBuilder::adapt() {
   const auto start = Clock::now();
+  prune_pass();
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
     std::size_t splits = 0;
     if (!split_pass(splits)) return false;
@@ -667,8 +803,7 @@ bool RemeshedStreakBuilder::adapt() {
     flip_pass();
   }
   collapse_pass();
-  flip_pass();
-  flip_pass();
+  if (flip_pass() > 0) flip_pass();
   report_.refine_seconds += seconds_since(start);
   return true;
 }
@@ -764,6 +899,7 @@ void RemeshedStreakBuilder::emit_frame(int index) {
   record.boundary_length = boundary;
   record.vertex_estimate = 1.155 * area / (o_.edge * o_.edge) + boundary / o_.edge;
   record.pieces = pieces;
+  record.area_pruned = report_.area_pruned;
   if (sink_) sink_(frame);
   record.finish_seconds = seconds_since(finish);
   record.seconds = seconds_since(start);
@@ -777,6 +913,9 @@ StreakReport RemeshedStreakBuilder::run() {
   if (!(o_.collapse > 0 && o_.collapse <= 0.5 * o_.split))
     throw InvalidArgument("collapse factor must lie in (0, split/2] (so a collapse never makes "
                           "an edge that splits), got " + number(o_.collapse));
+  if (!(o_.prune >= 0 && o_.prune <= 0.5 * o_.split))
+    throw InvalidArgument("prune width must lie in [0, split/2] edge lengths (wider would erode "
+                          "well-shaped faces at the boundary), got " + number(o_.prune));
   report_.dimension = flow_.dimension();
   report_.insertion = o_.insertion;
   report_.mesh = to_string(StreakMesh::remeshed);
@@ -806,6 +945,7 @@ StreakReport RemeshedStreakBuilder::run() {
     step = o_.edge / top_speed;
   }
   report_.release_step = step;
+  width_ = o_.prune * o_.edge;
   step_ = step_now_ = step;
 
   // Breaks: every release (and the release end) and every frame, in order.

@@ -74,6 +74,12 @@ struct StreakOptions {
   /// Remeshed: edges shorter than collapse·ℓ are collapsed (and, as for rows, edges longer
   /// than split·ℓ split). At most split/2, so a collapse never makes an edge that splits.
   double collapse = 0.75;
+  /// Remeshed: filaments of dye thinner than w = prune·ℓ are pruned. Stretching thins dye into
+  /// filaments a mesh with edges ℓ cannot resolve: their faces are slivers that turn over, and
+  /// their boundary, which grows exponentially, would set the vertex count. A filament is eaten
+  /// from its loose end while thinner than w, and cut where it is thinner than w/2 or a face of
+  /// it turns over (faces touching the newest row are never pruned). 0 keeps every filament.
+  double prune = 0.5;
   Tolerance tolerance{1e-10, 1e-10};
   /// Gridded series only: move particles by bulk advection (advect::BatchAdvector, DOPRI5 at
   /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
@@ -122,6 +128,7 @@ struct StreakFrameRecord {
   /// edges ℓ needs for them: 1.155 · area / ℓ² + boundary / ℓ vertices.
   double area = 0, boundary_length = 0, vertex_estimate = 0;
   std::size_t pieces = 0;           ///< connected pieces of the frame's mesh
+  double area_pruned = 0;           ///< remeshed: area removed as thin filaments up to this frame
   double seconds = 0;               ///< building and handing over the frame (both parts)
   double build_seconds = 0;         ///< its vertices and faces alone (the particles wait for these)
   double finish_seconds = 0;        ///< its quality, longest edge and sink
@@ -159,6 +166,10 @@ struct StreakReport {
   /// of the edge from its midpoint, placed by interpolation instead (of interpolated_insertions).
   std::size_t diverged_insertions = 0;
   std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
+  /// Remeshed: faces removed as filaments thinner than prune·ℓ (with the fans they would have
+  /// pinched), and their area.
+  std::size_t faces_pruned = 0;
+  double area_pruned = 0;
   /// Remeshed: moves taken back and made in two because a face would have turned over, and
   /// faces that turned over all the same (in a move already 1/64 of the release step).
   std::size_t steps_shortened = 0, faces_turned = 0;
