@@ -102,7 +102,8 @@ TEST_CASE("a streak surface through the 6 POP steps, land as no data", "[apps][s
 }
 #endif
 
-TEST_CASE("a remeshed streak surface of the backward-facing step (ParaView's .pvd as written)",
+TEST_CASE("a remeshed streak surface of the backward-facing step over its whole series "
+          "(ParaView's .pvd as written)",
           "[apps][streak][realdata]") {
   const fs::path pvd_in = fs::path(ORTHOFRONT_DATASETS_DIR) / "pitzdaily-les" / "step.pvd";
   if (!fs::exists(pvd_in)) {
@@ -111,12 +112,14 @@ TEST_CASE("a remeshed streak surface of the backward-facing step (ParaView's .pv
   }
   const fs::path dir = fresh_dir("streak-step");
   const fs::path pvd = dir / "streak.pvd", report = dir / "report.json", log = dir / "log.txt";
-  // A 6 mm line across the inlet's boundary layer 2 mm before the step's edge; ℓ two cells.
+  // A 6 mm line across the inlet's boundary layer 2 mm before the step's edge, released over
+  // the whole series (0.04 s, more than one flow-through); ℓ two cells.
   const double edge = 0.001;
+  const std::size_t frames = 8;
   const int status =
       run(std::string(ORTHOFRONT_BINARY) + " streak --field '" + pvd_in.string() +
-              "' --seed line:-0.002,0.0003,0:-0.002,0.0063,0 --release 0.03:0.04 "
-              "--frames 0.032:0.04:5 --edge 0.001 --out '" + pvd.string() + "' --report '" +
+              "' --seed line:-0.002,0.0003,0:-0.002,0.0063,0 --release 0.03:0.07 "
+              "--frames 0.035:0.07:8 --edge 0.001 --out '" + pvd.string() + "' --report '" +
               report.string() + "'",
           log);
   INFO(text_of(log));
@@ -124,8 +127,9 @@ TEST_CASE("a remeshed streak surface of the backward-facing step (ParaView's .pv
   const auto r = nlohmann::json::parse(text_of(report));
   CHECK(r["complete"].get<bool>());
   CHECK(r["mesh"].get<std::string>() == "remeshed");
-  REQUIRE(r["frames"].size() == 5);
-  for (std::size_t f = 0; f < 5; ++f) {
+  REQUIRE(r["frames"].size() == frames);
+  double pruned_before = 0;
+  for (std::size_t f = 0; f < frames; ++f) {
     const auto& fr = r["frames"][f];
     INFO("frame " << f << ": " << fr.dump());
     char name[32];
@@ -140,16 +144,25 @@ TEST_CASE("a remeshed streak surface of the backward-facing step (ParaView's .pv
     CHECK(q.degenerate_faces == 0);
     CHECK(q.inconsistent_edges == 0);
     CHECK(q.longest_edge <= 2 * edge);
+    CHECK(q.triangle_min_angle_p05 >= 20);
     // Bounded by the area: within 3 x what well-shaped triangles of edge ℓ need.
     CHECK(static_cast<double>(mesh.vertex_count()) <= 3 * fr["vertex_estimate"].get<double>());
     for (const auto& p : mesh.positions) {
       CHECK(p.x() >= -0.0207);
       CHECK(p.x() <= 0.2901);
     }
+    // Pruning only ever adds up, and takes less of the dye than it leaves.
+    const double pruned = fr["area_pruned"].get<double>();
+    CHECK(pruned >= pruned_before);
+    CHECK(pruned < fr["area"].get<double>());
+    pruned_before = pruned;
   }
   const auto& last = r["frames"].back();
   WARN("step streak surface, last frame: " << last["vertices"] << " vertices (estimate "
-                                           << last["vertex_estimate"] << "), p05 min angle "
+                                           << last["vertex_estimate"] << "), " << last["pieces"]
+                                           << " pieces, p05 min angle "
                                            << last["quality"]["triangle_min_angle_p05_deg"]
-                                           << ", " << r["seconds"]["total"] << " s");
+                                           << ", area pruned " << last["area_pruned"] << " of "
+                                           << last["area"] << ", " << r["seconds"]["total"]
+                                           << " s");
 }
