@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numeric>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "orthofront/error.h"
@@ -151,6 +152,13 @@ class RemeshedStreakBuilder {
   std::vector<std::int32_t> id_;
   std::vector<char> on_chain_;
   mutable std::vector<Topology::HalfEdge> ring_;  // scratch for fans
+  // Edges (by their particles' ids) whose collapse was refused, and the pass to try again at.
+  std::unordered_map<std::uint64_t, std::size_t> refused_;
+  std::size_t collapse_passes_ = 0;
+  std::uint64_t edge_key(std::int32_t a, std::int32_t b) const {
+    const auto ia = static_cast<std::uint64_t>(id_[idx(a)]), ib = static_cast<std::uint64_t>(id_[idx(b)]);
+    return std::min(ia, ib) << 32 | std::max(ia, ib);
+  }
   std::vector<std::array<std::int32_t, 3>> removed_;  // scratch: corners of removed faces
   std::vector<std::int32_t> chain_;  // the newest row, by s: the next strip's first side
   std::int32_t next_id_ = 0;
@@ -645,9 +653,28 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
 void RemeshedStreakBuilder::collapse_pass() {
   const auto start = Clock::now();
   const double limit = o_.collapse * o_.edge;
+  ++collapse_passes_;
+  if (collapse_passes_ % 64 == 0)
+    std::erase_if(refused_, [&](const auto& r) { return r.second <= collapse_passes_; });
   std::vector<Split> short_edges = edges_where([&](double length) { return length < limit; });
+  if (short_edges.empty()) {
+    report_.coarsen_seconds += seconds_since(start);
+    return;
+  }
   std::sort(short_edges.begin(), short_edges.end(),
             [](const Split& a, const Split& b) { return a.length < b.length; });
+  // Boundary vertices, for a quick refusal of an inner edge between two of them (which would
+  // pinch the surface): exact for every vertex not yet touched by this pass's collapses.
+  std::vector<char> boundary(x_.size(), 0);
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    for (int e = 0; e < 3; ++e)
+      if (topo_.neighbor(fi, e) == none) {
+        boundary[idx(topo_.face(fi)[e])] = 1;
+        boundary[idx(topo_.face(fi)[(e + 1) % 3])] = 1;
+      }
+  }
   std::vector<char> touched(x_.size(), 0);
   std::vector<Topology::HalfEdge> ring;
   for (const Split& sp : short_edges) {
@@ -655,12 +682,22 @@ void RemeshedStreakBuilder::collapse_pass() {
     const auto& c = topo_.face(sp.face);
     const std::int32_t a = c[sp.edge], b = c[(sp.edge + 1) % 3];
     if (touched[idx(a)] || touched[idx(b)]) continue;
+    if (topo_.neighbor(sp.face, sp.edge) != none && boundary[idx(a)] && boundary[idx(b)]) continue;
     if ((x_[idx(a)] - x_[idx(b)]).norm() >= limit) continue;
     // The younger particle goes first: the older one has travelled further on its label.
+    // An edge refused lately is left alone for a few passes: most refusals (a neighbour would
+    // turn or thin, a new edge would split) outlast one step, and short edges that stay short
+    // would be tried again at every step.
+    const std::uint64_t key = edge_key(a, b);
+    const auto refused = refused_.find(key);
+    if (refused != refused_.end() && refused->second > collapse_passes_) continue;
     std::int32_t u = tau_[idx(a)] >= tau_[idx(b)] ? a : b, w = u == a ? b : a;
     if (!collapsible(u, w)) {
       std::swap(u, w);
-      if (!collapsible(u, w)) continue;
+      if (!collapsible(u, w)) {
+        refused_[key] = collapse_passes_ + 8;
+        continue;
+      }
     }
     topo_.fan(u, ring);
     for (const Topology::HalfEdge& h : ring)
