@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/bench_series_file.h"
+#include "cli/bench_streak_real.h"
 #include "cli/commands.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
@@ -35,6 +36,7 @@ struct BenchStreakArgs {
   double budget_share = 16;  // data size / cache budget
   std::string keep;          // keep the series here (default: a temporary file, removed)
   bool json_only = false;
+  BenchStreakRealArgs real;
 };
 
 // The release point of the route comparison: the middle of the seed segment.
@@ -107,6 +109,22 @@ void add_bench_streak_command(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--keep", a->keep, "Write the series here and keep it");
   c->add_flag("--json", a->json_only, "Print only the JSON");
+  c->add_option("--real", a->real.field,
+                "Real unsteady series for the real-data rows (\"\": none; skipped when absent)")
+      ->capture_default_str();
+  c->add_option("--real-seed", a->real.seed, "Seed curve of the real-data rows")
+      ->capture_default_str();
+  c->add_option("--real-release", a->real.release, "Release interval T0:T1 of the real-data rows")
+      ->capture_default_str();
+  c->add_option("--real-frames", a->real.frames, "Observation times of the real-data rows")
+      ->capture_default_str();
+  c->add_option("--real-edge", a->real.edge, "Edge length of the real-data rows")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  c->add_option("--real-limit", a->real.limit_seconds,
+                "Seconds after which a real-data run stops (and says how far it got)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
     if (flow->dimension() != 2) throw InvalidArgument("bench-streak: --field must be a 2D flow");
@@ -370,6 +388,7 @@ void add_bench_streak_command(CLI::App& app) {
           "triMin = median minimum triangle angle (deg); read/data = bytes read / series "
           "size (raw, compressed).\n");
     }
+    if (!a->real.field.empty()) out["real"] = bench_streak_real(a->real, a->json_only);
     std::cout << out.dump(1) << "\n";
   });
 }

@@ -461,8 +461,43 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     }
     report_.diverged_insertions += far.size();
   }
-  report_.exact_insertions += exact_of.size() - far.size();
-  report_.interpolated_insertions += near_of.size() + far.size();
+  // A particle that would turn over one of the faces it makes (it landed beyond a corner across
+  // the edge: a thin face beside it) goes to the edge's midpoint instead, which keeps them all
+  // on their side; it is counted as placed by interpolation.
+  std::size_t folding_exact = 0;
+  std::vector<char> exact_placed(n, 0);
+  for (const std::size_t k : exact_of) exact_placed[k] = 1;
+  for (const std::size_t k : far) exact_placed[k] = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (status[k] != ParticleStatus::moving) continue;
+    const std::int32_t f = chosen[k].face;
+    const int e = chosen[k].edge;
+    const std::int32_t a = topo_.face(f)[e], b = topo_.face(f)[(e + 1) % 3];
+    const Vec3 mid = 0.5 * (x_[idx(a)] + x_[idx(b)]);
+    const auto keeps_side = [&](std::int32_t face, std::int32_t p, std::int32_t q) {
+      // The face (p, q, o) split at m into (p, m, o) and (m, q, o).
+      const std::int32_t o = topo_.opposite(face, topo_.face(face)[0] == p   ? 0
+                                                  : topo_.face(face)[1] == p ? 1
+                                                                             : 2);
+      const Vec3 side = normal(p, q, o);
+      const Vec3& xo = x_[idx(o)];
+      const Vec3 n1 = (x[k] - x_[idx(p)]).cross(xo - x_[idx(p)]);
+      const Vec3 n2 = (x_[idx(q)] - x[k]).cross(xo - x[k]);
+      return n1.dot(side) > 0 && n2.dot(side) > 0;
+    };
+    bool ok = keeps_side(f, a, b);
+    const std::int32_t g = topo_.neighbor(f, e);
+    if (ok && g != none) ok = keeps_side(g, b, a);
+    if (ok) continue;
+    x[k] = mid;
+    if (exact_placed[k]) {
+      exact_placed[k] = 0;
+      ++folding_exact;
+    }
+  }
+  report_.diverged_insertions += folding_exact;
+  report_.exact_insertions += exact_of.size() - far.size() - folding_exact;
+  report_.interpolated_insertions += near_of.size() + far.size() + folding_exact;
   for (std::size_t k = 0; k < n; ++k) {
     const auto& c = topo_.face(chosen[k].face);
     const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
@@ -682,20 +717,24 @@ void RemeshedStreakBuilder::collapse_pass() {
     const auto& c = topo_.face(sp.face);
     const std::int32_t a = c[sp.edge], b = c[(sp.edge + 1) % 3];
     if (touched[idx(a)] || touched[idx(b)]) continue;
-    if (topo_.neighbor(sp.face, sp.edge) != none && boundary[idx(a)] && boundary[idx(b)]) continue;
     if ((x_[idx(a)] - x_[idx(b)]).norm() >= limit) continue;
-    // The younger particle goes first: the older one has travelled further on its label.
-    // An edge refused lately is left alone for a few passes: most refusals (a neighbour would
-    // turn or thin, a new edge would split) outlast one step, and short edges that stay short
-    // would be tried again at every step.
+    const bool inner = topo_.neighbor(sp.face, sp.edge) != none;
+    if (inner && boundary[idx(a)] && boundary[idx(b)]) continue;
+    // An inner edge refused lately is left alone for a few passes: most refusals (a neighbour
+    // would turn or thin, a new edge would split) outlast one step, and short edges that stay
+    // short would be tried again at every step. Boundary edges are always tried (they shape
+    // the boundary, and the loose ends of filaments).
     const std::uint64_t key = edge_key(a, b);
-    const auto refused = refused_.find(key);
-    if (refused != refused_.end() && refused->second > collapse_passes_) continue;
+    if (inner) {
+      const auto refused = refused_.find(key);
+      if (refused != refused_.end() && refused->second > collapse_passes_) continue;
+    }
+    // The younger particle goes first: the older one has travelled further on its label.
     std::int32_t u = tau_[idx(a)] >= tau_[idx(b)] ? a : b, w = u == a ? b : a;
     if (!collapsible(u, w)) {
       std::swap(u, w);
       if (!collapsible(u, w)) {
-        refused_[key] = collapse_passes_ + 8;
+        if (inner) refused_[key] = collapse_passes_ + 8;
         continue;
       }
     }

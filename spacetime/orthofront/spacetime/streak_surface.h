@@ -162,8 +162,10 @@ struct StreakReport {
   /// Remeshed, exact insertion: particles released again at a label moved toward the one whose
   /// path passes through the split edge's midpoint (counted per try).
   std::size_t steered_insertions = 0;
-  /// Remeshed, exact insertion: particles whose exact path still ended farther than a quarter
-  /// of the edge from its midpoint, placed by interpolation instead (of interpolated_insertions).
+  /// Remeshed, exact insertion: particles placed by interpolation instead (of
+  /// interpolated_insertions): their labels were tangled (a face beside the edge has its label
+  /// triangle turned), their exact path ended farther than a quarter of the edge from its
+  /// midpoint, or it would have turned a face over (those go to the edge's midpoint).
   std::size_t diverged_insertions = 0;
   std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
   /// Remeshed: faces removed as filaments thinner than prune·ℓ (with the fans they would have
