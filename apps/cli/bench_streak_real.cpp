@@ -116,19 +116,25 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
     }
     const auto& f = rep.frames.back();
     std::size_t folds = 0;
-    double worst_bound = 0;
+    double worst_bound = 0;  // the row mesh does not measure its area
     for (const auto& g : rep.frames) {
       folds = std::max(folds, g.quality.folds);
-      worst_bound = std::max(worst_bound, static_cast<double>(g.vertices) / g.vertex_estimate);
+      if (g.vertex_estimate > 0)
+        worst_bound = std::max(worst_bound, static_cast<double>(g.vertices) / g.vertex_estimate);
     }
-    char frames[32];
+    char frames[32], bound[32], shape[32], pieces[32];
+    std::snprintf(pieces, sizeof pieces, f.pieces > 0 ? "%zu" : "-", f.pieces);
     std::snprintf(frames, sizeof frames, "%zu/%zu", rep.frames.size(), o.frames.size());
+    std::snprintf(bound, sizeof bound, worst_bound > 0 ? "%.2f" : "-", worst_bound);
+    if (f.quality.quad_share > 0)
+      std::snprintf(shape, sizeof shape, "%.1f%%q", 100 * f.quality.quad_angles_within_10);
+    else
+      std::snprintf(shape, sizeof shape, "%.1f", f.quality.triangle_min_angle_p05);
     std::printf(
-        "%-36s %7s %8.4f %7.1f %7.1f %7.1f %7.1f %7.1f %9zu %6.2f %6zu %6zu %6.2f %6.1f %7.1f\n",
+        "%-36s %7s %8.4f %7.1f %7.1f %7.1f %7.1f %7.1f %9zu %6s %6s %6zu %6.2f %6s %7.1f\n",
         r.name.c_str(), frames, rep.time_reached, rep.total_seconds, rep.advect_seconds,
         rep.refine_seconds, rep.coarsen_seconds, 100 * rep.refine_seconds / rep.total_seconds,
-        f.vertices, worst_bound, f.pieces, folds, f.max_edge / a.edge,
-        f.quality.triangle_min_angle_p05,
+        f.vertices, bound, pieces, folds, f.max_edge / a.edge, shape,
         100 * f.area_pruned / std::max(f.area + f.area_pruned, 1e-300));
   }
   const auto& best = rows.front().report;
@@ -142,9 +148,9 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
   std::printf(
       "\nColumns: frames = frames written of those asked for; t = time reached; refine = "
       "inserting (with the integrations of exact insertion), coarsen its part collapsing; "
-      "xbound = the largest vertices / (1.155 area / l^2 + boundary / l) over the frames; folds "
+      "xbound = the largest vertices / (1.155 area / l^2 + boundary / l) over the frames (- where not measured); folds "
       "= the most in any frame; p05 = 5th percentile of the triangles' smallest angles (deg, "
-      "last frame; 0 for quads); pruned%% = dye area pruned as thin filaments, of all dye.\n");
+      "last frame; for quads N%%q: the share of quad angles within 90±10°); pruned%% = dye area pruned as thin filaments, of all dye.\n");
   return out;
 }
 

@@ -15,7 +15,7 @@ struct PathArgs {
   std::string field, seed, out, report, budget;  // budget: empty = a quarter of --memory
   int seed_count = 20;
   double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
-  bool spacetime_out = false, quiet = false, no_prefetch = false, warm = false;
+  bool spacetime_out = false, flat = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
   std::string device;                 // empty: per vertex through the streamed field
   std::size_t device_min_vertices = 0;

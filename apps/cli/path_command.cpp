@@ -122,8 +122,12 @@ void add_path_flags(CLI::App& command, PathArgs& args) {
   command.add_option("--device-memory", args.device_memory,
                      "With --device cuda/auto: time steps kept on the device (e.g. 8GiB; default: "
                      "half its free memory)");
+  command.add_flag("--flat", args.flat,
+                   "2D flows: write positions (x, y, 0), the surface pressed into the plane (it "
+                   "overlaps itself where path lines cross); default (x, y, t)");
   command.add_flag("--spacetime-out", args.spacetime_out,
-                   "2D flows: write positions (x, y, t) instead of (x, y, 0)");
+                   "2D flows: write positions (x, y, t) (the default; kept for old scripts)")
+      ->excludes("--flat");
   add_engine_flags(command, args.options);
   add_memory_flag(command, args.limits);
 }
@@ -236,7 +240,7 @@ void add_path_command(CLI::App& app) {
       result.path.message = text;
     }
     Mesh& mesh = result.mesh;
-    if (args->spacetime_out && !result.spacetime_positions.empty())
+    if (!args->flat && !result.spacetime_positions.empty())
       mesh.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
     // The mesh and its report are replaced together: both are written in full to temporaries
     // before either is renamed (a failure replaces neither), and a concurrent run of the same
@@ -252,7 +256,7 @@ void add_path_command(CLI::App& app) {
       report["output"] = args->out;
       report["complete"] = result.report.complete;
       report["path"] = spacetime::to_json(result.path);
-      report["path"]["spacetime_out"] = args->spacetime_out;
+      report["path"]["positions"] = spacetime::path_positions(result, args->flat);
       report["limits"] = args->limits.to_json();
       if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
@@ -263,12 +267,12 @@ void add_path_command(CLI::App& app) {
     const spacetime::PathReport& pr = result.path;
     if (!args->quiet) {
       std::printf(
-          "Path surface of %s from %s: %zu vertices, %zu faces, t from %g to %g (reached %g), "
-          "c = %g (%s), %d steps, stopped: %s%s. Quality (2D flows in (x, y, c t), 3D in "
-          "space): %.1f%% quads, %.1f%% of quad angles within 90±10°, edge spread %.3f, "
+          "Path surface of %s from %s: %zu vertices, %zu faces, positions (%s), t from %g to %g "
+          "(reached %g), c = %g (%s), %d steps, stopped: %s%s. Quality (2D flows in (x, y, c t), "
+          "3D in space): %.1f%% quads, %.1f%% of quad angles within 90±10°, edge spread %.3f, "
           "%zu folds, %zu non-manifold edges, %zu degenerate faces. Time %.3f s",
-          args->field.c_str(), args->seed.c_str(), mesh.vertex_count(), mesh.face_count(), pr.t0,
-          pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(), result.report.steps,
+          args->field.c_str(), args->seed.c_str(), mesh.vertex_count(), mesh.face_count(),
+          spacetime::path_positions(result, args->flat), pr.t0, pr.t1, pr.time_reached, pr.time_scale, pr.time_scale_source.c_str(), result.report.steps,
           to_string(result.report.stop_reason), pr.complete ? "" : " (incomplete)",
           100.0 * result.report.quality.quad_share,
           100.0 * result.report.quality.quad_angles_within_10,

@@ -178,7 +178,11 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
     }
   }
   interrupt.rethrow_if_raised();
-  if (args.spacetime_out && !result.spacetime_positions.empty())
+  const bool two_d = !result.spacetime_positions.empty();
+  Mesh lifted;
+  if (two_d)
+    lifted.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
+  if (!args.flat && two_d)
     result.mesh.positions.assign(result.spacetime_positions.begin(),
                                  result.spacetime_positions.end());
   nlohmann::json report = io::to_json(result.report);
@@ -187,15 +191,11 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   report["seed_count"] = args.seed_count;
   report["complete"] = result.report.complete;
   report["path"] = spacetime::to_json(result.path);
-  report["path"]["spacetime_out"] = args.spacetime_out;
+  report["path"]["positions"] = spacetime::path_positions(result, args.flat);
   report["limits"] = args.limits.to_json();
   if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
   py::dict out = surface_dict(result.mesh, report);
-  if (!result.spacetime_positions.empty()) {
-    Mesh lifted;
-    lifted.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
-    out["spacetime_vertices"] = mesh_to_dict(lifted)["vertices"];
-  }
+  if (two_d) out["spacetime_vertices"] = mesh_to_dict(lifted)["vertices"];
   return out;
 }
 

@@ -63,7 +63,7 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   const fs::path dir = fresh_dir();
   const fs::path out = dir / "gyre.vtp", report = dir / "gyre.json";
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 0 "
-              "--t1 4 --edge 0.05 --spacetime-out --out " +
+              "--t1 4 --edge 0.05 --out " +
                   out.string() + " --report " + report.string(),
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
@@ -89,6 +89,23 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   }
   CHECK(zmax > 3.97);  // path lines end within one front step of t1
   CHECK(zmax <= 4.0 + 1e-9);
+  CHECK(j["path"]["positions"] == "x, y, t");  // a 2D flow's surface, written as a surface
+  // --flat presses it into the plane, and says so; the same vertices otherwise.
+  const fs::path flat = dir / "flat.vtp", flat_report = dir / "flat.json";
+  REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 0 "
+              "--t1 4 --edge 0.05 --flat --out " +
+                  flat.string() + " --report " + flat_report.string(),
+              dir / "log") == 0);
+  CHECK(nlohmann::json::parse(read_text(flat_report))["path"]["positions"] == "x, y, 0 (flat)");
+  const Mesh pressed = io::read_mesh(flat);
+  REQUIRE(pressed.vertex_count() == mesh.vertex_count());
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    CHECK(pressed.positions[i][2] == 0);
+    CHECK(pressed.positions[i].head<2>() == mesh.positions[i].head<2>());
+  }
+  CHECK(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --t1 1 --flat "
+            "--spacetime-out --out " + flat.string(),
+            dir / "log") != 0);
   // --time-scale overrides and is reported.
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t1 1 "
               "--edge 0.05 --time-scale 0.5 --out " +

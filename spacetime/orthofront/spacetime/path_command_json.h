@@ -53,6 +53,13 @@ inline nlohmann::json to_json(const CacheStatistics& s) {
           {"units_read_per_step", s.units_read_per_step}};
 }
 
+/// What a written path surface's positions are: "x, y, t" for a 2D flow (flat: "x, y, 0
+/// (flat)", the surface pressed into the plane), "x, y, z" for a 3D one.
+inline const char* path_positions(const PathSurfaceResult& result, bool flat) {
+  if (result.spacetime_positions.empty()) return "x, y, z";
+  return flat ? "x, y, 0 (flat)" : "x, y, t";
+}
+
 inline nlohmann::json to_json(const PathReport& r) {
   nlohmann::json band = nlohmann::json::array();
   double widest = 0;
