@@ -174,10 +174,9 @@ class PathTask final : public SurfaceTask {
     spacetime::PathSurfaceResult r = builder_->finish();
     json report = io::to_json(r.report);
     report["path"] = spacetime::to_json(r.path);
-    // As `path` writes them: a 2D flow's surface in (x, y, t).
+    // As `path` writes them: a 2D flow's surface in (x, y, c t).
     report["path"]["positions"] = spacetime::path_positions(r, false);
-    if (!r.spacetime_positions.empty())
-      r.mesh.positions.assign(r.spacetime_positions.begin(), r.spacetime_positions.end());
+    spacetime::place_for_output(r, false);
     report["complete"] = r.report.complete;
     return {std::move(r.mesh), std::move(report)};
   }

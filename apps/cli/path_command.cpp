@@ -124,9 +124,10 @@ void add_path_flags(CLI::App& command, PathArgs& args) {
                      "half its free memory)");
   command.add_flag("--flat", args.flat,
                    "2D flows: write positions (x, y, 0), the surface pressed into the plane (it "
-                   "overlaps itself where path lines cross); default (x, y, t)");
+                   "overlaps itself where path lines cross); default (x, y, c t), c the time "
+                   "scale (--time-scale 1: (x, y, t))");
   command.add_flag("--spacetime-out", args.spacetime_out,
-                   "2D flows: write positions (x, y, t) (the default; kept for old scripts)")
+                   "2D flows: write positions in space-time (the default; kept for old scripts)")
       ->excludes("--flat");
   add_engine_flags(command, args.options);
   add_memory_flag(command, args.limits);
@@ -239,9 +240,8 @@ void add_path_command(CLI::App& app) {
         note += (note.empty() ? "" : "; ") + text;
       result.path.message = text;
     }
+    spacetime::place_for_output(result, args->flat);
     Mesh& mesh = result.mesh;
-    if (!args->flat && !result.spacetime_positions.empty())
-      mesh.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
     // The mesh and its report are replaced together: both are written in full to temporaries
     // before either is renamed (a failure replaces neither), and a concurrent run of the same
     // outputs cannot interleave its files with these.

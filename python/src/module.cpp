@@ -180,11 +180,11 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   interrupt.rethrow_if_raised();
   const bool two_d = !result.spacetime_positions.empty();
   Mesh lifted;
-  if (two_d)
+  if (two_d) {
     lifted.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
-  if (!args.flat && two_d)
-    result.mesh.positions.assign(result.spacetime_positions.begin(),
-                                 result.spacetime_positions.end());
+    for (Vec3& p : lifted.positions) p.z() *= result.path.time_scale;
+  }
+  spacetime::place_for_output(result, args.flat);
   nlohmann::json report = io::to_json(result.report);
   report["field"] = args.field;
   report["seed"] = args.seed;

@@ -13,6 +13,7 @@
 #include "orthofront/field/unsteady.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
+#include "orthofront/quality/quality.h"
 #include "orthofront/spacetime/sampled_series.h"
 #include "temp_dir.h"
 
@@ -82,14 +83,21 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
   CHECK(j["path"]["band"].size() == j["steps"].get<std::size_t>());
   const Mesh mesh = io::read_mesh(out);
   REQUIRE(mesh.vertex_count() == j["counts"]["vertices"].get<std::size_t>());
-  double zmax = 0;
+  const double c = j["path"]["time_scale"].get<double>();
+  double tmax = 0;
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    CHECK(mesh.positions[i][2] == Approx(mesh.time[i]).margin(1e-9));  // (x, y, t)
-    zmax = std::max(zmax, mesh.positions[i][2]);
+    CHECK(mesh.positions[i][2] == Approx(c * mesh.time[i]).margin(1e-9));  // (x, y, c t)
+    tmax = std::max(tmax, mesh.time[i]);
   }
-  CHECK(zmax > 3.97);  // path lines end within one front step of t1
-  CHECK(zmax <= 4.0 + 1e-9);
-  CHECK(j["path"]["positions"] == "x, y, t");  // a 2D flow's surface, written as a surface
+  CHECK(tmax > 3.97);  // path lines end within one front step of t1
+  CHECK(tmax <= 4.0 + 1e-9);
+  // A 2D flow's surface, written as the surface that was built: the quality of the file as
+  // written is the report's.
+  CHECK(j["path"]["positions"] == "x, y, c t");
+  const QualityReport written = measure_quality(mesh);
+  CHECK(written.folds == j["quality"]["folds"].get<std::size_t>());
+  CHECK(written.quad_angles_within_10 ==
+        Approx(j["quality"]["quad_angles_within_10deg"].get<double>()).margin(1e-3));
   // --flat presses it into the plane, and says so; the same vertices otherwise.
   const fs::path flat = dir / "flat.vtp", flat_report = dir / "flat.json";
   REQUIRE(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 0 "

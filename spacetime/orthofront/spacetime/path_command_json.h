@@ -53,11 +53,21 @@ inline nlohmann::json to_json(const CacheStatistics& s) {
           {"units_read_per_step", s.units_read_per_step}};
 }
 
-/// What a written path surface's positions are: "x, y, t" for a 2D flow (flat: "x, y, 0
+/// What a written path surface's positions are: "x, y, c t" for a 2D flow (flat: "x, y, 0
 /// (flat)", the surface pressed into the plane), "x, y, z" for a 3D one.
 inline const char* path_positions(const PathSurfaceResult& result, bool flat) {
   if (result.spacetime_positions.empty()) return "x, y, z";
-  return flat ? "x, y, 0 (flat)" : "x, y, t";
+  return flat ? "x, y, 0 (flat)" : "x, y, c t";
+}
+
+/// A 2D flow's path surface as it is written: in (x, y, c t), c = the report's time scale, where
+/// it is the surface the engine built (its angles, no folds; --time-scale 1 gives (x, y, t));
+/// flat: (x, y, 0). The vertex attribute `time` is t either way. 3D flows: unchanged.
+inline void place_for_output(PathSurfaceResult& result, bool flat) {
+  if (flat || result.spacetime_positions.empty()) return;
+  result.mesh.positions.assign(result.spacetime_positions.begin(),
+                               result.spacetime_positions.end());
+  for (auto& p : result.mesh.positions) p.z() *= result.path.time_scale;
 }
 
 inline nlohmann::json to_json(const PathReport& r) {
