@@ -104,3 +104,52 @@ TEST_CASE("a path surface through the 6 POP steps, land as no data", "[apps][pat
              0, 1.296e7, 6);
 }
 #endif
+
+TEST_CASE("a path surface of the backward-facing step over its whole series, written in "
+          "(x, y, c t)",
+          "[apps][path][realdata]") {
+  const fs::path pvd = fs::path(ORTHOFRONT_DATASETS_DIR) / "pitzdaily-les" / "step.pvd";
+  if (!fs::exists(pvd)) {
+    WARN("skipped: " << pvd.string() << " not found");
+    return;
+  }
+  const fs::path dir = fresh_dir("path-step");
+  const fs::path out = dir / "surface.vtp", report = dir / "report.json", log = dir / "log.txt";
+  // The streak test's seed, its particles followed from 0.03 to 0.07; ℓ four cells.
+  const double edge = 0.002;
+  const int status =
+      run(std::string(ORTHOFRONT_BINARY) + " path --field '" + pvd.string() +
+              "' --seed line:-0.002,0.0003,0:-0.002,0.0063,0 --seed-count 7 --t0 0.03 --t1 0.07 "
+              "--edge 0.002 --out '" + out.string() + "' --report '" + report.string() + "'",
+          log);
+  INFO(text_of(log));
+  REQUIRE(status == 0);
+  const auto r = nlohmann::json::parse(text_of(report));
+  CHECK(r["complete"].get<bool>());
+  CHECK(r["path"]["positions"] == "x, y, c t");
+  CHECK(r["path"]["cache"]["max_reads_of_a_unit"].get<int>() == 1);
+  const double c = r["path"]["time_scale"].get<double>();
+  const orthofront::Mesh mesh = orthofront::io::read_mesh(out);
+  REQUIRE(mesh.vertex_count() > 1000);
+  // Measured on the file as written: the surface the engine built.
+  const orthofront::QualityReport q = orthofront::measure_quality(mesh);
+  CHECK(q.folds == 0);
+  CHECK(q.non_manifold_edges == 0);
+  CHECK(q.t_junctions == 0);
+  CHECK(q.degenerate_faces == 0);
+  CHECK(q.inconsistent_edges == 0);
+  CHECK(q.longest_edge <= 2 * edge);
+  CHECK(q.quad_angles_within_10 > 0.9);
+  double t_max = 0;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    REQUIRE(mesh.positions[i].allFinite());
+    CHECK(mesh.positions[i].z() == Approx(c * mesh.time[i]).margin(1e-9));
+    CHECK(mesh.positions[i].x() <= 0.2901);
+    t_max = std::max(t_max, mesh.time[i]);
+  }
+  CHECK(t_max == Approx(0.07).margin(1e-4));
+  WARN("step path surface: " << mesh.vertex_count() << " vertices, " << q.quad_share * 100
+                             << "% quads, " << q.quad_angles_within_10 * 100
+                             << "% of quad angles within 90±10° as written, " << q.folds
+                             << " folds, " << r["times_s"]["total"] << " s");
+}
