@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
+#include "orthofront/io/input_files.h"
 
 int main(int argc, char** argv) {
   // A surface's arrays grow by doubling and the quality measure allocates and frees large
@@ -17,6 +18,8 @@ int main(int argc, char** argv) {
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 128 << 20);
   mallopt(M_TOP_PAD, 16 << 20);
+  // One command, one job: no output of it may replace a file it read.
+  const orthofront::io::InputScope job_inputs;
   CLI::App app{"orthofront: stream surfaces with flow-orthogonal front lines"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "orthofront 0.1.0");

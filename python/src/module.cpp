@@ -22,6 +22,7 @@
 #include "orthofront/field/grid_field.h"
 #include "orthofront/field/unsteady.h"
 #include "orthofront/io/error.h"
+#include "orthofront/io/input_files.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/open_field.h"
 #include "orthofront/io/report_json.h"
@@ -273,6 +274,8 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
 PYBIND11_MODULE(_orthofront, m) {
   using namespace orthofront;
   using namespace orthofront::python;
+  // A Python session is one job: no file written through the module replaces one it read.
+  static const io::InputScope session_inputs;
   m.doc() = "Flow-orthogonal stream, path and streak surfaces (the compiled part of orthofront)";
   m.attr("__version__") = ORTHOFRONT_VERSION;
 

@@ -136,6 +136,18 @@ TEST_CASE("path command: HDF5 series through the cache, and errors that leave no
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
   CHECK(j["path"]["streamed"] == true);
+  CHECK(j["stop_reason"] == "end_time");  // t1 reached: not "left the domain"
+  // The 41 steps end at t = 4: a t1 past them stops there, and says so.
+  const fs::path short_out = dir / "short.vtp", short_report = dir / "short.json";
+  CHECK(run("path --field " + h5.string() +
+                " --seed line:0.3,0.25,0:0.9,0.7,0 --seed-count 8 --t0 3 --t1 5 --edge 0.05 --out " +
+                short_out.string() + " --report " + short_report.string(),
+            dir / "log_short") != 0);
+  const nlohmann::json shortened = nlohmann::json::parse(read_text(short_report));
+  CHECK(shortened["complete"] == false);
+  CHECK_THAT(shortened["message"].get<std::string>(),
+             Catch::Contains("the data end at t = 4") && Catch::Contains("before t1 = 5"));
+  CHECK_THAT(read_text(dir / "log_short"), Catch::Contains("the data end at t = 4"));
   CHECK(j["path"]["cache"]["peak_bytes"].get<std::size_t>() <= (2u << 20));
   CHECK(j["path"]["cache"]["loads"].get<std::size_t>() >= 31);
   CHECK(j["path"]["time_reached"].get<double>() == Approx(3.0).epsilon(1e-3));

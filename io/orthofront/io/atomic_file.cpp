@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "orthofront/io/error.h"
+#include "orthofront/io/input_files.h"
 
 namespace orthofront::io {
 namespace {
@@ -46,6 +47,29 @@ std::string write_cause(const std::filesystem::path& temp, int err) {
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
   throw IoError("cannot write " + path.string() + ": " + what);
+}
+
+/// Outputs replace regular files only, and never an input of this run: renaming onto a device,
+/// a pipe or a symbolic link would replace it with a plain file (a device node, a link the user
+/// keeps), and onto an input would destroy the data the output came from.
+void check_replaceable(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::symlink_status(path, ec);
+  if (ec || !std::filesystem::exists(status)) return;
+  if (std::filesystem::is_symlink(status)) {
+    std::error_code ignored;
+    fail(path, "it is a symbolic link (to " + std::filesystem::read_symlink(path, ignored).string() +
+                   "): outputs replace regular files only; give the path of the file itself");
+  }
+  if (std::filesystem::is_directory(status)) fail(path, "it is a directory");
+  if (!std::filesystem::is_regular_file(status))
+    fail(path, "it is not a regular file (a device, pipe or socket): outputs replace regular "
+               "files only");
+  if (const auto input = input_named_by(path))
+    fail(path, input->string() == path.string()
+                   ? "it is an input of this run; write the output elsewhere"
+                   : "it is an input of this run (" + input->string() +
+                         "); write the output elsewhere");
 }
 
 /// Forces the file's data to disk, so that after a power loss the renamed file is never empty.
@@ -135,6 +159,7 @@ std::filesystem::path temporary_path(const std::filesystem::path& path) {
 
 void write_atomically(const std::filesystem::path& path,
                       const std::function<void(std::ofstream&)>& write) {
+  check_replaceable(path);
   const std::filesystem::path temp = temporary_path(path);
   write_temporary(path, temp, write);
   std::error_code ec;
@@ -159,6 +184,7 @@ void AtomicFileSet::discard() noexcept {
 void AtomicFileSet::add(const std::filesystem::path& path,
                         const std::function<void(std::ofstream&)>& write) {
   try {
+    check_replaceable(path);
     std::error_code ec;
     const std::filesystem::path key = std::filesystem::weakly_canonical(path, ec);
     for (const auto& staged : staged_) {
@@ -221,6 +247,7 @@ void check_writable(const std::filesystem::path& path) {
     fail(path, "directory " + dir.string() + " is not writable: " + errno_text(errno));
   }
   if (std::filesystem::is_directory(path, ec)) fail(path, "it is a directory");
+  check_replaceable(path);
 }
 
 }  // namespace orthofront::io

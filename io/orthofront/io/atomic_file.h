@@ -9,6 +9,10 @@
 
 namespace orthofront::io {
 
+/// Every writer below refuses (IoError naming `path`) a path that is a symbolic link, a device,
+/// a pipe, a socket or a directory, or that names a file this process reads its data from
+/// (io/input_files.h): outputs are regular files, and never an input.
+///
 /// Calls `write(stream)` on a binary stream opened on "<path>.tmp-<pid>", then flushes, checks the
 /// stream and renames onto `path`. On any failure (including an exception from `write`) the
 /// temporary file is removed and IoError is thrown naming `path` and the cause (the system's
@@ -61,7 +65,8 @@ class OutputLock {
   int fd_ = -1;
 };
 
-/// Throws IoError naming `path` when its directory does not exist or is not writable.
+/// Throws IoError naming `path` when its directory does not exist or is not writable, or when
+/// `path` is one no writer replaces (see above).
 void check_writable(const std::filesystem::path& path);
 
 }  // namespace orthofront::io

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "orthofront/io/error.h"
+#include "orthofront/io/input_files.h"
 
 namespace orthofront::io::detail {
 
@@ -19,6 +20,7 @@ std::string read_file_bytes(const std::filesystem::path& path) {
   // A device or pipe (/dev/zero, a FIFO) has no end: reading it would allocate without bound.
   if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
     throw IoError("cannot read " + path.string() + ": not a regular file");
+  note_input(path);
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "orthofront/error.h"
+#include "orthofront/io/input_files.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/grid_file.h"
@@ -165,6 +166,7 @@ std::unique_ptr<GridFileSeries> open_pvd(const std::filesystem::path& path,
       }
       std::filesystem::path data = *name;
       if (data.is_relative()) data = path.parent_path() / data;
+      note_input(data);
       entries.emplace_back(t, data);
     }
   }
@@ -251,6 +253,7 @@ std::vector<std::filesystem::path> expand_file_pattern(const std::string& patter
     if (end == std::string::npos) break;
     begin = end + 1;
   }
+  for (const auto& f : files) note_input(f);
   return files;
 }
 

@@ -20,6 +20,7 @@
 #include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_detail.h"
+#include "orthofront/io/input_files.h"
 
 namespace orthofront::io {
 
@@ -126,6 +127,7 @@ struct Hdf5TimeSeries::Impl {
       throw FormatError(path.string() + " is not an HDF5 file (or cannot be read)");
     if (!vetting_child) vet_hdf5_file(path, group_path, read_options);
     file = H5Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    if (file.valid()) note_input(path);
     if (!file.valid()) {
       // HDF5 says why on its error stack; a truncated file is the common case, worth plain words.
       const std::string cause = detail::hdf5_error_cause();

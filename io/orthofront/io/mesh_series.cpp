@@ -1,5 +1,10 @@
 #include "orthofront/io/mesh_series.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <system_error>
@@ -36,6 +41,34 @@ MeshSeriesWriter::MeshSeriesWriter(std::filesystem::path pvd) : pvd_(std::move(p
   check_writable(pvd_);
   name_ = pvd_.stem().string();
   folder_ = pvd_.parent_path() / name_;
+  std::error_code ec;
+  made_folder_ = std::filesystem::create_directories(folder_, ec);
+  if (ec) throw IoError("cannot create the frame folder " + folder_.string() + ": " + ec.message());
+  lock_ = ::open(folder_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lock_ >= 0 && ::flock(lock_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(lock_);
+    lock_ = -1;
+    // Without locks (a file system that refuses them) the frames are still each written whole.
+    if (err == EWOULDBLOCK) {
+      if (made_folder_) {
+        std::error_code ignored;
+        std::filesystem::remove(folder_, ignored);
+      }
+      throw IoError("cannot write " + pvd_.string() + ": another run is writing this collection "
+                    "(its frame folder " + folder_.string() + " is locked); wait for it to end "
+                    "or write elsewhere");
+    }
+  }
+}
+
+MeshSeriesWriter::~MeshSeriesWriter() {
+  // A run that wrote no frame (bad input found later) leaves no folder it made.
+  if (entries_.empty() && made_folder_) {
+    std::error_code ignored;
+    std::filesystem::remove(folder_, ignored);  // only while empty
+  }
+  if (lock_ >= 0) ::close(lock_);  // closing releases the lock
 }
 
 std::filesystem::path MeshSeriesWriter::add_frame(const Mesh& mesh, double time) {

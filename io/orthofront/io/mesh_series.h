@@ -15,8 +15,13 @@ namespace orthofront::io {
 class MeshSeriesWriter {
  public:
   /// `pvd` must end in .pvd and its folder must exist and be writable (IoError /
-  /// InvalidArgument naming it otherwise). Nothing is written until the first frame.
+  /// InvalidArgument naming it otherwise). The frame folder is made now and locked for the
+  /// writer's life: a second writer of the same collection (another run) is refused with
+  /// IoError, so two runs never mix their frames. No frame is written until the first.
   explicit MeshSeriesWriter(std::filesystem::path pvd);
+  ~MeshSeriesWriter();
+  MeshSeriesWriter(const MeshSeriesWriter&) = delete;
+  MeshSeriesWriter& operator=(const MeshSeriesWriter&) = delete;
 
   /// Writes `mesh` as the next frame at `time` (times must increase), then the .pvd. Returns the
   /// frame's path. Throws IoError naming the file on a failed write (the .pvd then still lists
@@ -36,6 +41,8 @@ class MeshSeriesWriter {
   std::filesystem::path pvd_, folder_;
   std::string name_;
   std::vector<Entry> entries_;
+  int lock_ = -1;         // the frame folder, flock'ed
+  bool made_folder_ = false;  // removed again if no frame was written
 };
 
 }  // namespace orthofront::io

@@ -13,6 +13,7 @@
 
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_series.h"
+#include "orthofront/io/input_files.h"
 
 namespace orthofront::io {
 
@@ -51,6 +52,7 @@ class NcFile {
     const int status = nc_open(path.c_str(), NC_NOWRITE, &id_);
     if (status != NC_NOERR)
       throw FormatError("cannot read '" + path.string() + "' as NetCDF: " + nc_strerror(status));
+    note_input(path);
   }
   NcFile(const NcFile&) = delete;
   NcFile& operator=(const NcFile&) = delete;

@@ -124,7 +124,7 @@ void write_report(ByteWriter& out, const SurfaceReport& r) {
 SurfaceReport read_report(ByteReader& in) {
   SurfaceReport r;
   const std::uint8_t reason = in.u8();
-  if (reason > static_cast<std::uint8_t>(StopReason::cancelled))
+  if (reason > static_cast<std::uint8_t>(StopReason::end_time))
     in.fail("stop reason " + std::to_string(reason) + " is not one this version knows");
   r.stop_reason = static_cast<StopReason>(reason);
   r.steps = in.i32();

@@ -21,6 +21,7 @@
 #include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
+#include "orthofront/io/input_files.h"
 #include "orthofront/io/vdb_detail.h"
 #include "orthofront/io/vdb_module.h"
 
@@ -313,6 +314,7 @@ openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
     if (!probe || std::filesystem::is_directory(path))
       throw IoError("cannot read " + path.string() + ": no such file or not readable");
   }
+  note_input(path);
   vet_vdb_file(path, path.string());
   try {
     openvdb::io::File file(path.string());
@@ -359,6 +361,7 @@ LoadedVdbGrid load_vdb_grid(const std::filesystem::path& path, const std::string
     if (!probe || std::filesystem::is_directory(path))
       throw IoError("cannot read " + path.string() + ": no such file or not readable");
   }
+  note_input(path);
   vet_vdb_file(path, where);
   openvdb::GridPtrVec chosen;
   try {

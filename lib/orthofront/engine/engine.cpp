@@ -35,6 +35,8 @@ const char* to_string(StopReason reason) {
       return "left_domain";
     case StopReason::cancelled:
       return "cancelled";
+    case StopReason::end_time:
+      return "end_time";
   }
   return "?";
 }

@@ -18,6 +18,7 @@ enum class StopReason {
   fronts_exhausted,  ///< every front became shorter than two vertices / ℓ, or stalled
   left_domain,       ///< every remaining vertex left the domain (or reached no-data cells)
   cancelled,         ///< the progress callback asked to stop
+  end_time,          ///< path surfaces: the path lines reached t1
 };
 
 const char* to_string(StopReason reason);

@@ -388,6 +388,25 @@ class PathRun final : public PathSurfaceBuilder::Impl {
                    std::to_string(o_.t1) + ": " + to_string(reason) + " reached (raise " + raise +
                    ")";
     }
+    // Short of t1 for any other reason, the surface is incomplete too, and says why; at t1 the
+    // path lines leave the lifted domain through its end, which is no "left the domain".
+    // The last front ends within about a front step (ℓ / c in time) of where it stops.
+    const double close = std::max(1e-6 * (o_.t1 - o_.t0), 1.5 * o_.engine.edge / c_);
+    const double data_end = run_.flow.time_range().end;
+    if (pr.complete && pr.time_reached < o_.t1 - close) {
+      if (data_end < o_.t1 - close && pr.time_reached >= data_end - close) {
+        pr.complete = false;
+        pr.message = "the data end at t = " + std::to_string(data_end) + ", before t1 = " +
+                     std::to_string(o_.t1) + ": the surface stops there";
+      } else if (reason == StopReason::fronts_exhausted) {
+        pr.complete = false;
+        pr.message = "stopped at t = " + std::to_string(pr.time_reached) + " of t1 = " +
+                     std::to_string(o_.t1) + ": every front stalled or became shorter than two "
+                     "edges (fronts_exhausted)";
+      }
+    }
+    if (reason == StopReason::left_domain && pr.time_reached >= o_.t1 - close)
+      sr.report.stop_reason = StopReason::end_time;
     result_.report = std::move(sr.report);
     if (!pr.complete) {
       result_.report.complete = false;
