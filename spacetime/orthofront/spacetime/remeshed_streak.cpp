@@ -483,7 +483,10 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
       const Vec3& xo = x_[idx(o)];
       const Vec3 n1 = (x[k] - x_[idx(p)]).cross(xo - x_[idx(p)]);
       const Vec3 n2 = (x_[idx(q)] - x[k]).cross(xo - x[k]);
-      return n1.dot(side) > 0 && n2.dot(side) > 0;
+      // Within 60° of the face it splits (in 2D exactly its sign): a steeper new face would
+      // crease the surface against its neighbours.
+      const double flat = 0.5 * side.norm();
+      return n1.dot(side) > flat * n1.norm() && n2.dot(side) > flat * n2.norm();
     };
     bool ok = keeps_side(f, a, b);
     const std::int32_t g = topo_.neighbor(f, e);
