@@ -44,7 +44,8 @@ bool land(double lon, double lat) {
 // east at sea, land a block of _FillValue; u, v as shorts (scale 0.001); one step on an
 // unlimited time dimension, `time_value` in `time_units` (calendar noleap).
 void write_day(const fs::path& file, int format, double time_value, const std::string& time_units,
-               const std::string& velocity_units = "m s-1") {
+               const std::string& velocity_units = "m s-1", const char* units = "units",
+               bool cf_names = true) {
   int nc = 0;
   ok(nc_create(file.c_str(), NC_CLOBBER | format, &nc));
   int dt = 0, dy = 0, dx = 0, vt = 0, vy = 0, vx = 0, vu = 0, vv = 0;
@@ -52,12 +53,18 @@ void write_day(const fs::path& file, int format, double time_value, const std::s
   ok(nc_def_dim(nc, "lat", 41, &dy));
   ok(nc_def_dim(nc, "lon", 41, &dx));
   ok(nc_def_var(nc, "time", NC_DOUBLE, 1, &dt, &vt));
-  ok(nc_put_att_text(nc, vt, "units", time_units.size(), time_units.c_str()));
+  ok(nc_put_att_text(nc, vt, units, time_units.size(), time_units.c_str()));
   ok(nc_put_att_text(nc, vt, "calendar", 6, "noleap"));
   ok(nc_def_var(nc, "lat", NC_FLOAT, 1, &dy, &vy));
-  ok(nc_put_att_text(nc, vy, "units", 13, "degrees_north"));
+  if (cf_names)
+    ok(nc_put_att_text(nc, vy, units, 13, "degrees_north"));
+  else
+    ok(nc_put_att_text(nc, vy, units, 7, "degrees"));
   ok(nc_def_var(nc, "lon", NC_FLOAT, 1, &dx, &vx));
-  ok(nc_put_att_text(nc, vx, "units", 12, "degrees_east"));
+  if (cf_names)
+    ok(nc_put_att_text(nc, vx, units, 12, "degrees_east"));
+  else
+    ok(nc_put_att_text(nc, vx, units, 7, "degrees"));
   const int dims[3] = {dt, dy, dx};
   const short fill = -32767;
   const double scale = 0.001;
@@ -65,8 +72,9 @@ void write_day(const fs::path& file, int format, double time_value, const std::s
        {std::tuple<const char*, std::string, int*>{"uo", "eastward_sea_water_velocity", &vu},
         {"vo", "northward_sea_water_velocity", &vv}}) {
     ok(nc_def_var(nc, name, NC_SHORT, 3, dims, id));
-    ok(nc_put_att_text(nc, *id, "standard_name", standard.size(), standard.c_str()));
-    ok(nc_put_att_text(nc, *id, "units", velocity_units.size(), velocity_units.c_str()));
+    if (cf_names)
+      ok(nc_put_att_text(nc, *id, "standard_name", standard.size(), standard.c_str()));
+    ok(nc_put_att_text(nc, *id, units, velocity_units.size(), velocity_units.c_str()));
     ok(nc_put_att_short(nc, *id, "_FillValue", NC_SHORT, 1, &fill));
     ok(nc_put_att_double(nc, *id, "scale_factor", NC_DOUBLE, 1, &scale));
   }
@@ -160,6 +168,37 @@ TEST_CASE("NetCDF: daily CF files on a lon/lat grid read as one series", "[apps]
   m->read(0, mv);
   CHECK(mv[0] == Approx(kEast));
   CHECK(m->geometry().spacing.y() == Approx(kR * 0.5 / kDeg));
+}
+
+TEST_CASE("NetCDF: units under another attribute name ('Unit') are read, not ignored",
+          "[apps][netcdf]") {
+  // As a real ocean product writes them: 'Unit' rather than CF's 'units', lon/lat in plain
+  // "degrees", no standard names. The series must be the CF file's, value for value.
+  TempDir dir;
+  namespace io = orthofront::io;
+  write_day(dir / "cf.nc", NC_CLASSIC_MODEL, 27010, "days since 1950-01-01");
+  write_day(dir / "unit.nc", NC_CLASSIC_MODEL, 27010, "days since 1950-01-01", "m s-1", "Unit",
+            false);
+  io::NetcdfOptions o;
+  o.variables = {"uo", "vo"};
+  const auto cf = io::open_netcdf_series({dir / "cf.nc"}, o);
+  const auto unit = io::open_netcdf_series({dir / "unit.nc"}, o);
+  const io::NetcdfDescription& d = *io::netcdf_description(*unit);
+  CHECK(d.lonlat);
+  CHECK(d.velocity_units == "m s-1");
+  CHECK(unit->time(0) == cf->time(0));
+  CHECK(unit->geometry().spacing == cf->geometry().spacing);
+  CHECK(unit->geometry().origin == cf->geometry().origin);
+  std::vector<float> a(cf->step_floats()), b(unit->step_floats());
+  cf->read(0, a);
+  unit->read(0, b);
+  std::size_t differ = 0, land_points = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    land_points += std::isnan(a[i]) ? 1 : 0;
+    differ += std::isnan(a[i]) != std::isnan(b[i]) || (!std::isnan(a[i]) && a[i] != b[i]) ? 1 : 0;
+  }
+  CHECK(land_points > 0);  // land is no data (NaN) in both
+  CHECK(differ == 0);
 }
 
 TEST_CASE("NetCDF: path lines of a uniform eastward flow stay on their latitude",

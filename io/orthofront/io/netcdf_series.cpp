@@ -139,6 +139,20 @@ class NcFile {
     s.resize(std::strlen(s.c_str()));
     return s;
   }
+  // A variable's units: CF's "units", else the spellings other tools write ("Unit", "unit",
+  // "UNITS"). Left unread, m/s on a lon/lat grid would be taken for degrees per second.
+  std::string units(int v) const {
+    if (std::string cf = text(v, "units"); !cf.empty()) return cf;
+    int count = 0;
+    if (nc_inq_varnatts(id_, v, &count) != NC_NOERR) return {};
+    for (int i = 0; i < count; ++i) {
+      char name[NC_MAX_NAME + 1] = {};
+      if (nc_inq_attname(id_, v, i, name) != NC_NOERR) continue;
+      const std::string n = lower(name);
+      if (n == "units" || n == "unit") return text(v, name);
+    }
+    return {};
+  }
   // A numeric attribute as doubles (empty when absent or text).
   std::vector<double> numbers(int v, const char* name) const {
     nc_type t = 0;
@@ -582,7 +596,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
     const std::string name = f.dimension_name(dims[0]);
     const auto coordinate = f.variable(name);
     const bool cf_time =
-        coordinate && f.text(*coordinate, "units").find(" since ") != std::string::npos;
+        coordinate && f.units(*coordinate).find(" since ") != std::string::npos;
     if (cf_time || f.unlimited(dims[0]) || lower(name) == "time" || lower(name) == "t") {
       time_variable_ = name;
       first_spatial = 1;
@@ -605,7 +619,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
         throw FormatError("'" + f.path().string() + "': coordinate variable '" + a.dimension +
                           "' has " + std::to_string(f.dimension_length(cdims[0])) +
                           " values for a dimension of " + std::to_string(n));
-      a.units = f.text(*cv, "units");
+      a.units = f.units(*cv);
       a.standard_name = f.text(*cv, "standard_name");
       a.coordinates = f.read_all(*cv, n);
     } else {
@@ -648,7 +662,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
   }
   source_points_ = points;
   for (const int v : vars) rules_.push_back(no_data_rules(f, v));
-  description_.velocity_units = f.text(vars[0], "units");
+  description_.velocity_units = f.units(vars[0]);
 
   // The output grid: x fastest (the file's last dimension).
   const std::size_t d = axes_.size();
@@ -746,7 +760,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
 void NetcdfSeries::read_times(const NcFile& f, FileLayout& layout, bool first) {
   const std::string where = "'" + f.path().string() + "'";
   const auto tv = time_variable_.empty() ? std::nullopt : f.variable(time_variable_);
-  const std::string units = tv ? f.text(*tv, "units") : std::string();
+  const std::string units = tv ? f.units(*tv) : std::string();
   if (!tv || units.find(" since ") == std::string::npos) {
     if (!(options_.dt > 0))
       throw FormatError(where + ": no CF time coordinate (a variable '" +
@@ -977,7 +991,7 @@ NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std
   for (double& x : out.values)
     x = rules.is_no_data(x) ? std::numeric_limits<double>::quiet_NaN()
                             : x * rules.scale + rules.offset;
-  out.units = f.text(*v, "units");
+  out.units = f.units(*v);
   return out;
 }
 
