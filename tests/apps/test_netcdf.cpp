@@ -201,6 +201,56 @@ TEST_CASE("NetCDF: units under another attribute name ('Unit') are read, not ign
   CHECK(differ == 0);
 }
 
+TEST_CASE("NetCDF: depth that is positive down turns an upward w into decreasing depth",
+          "[apps][netcdf]") {
+  // Metres on x, y; depth 0, 50, 100 m (positive="down"); w = +1e-4 m/s, upward as CF has it.
+  TempDir dir;
+  namespace io = orthofront::io;
+  const fs::path file = dir / "column.nc";
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER, &nc));
+  int dz = 0, dy = 0, dx = 0, vz = 0, vy = 0, vx = 0;
+  ok(nc_def_dim(nc, "depth", 3, &dz));
+  ok(nc_def_dim(nc, "y", 3, &dy));
+  ok(nc_def_dim(nc, "x", 3, &dx));
+  ok(nc_def_var(nc, "depth", NC_DOUBLE, 1, &dz, &vz));
+  ok(nc_put_att_text(nc, vz, "units", 1, "m"));
+  ok(nc_put_att_text(nc, vz, "positive", 4, "down"));
+  ok(nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy));
+  ok(nc_put_att_text(nc, vy, "units", 1, "m"));
+  ok(nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx));
+  ok(nc_put_att_text(nc, vx, "units", 1, "m"));
+  const int dims[3] = {dz, dy, dx};
+  int ids[3] = {};
+  const char* names[3] = {"u", "v", "w"};
+  for (int c = 0; c < 3; ++c) {
+    ok(nc_def_var(nc, names[c], NC_DOUBLE, 3, dims, &ids[c]));
+    ok(nc_put_att_text(nc, ids[c], "units", 5, "m s-1"));
+  }
+  ok(nc_enddef(nc));
+  const double depth[3] = {0, 50, 100}, xy[3] = {0, 1000, 2000};
+  ok(nc_put_var_double(nc, vz, depth));
+  ok(nc_put_var_double(nc, vy, xy));
+  ok(nc_put_var_double(nc, vx, xy));
+  const std::vector<double> zero(27, 0.0), up(27, 1e-4);
+  ok(nc_put_var_double(nc, ids[0], zero.data()));
+  ok(nc_put_var_double(nc, ids[1], zero.data()));
+  ok(nc_put_var_double(nc, ids[2], up.data()));
+  ok(nc_close(nc));
+  io::NetcdfOptions o;
+  o.dt = 86400;
+  const auto series = io::open_netcdf_series({file}, o);
+  const io::NetcdfDescription& d = *io::netcdf_description(*series);
+  INFO(d.coordinates);
+  CHECK_THAT(d.coordinates, Catch::Contains("positive down") && Catch::Contains("z is depth"));
+  std::vector<float> values(series->step_floats());
+  series->read(0, values);
+  for (std::size_t i = 0; i < 27; ++i) {
+    CHECK(values[3 * i] == 0.0f);
+    CHECK(values[3 * i + 2] == Approx(-1e-4));  // rising: depth decreases
+  }
+}
+
 TEST_CASE("NetCDF: path lines of a uniform eastward flow stay on their latitude",
           "[apps][netcdf]") {
   TempDir dir;

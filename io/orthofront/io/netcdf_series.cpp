@@ -406,6 +406,7 @@ struct Axis {
   std::vector<double> coordinates;  // increasing after the flip
   bool flipped = false;             // stored decreasing
   bool from_index = false;          // no coordinate variable
+  bool positive_down = false;       // CF positive="down": depth, increasing downward
 };
 
 bool is_longitude(const Axis& a) {
@@ -459,6 +460,9 @@ class NetcdfSeries final : public TimeSeries {
   std::vector<Axis> axes_;              // spatial, file order: slowest first (z, y, x)
   std::size_t source_points_ = 0;       // points of one variable in one step
   double velocity_factor_ = 1;          // to m/s (lon/lat only)
+  // -1 where the vertical axis is depth (positive down) and w is upward, as CF's vertical
+  // velocities are: a particle rising moves to smaller depth.
+  double vertical_sign_ = 1;
   Calendar calendar_ = Calendar::mixed;
   std::string calendar_text_;
   std::optional<double> epoch_;  // the first file's reference, calendar seconds
@@ -621,6 +625,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
                           " values for a dimension of " + std::to_string(n));
       a.units = f.units(*cv);
       a.standard_name = f.text(*cv, "standard_name");
+      a.positive_down = lower(trim(f.text(*cv, "positive"))) == "down";
       a.coordinates = f.read_all(*cv, n);
     } else {
       a.from_index = true;
@@ -677,6 +682,9 @@ void NetcdfSeries::open_first(const NcFile& f) {
   coordinates[0] = ax.coordinates;
   coordinates[1] = ay.coordinates;
   if (d == 3) coordinates[2] = axes_[0].coordinates;
+  if (d == 3 && vars.size() == 3 && axes_[0].positive_down &&
+      lower(f.text(vars[2], "standard_name")).find("downward") == std::string::npos)
+    vertical_sign_ = -1;
   if (lonlat_) {
     const std::optional<double> factor = speed_unit(description_.velocity_units);
     if (!factor)
@@ -739,10 +747,13 @@ void NetcdfSeries::open_first(const NcFile& f) {
             std::to_string(axis.length) + ", " + number(axis.coordinates.front()) + " to " +
             number(axis.coordinates.back()) + (axis.units.empty() ? "" : " " + axis.units) +
             (axis.flipped ? ", stored decreasing" : "") +
-            (axis.from_index ? ", no coordinate variable: index" : "") + ")";
+            (axis.from_index ? ", no coordinate variable: index" : "") +
+            (axis.positive_down ? ", positive down" : "") + ")";
   }
   description_.coordinates = text + (uniform ? "; uniform" : "; rectilinear") +
-                             (wrap_ ? "; global in longitude, seam closed" : "");
+                             (wrap_ ? "; global in longitude, seam closed" : "") +
+                             (vertical_sign_ < 0 ? "; z is depth: upward w moves to smaller z"
+                                                 : "");
   std::string fill;
   const NoDataRules& r = rules_[0];
   if (r.fill) fill += "_FillValue " + number(*r.fill);
@@ -903,7 +914,9 @@ void NetcdfSeries::decode(const RawStep& raw, std::span<float> values) const {
         o[1] = static_cast<float>(v[1] * north);
         // A 3D grid with u and v only: w = 0.
         if (components_ == 3)
-          o[2] = comps == 3 ? static_cast<float>(v[2] * (lonlat_ ? velocity_factor_ : 1)) : 0.0f;
+          o[2] = comps == 3 ? static_cast<float>(vertical_sign_ * v[2] *
+                                                 (lonlat_ ? velocity_factor_ : 1))
+                            : 0.0f;
       }
     }
 }
