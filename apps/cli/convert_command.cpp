@@ -123,6 +123,7 @@ class PlacedSeries final : public io::TimeSeries {
   const GridGeometry& geometry() const override { return geometry_; }
   int components() const override { return inner_->components(); }
   std::string describe() const override { return inner_->describe(); }
+  bool zero_is_no_data() const override { return inner_->zero_is_no_data(); }
   io::RawStep read_raw(std::size_t step) const override { return inner_->read_raw(step); }
   void decode(const io::RawStep& raw, std::span<float> values) const override {
     inner_->decode(raw, values);
@@ -143,6 +144,7 @@ class RetimedSeries final : public io::TimeSeries {
   const GridGeometry& geometry() const override { return inner_->geometry(); }
   int components() const override { return inner_->components(); }
   std::string describe() const override { return inner_->describe(); }
+  bool zero_is_no_data() const override { return inner_->zero_is_no_data(); }
   io::RawStep read_raw(std::size_t step) const override { return inner_->read_raw(step); }
   void decode(const io::RawStep& raw, std::span<float> values) const override {
     inner_->decode(raw, values);
@@ -217,8 +219,10 @@ Input open_inputs(const std::vector<std::string>& files, const std::vector<doubl
         return input;
       }
     }
+    // Zero vectors: no data in grid files, flow in VDB (whose inactive voxels are the no data).
     input.series = std::make_unique<io::SingleGridSeries>(
-        io::read_vector_grid(spec.path, spec.selector), files.front());
+        io::read_vector_grid(spec.path, spec.selector), files.front(),
+        io::grid_format_of(spec.path) != io::GridFormat::kVdb);
     return input;
   }
   // Several NetCDF files: one series over all of them (steps and times from the files).
@@ -382,7 +386,9 @@ void run_convert(const ConvertArgs& args) {
     options.units = args.units;
     if (std::isfinite(args.chunk_mib))
       options.max_chunk_bytes = static_cast<std::size_t>(args.chunk_mib * 1024 * 1024);
-    options.zero_is_no_data = !args.zeros_are_flow;
+    // The output keeps the input's rule for zero vectors (an HDF5 file whose zeros are flow
+    // stays so); --zeros-are-flow overrides it.
+    options.zero_is_no_data = !args.zeros_are_flow && series.zero_is_no_data();
     if (std::isfinite(args.fill_value)) options.fill_value = static_cast<float>(args.fill_value);
     if (steady) {
       read_step(0);

@@ -100,6 +100,32 @@ TEST_CASE("convert: several files make a time series in natural order", "[apps][
   CHECK(o["grid"]["spacing"] == nlohmann::json{0.5, 0.5, 2.0});
 }
 
+TEST_CASE("convert keeps the input's rule for zero vectors", "[apps][convert]") {
+  TempDir dir("convert-zeros");
+  write_vtk(dir / "a.vtk", sample_grid(4, 3, 2));
+  write_vtk(dir / "b.vtk", sample_grid(4, 3, 2));
+  const auto zeros_are_no_data = [](const fs::path& file) {
+    orthofront::io::Hdf5ReadOptions options;
+    options.steady_as_single_step = true;
+    return orthofront::io::open_hdf5_series(file, "/", options)->zero_is_no_data();
+  };
+  // Grid files: zeros are solid or land; so in the conversion.
+  REQUIRE(run("convert " + quoted(dir / "a.vtk") + " " + quoted(dir / "b.vtk") + " --out " +
+              quoted(dir / "grid.h5")).status == 0);
+  CHECK(zeros_are_no_data(dir / "grid.h5"));
+  // An HDF5 file whose zeros are flow stays so when converted again (to another compression).
+  REQUIRE(run("convert " + quoted(dir / "grid.h5") + " --zeros-are-flow --out " +
+              quoted(dir / "flow.h5")).status == 0);
+  CHECK_FALSE(zeros_are_no_data(dir / "flow.h5"));
+  REQUIRE(run("convert " + quoted(dir / "flow.h5") + " --compress gzip --out " +
+              quoted(dir / "again.h5")).status == 0);
+  CHECK_FALSE(zeros_are_no_data(dir / "again.h5"));
+  // And one whose zeros are no data stays so.
+  REQUIRE(run("convert " + quoted(dir / "grid.h5") + " --compress gzip --out " +
+              quoted(dir / "kept.h5")).status == 0);
+  CHECK(zeros_are_no_data(dir / "kept.h5"));
+}
+
 TEST_CASE("convert: bad arguments are refused with a message", "[apps][convert]") {
   TempDir dir("convert");
   write_vtk(dir / "a.vtk", sample_grid(3, 3, 3));

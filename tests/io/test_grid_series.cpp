@@ -56,6 +56,9 @@ TEST_CASE("grid series: a .pvd collection gives its files in time order", "[seri
   CHECK(series->geometry().size == grid.geometry.size);
   CHECK(series->step_floats() == grid.values.size());
   CHECK_THAT(series->describe(), Contains("3 VTK XML ImageData files"));
+  // Zero vectors are no data (solid, land) in a series of grid files, as in one grid file and
+  // as `info` says: path and streak surfaces stop there.
+  CHECK(series->zero_is_no_data());
   for (std::size_t s = 0; s < 3; ++s) {
     std::vector<float> values(series->step_floats());
     series->read(s, values);

@@ -164,8 +164,10 @@ DataFile open_data_file(const std::string& spec) {
   return found->second->open(found->first);
 }
 
-std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description) {
-  return std::make_unique<SingleGridSeries>(std::move(grid), std::move(description));
+std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description,
+                                               bool zero_is_no_data) {
+  return std::make_unique<SingleGridSeries>(std::move(grid), std::move(description),
+                                            zero_is_no_data);
 }
 
 }  // namespace orthofront::io

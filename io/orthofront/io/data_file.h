@@ -65,7 +65,9 @@ DataFile open_data_file(const std::string& spec);
 /// build has no NetCDF.
 std::unique_ptr<TimeSeries> open_netcdf_series(const DataFileSpec& spec);
 
-/// A series of one grid held in memory (for formats whose readers produce a VectorGrid).
-std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description);
+/// A series of one grid held in memory (for formats whose readers produce a VectorGrid), with
+/// its file's rule for zero vectors.
+std::unique_ptr<TimeSeries> single_grid_series(VectorGrid grid, std::string description,
+                                               bool zero_is_no_data);
 
 }  // namespace orthofront::io

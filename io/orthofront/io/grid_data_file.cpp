@@ -129,7 +129,7 @@ DataFile open_grid_file(const DataFileSpec& spec) {
   std::error_code ec;
   file.stored_bytes = std::filesystem::file_size(spec.path, ec);
   if (ec) file.stored_bytes = 0;
-  file.series = single_grid_series(std::move(grid), spec.path.string());
+  file.series = single_grid_series(std::move(grid), spec.path.string(), true);
   return file;
 }
 
@@ -177,8 +177,8 @@ DataFile open_vdb_file(const DataFileSpec& spec) {
     return file;
   }
   VectorGrid grid = read_vdb_grid(spec.path, spec.selector);
-  file.series = single_grid_series(std::move(grid), spec.path.string());
   file.zero_is_no_data = false;  // inactive voxels mark missing data; zeros are flow
+  file.series = single_grid_series(std::move(grid), spec.path.string(), file.zero_is_no_data);
   return file;
 }
 

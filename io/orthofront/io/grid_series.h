@@ -15,8 +15,10 @@ namespace orthofront::io {
 /// time series is expected (convert, info).
 class SingleGridSeries final : public TimeSeries {
  public:
-  SingleGridSeries(VectorGrid grid, std::string description)
-      : grid_(std::move(grid)), description_(std::move(description)) {}
+  SingleGridSeries(VectorGrid grid, std::string description, bool zero_is_no_data)
+      : grid_(std::move(grid)), description_(std::move(description)),
+        zero_is_no_data_(zero_is_no_data) {}
+  bool zero_is_no_data() const override { return zero_is_no_data_; }
   std::size_t step_count() const override { return 1; }
   double time(std::size_t) const override { return 0.0; }
   const GridGeometry& geometry() const override { return grid_.geometry; }
@@ -31,6 +33,7 @@ class SingleGridSeries final : public TimeSeries {
  private:
   VectorGrid grid_;
   std::string description_;
+  bool zero_is_no_data_;
 };
 
 /// Steps held in memory (arrays handed over by Python or ParaView), each at its time: a series
@@ -76,6 +79,10 @@ class GridFileSeries final : public TimeSeries {
   double time(std::size_t step) const override { return times_.at(step); }
   const GridGeometry& geometry() const override { return geometry_; }
   int components() const override { return components_; }
+  /// Grid files (.vti, .nhdr, .vec, ... and ParaView's collections of them) mark solid cells and
+  /// land with zero vectors (ParaView's resampling writes 0 outside the fluid): no data, as for
+  /// a single grid file.
+  bool zero_is_no_data() const override { return true; }
   std::string describe() const override;
   RawStep read_raw(std::size_t step) const override;
   void decode(const RawStep& raw, std::span<float> values) const override;
