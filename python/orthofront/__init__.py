@@ -105,7 +105,8 @@ def path_surface(field, seed, closed=False, **options):
     field: a Series, a file or glob of a series, or an unsteady analytic field name. Options are
     those of ``orthofront path`` (t0, t1, seed_count, edge, cache_budget, max_band, ...). Gridded
     series are streamed through the same brick cache as on the command line. For 2D flows the
-    surface's (x, y, t) positions are ``spacetime_vertices``.
+    vertices are (x, y, c t), c = ``report["path"]["time_scale"]`` (``flat=True``: (x, y, 0));
+    ``spacetime_vertices`` are (x, y, c t) either way, and ``attributes["time"]`` is t.
     """
     surface = Surface(_orthofront._path_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the path surface")
