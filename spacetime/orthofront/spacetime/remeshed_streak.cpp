@@ -579,6 +579,10 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
     const Vec3 target = 0.5 * (x_[idx(a)] + x_[idx(b)]);
     const Vec3 error = x[k] - target;
     if (error.norm() <= tolerance) continue;
+    // A path that ends more than the edge's length away went elsewhere (its label midpoint
+    // lies between paths that parted): a chord step does not bring it back, and it is placed
+    // by interpolation below.
+    if (error.norm() > (x_[idx(b)] - x_[idx(a)]).norm()) continue;
     const Eigen::Vector2d l0(ms[k], mtau[k]);
     const Eigen::Vector2d la = label(a, ms[k]), lb = label(b, ms[k]), lo = label(o, ms[k]);
     Eigen::Vector2d l1;
