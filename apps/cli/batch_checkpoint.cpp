@@ -1,5 +1,7 @@
 #include "cli/batch_checkpoint.h"
 
+#include <zlib.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -15,7 +17,7 @@ namespace {
 // 2: the report stores clamped-α and insertion-fallback counts by cause; 3: stall cuts, gaps
 // closed and the gap-closing time; 4: front vertices beside a missed seed shot, and the shots
 // skipped; 5: triangles by cause; 6: the seed-shot time limit and the shots over budget.
-constexpr std::uint32_t kFormat = 6;
+constexpr std::uint32_t kFormat = 7;  // 7: a CRC-32 of the state follows it
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 
 std::string read_file(const std::filesystem::path& path) {
@@ -73,6 +75,11 @@ std::string digest_text(std::uint64_t digest) {
   char text[32];
   std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(digest));
   return text;
+}
+
+std::uint32_t state_checksum(std::string_view bytes) {
+  return static_cast<std::uint32_t>(
+      ::crc32(0L, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
 }
 
 }  // namespace
@@ -138,9 +145,14 @@ void CheckpointFolder::save_state(const std::string& surface, const SurfaceState
     io::write_engine_state(out, *stream);
   else
     write_path_state(out, std::get<spacetime::PathState>(state));
+  const std::uint32_t crc = state_checksum(out.bytes());
   io::write_atomically(file(surface, ".state"), [&](std::ofstream& f) {
     f.write(kMagic, sizeof kMagic - 1);
     f.write(out.bytes().data(), static_cast<std::streamsize>(out.bytes().size()));
+    const char tail[4] = {static_cast<char>(crc & 0xff), static_cast<char>((crc >> 8) & 0xff),
+                          static_cast<char>((crc >> 16) & 0xff),
+                          static_cast<char>((crc >> 24) & 0xff)};
+    f.write(tail, 4);
   });
 }
 
@@ -151,7 +163,20 @@ std::optional<SurfaceState> CheckpointFolder::load_state(const std::string& surf
   const std::string_view magic(kMagic, sizeof kMagic - 1);
   if (bytes.compare(0, magic.size(), magic) != 0)
     throw io::FormatError("'" + path.string() + "' is not an orthofront checkpoint");
-  io::ByteReader in(std::string_view(bytes).substr(magic.size()), path.string());
+  // A state that changed after it was written (a flipped bit, a partial copy) would resume into
+  // another surface without a word: its checksum must match.
+  if (bytes.size() < magic.size() + 4)
+    throw io::FormatError("corrupt checkpoint '" + path.string() + "': cut short");
+  const std::string_view payload =
+      std::string_view(bytes).substr(magic.size(), bytes.size() - magic.size() - 4);
+  std::uint32_t stored = 0;
+  for (int k = 3; k >= 0; --k)
+    stored = stored << 8 | static_cast<unsigned char>(bytes[bytes.size() - 4 + static_cast<std::size_t>(k)]);
+  if (stored != state_checksum(payload))
+    throw io::FormatError("corrupt checkpoint '" + path.string() +
+                          "': its checksum does not match (it changed after it was written); "
+                          "resume with --restart to build the surface again");
+  io::ByteReader in(payload, path.string());
   const std::string version = in.text();
   if (version != checkpoint_version())
     throw InvalidArgument("checkpoint '" + path.string() + "' was written by version " + version +

@@ -311,9 +311,18 @@ TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are re
   CHECK(fresh.status == 2);
   CHECK(fresh.output.find("--resume") != std::string::npos);
 
-  // A state file cut short: refused naming it, and nothing written.
+  // One flipped bit in the state: refused naming the file, and nothing written.
   const fs::path state = out / ".checkpoint" / "s.state";
   const std::string bytes = read_text(state);
+  std::string flipped = bytes;
+  flipped[flipped.size() / 2] = static_cast<char>(flipped[flipped.size() / 2] ^ 0x10);
+  write_text(state, flipped);
+  const auto bit = run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out) + " --resume");
+  CHECK(bit.status == 2);
+  CHECK(bit.output.find("s.state") != std::string::npos);
+  CHECK(bit.output.find("checksum") != std::string::npos);
+  CHECK_FALSE(fs::exists(out / "s.vtp"));
+  // A state file cut short: refused naming it, and nothing written.
   write_text(state, bytes.substr(0, bytes.size() / 2));
   const auto corrupt =
       run("batch " + quoted(dir / "a.toml") + " --out " + quoted(out) + " --resume");
