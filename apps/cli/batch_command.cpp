@@ -369,9 +369,18 @@ class BatchRun {
                   seconds_since(start), (job_.out / "summary.json").string().c_str(),
                   (job_.out / "summary.txt").string().c_str());
     }
-    if (failed > 0)
-      throw Error(std::to_string(failed) + " of " + std::to_string(rows_.size()) +
-                  " surfaces failed (see " + (job_.out / "summary.txt").string() + ")");
+    // A surface cut short (a cap, a budget, the data's end) is written and marked, and the job
+    // does not end as if all had finished.
+    if (failed > 0 || incomplete > 0)
+      throw Error((failed > 0 ? std::to_string(failed) + " of " + std::to_string(rows_.size()) +
+                                    " surfaces failed"
+                              : std::string()) +
+                  (failed > 0 && incomplete > 0 ? ", " : "") +
+                  (incomplete > 0 ? std::to_string(incomplete) + " of " +
+                                        std::to_string(rows_.size()) +
+                                        " surfaces are incomplete (written, marked so)"
+                                  : std::string()) +
+                  " (see " + (job_.out / "summary.txt").string() + ")");
   }
 
  private:

@@ -357,6 +357,23 @@ TEST_CASE("batch: a surface that fails is reported and the others are built", "[
   CHECK_FALSE(fs::exists(dir / "out" / "outside.vtp"));
 }
 
+TEST_CASE("batch: a surface cut short by its vertex cap is written, marked, and fails the job",
+          "[batch]") {
+  TempDir dir("batch-capped");
+  write_text(dir / "job.toml",
+             "[job]\nfield = \"double-gyre\"\n[defaults]\nedge = 0.02\nt0 = 0.0\nt1 = 8.0\n"
+             "[[surface]]\nname = \"capped\"\nseed = \"line:0.3,0.2,0:0.3,0.8,0\"\n"
+             "max_vertices = 200\n");
+  const auto r = run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out"));
+  INFO(r.output);
+  CHECK(r.status == 2);
+  CHECK(r.output.find("1 of 1 surfaces are incomplete") != std::string::npos);
+  CHECK(fs::exists(dir / "out" / "capped.vtp"));
+  const auto s = nlohmann::json::parse(read_text(dir / "out" / "summary.json"));
+  CHECK(s["incomplete"] == 1);
+  CHECK(s["surfaces"][0]["status"] == "incomplete");
+}
+
 TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]") {
   TempDir dir("batch-errors");
   const auto refused = [&](const std::string& file, const std::string& text) {
