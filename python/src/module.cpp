@@ -77,7 +77,10 @@ PyField resolve_field(const py::object& field) {
   throw py::type_error("field must be an orthofront.Field or a string (a file or analytic name)");
 }
 
-SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name) {
+/// `planar` (when given) says whether the seed came as (n, 2) points: z = 0, which only a 2D
+/// field may take silently.
+SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name,
+                       bool* planar = nullptr) {
   if (py::isinstance<py::str>(seed)) {
     name = seed.cast<std::string>();
     return cli::parse_seed(name);
@@ -88,12 +91,20 @@ SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name) {
     throw py::value_error(
         "seed must be a seed string (e.g. 'line:0,0,0:1,0,0') or an (n, 2) or "
         "(n, 3) array of at least 2 points");
+  if (planar != nullptr) *planar = points.shape(1) == 2;
   std::vector<Vec3> polyline;
   const auto p = points.unchecked<2>();
   for (py::ssize_t i = 0; i < points.shape(0); ++i)
     polyline.emplace_back(p(i, 0), p(i, 1), points.shape(1) == 3 ? p(i, 2) : 0.0f);
   name = "array of " + std::to_string(points.shape(0)) + " points";
   return SeedCurve::polyline(std::move(polyline), closed);
+}
+
+/// (n, 2) seed points on a 3D field would all sit at z = 0 without a word: refused.
+void check_planar_seed(bool planar, int dimension, const std::string& field) {
+  if (planar && dimension == 3)
+    throw py::value_error("seed: (n, 2) points (x, y) on the 3D field '" + field +
+                          "'; give (n, 3) points (x, y, z)");
 }
 
 /// The surface as numpy arrays plus its report (JSON text; the Python side loads it).
@@ -143,7 +154,8 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   cli::add_path_flags(command, args);
   parse_keywords(command, options);
   cli::apply_memory_flag(command, args.limits, args.options);
-  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed);
+  bool planar_seed = false;
+  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed, &planar_seed);
   cli::check_seed_count(args.seed_count, args.options.max_vertices);
 
   std::unique_ptr<UnsteadyField> analytic;
@@ -162,6 +174,8 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
         "name, or a series of files)");
   }
   args.field = series.name;
+  check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
+                    series.name);
   spacetime::PathSurfaceOptions o = cli::path_options(args);
   InterruptCheck interrupt;
   o.progress = [&](const spacetime::PathProgress&) { return interrupt.keep_going(); };
@@ -212,7 +226,8 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
                           "others (orthofront streak --route " +
                           args.route + ")");
   if (args.frames.empty()) throw py::type_error("frames is required (the observation times)");
-  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed);
+  bool planar_seed = false;
+  const SeedCurve seed = resolve_seed(seed_in, closed, args.seed, &planar_seed);
   std::unique_ptr<UnsteadyField> analytic;
   PySeries series;
   if (py::isinstance<PySeries>(field_in)) {
@@ -227,6 +242,8 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
     throw py::type_error("field must be an orthofront.Series or a string");
   }
   args.field = series.name;
+  check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
+                    series.name);
   spacetime::StreakOptions o = cli::streak_options(command, args);
   if (analytic && o.device)
     throw py::value_error("device: bulk advection reads gridded series, not analytic fields");

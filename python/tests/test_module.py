@@ -175,6 +175,12 @@ def test_bad_input_names_what_is_wrong(tmp_path):
     field = orthofront.Field(values, origin=origin, spacing=spacing)
     with pytest.raises(ValueError, match="outside the domain"):
         orthofront.stream_surface(field, "line:10,10,10:11,10,10")
+    # (x, y) seed points on a 3D unsteady field would sit at z = 0 without a word.
+    planar = np.array([[1.0, 1.0], [1.5, 1.0]])
+    with pytest.raises(ValueError, match=r"\(n, 2\) points"):
+        orthofront.path_surface("unsteady-abc", planar, t0=0, t1=1)
+    with pytest.raises(ValueError, match=r"\(n, 2\) points"):
+        orthofront.streak_surface("unsteady-abc", planar, release="0:1", frames="1")
 
 
 def test_save_round_trips(tmp_path):
