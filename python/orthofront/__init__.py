@@ -96,6 +96,12 @@ def stream_surface(field, seed, closed=False, **options):
     """
     surface = Surface(_orthofront._stream_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the stream surface")
+    if len(surface.faces) == 0:
+        # As the command line warns: an empty surface is returned, never silently.
+        warnings.warn("the stream surface has no faces (stopped: %s after %s steps); check steps, "
+                      "edge and the field's speed along the seed"
+                      % (surface.report.get("stop_reason", "?"), surface.report.get("steps", "?")),
+                      RuntimeWarning, stacklevel=2)
     return surface
 
 

@@ -175,6 +175,10 @@ def test_bad_input_names_what_is_wrong(tmp_path):
     field = orthofront.Field(values, origin=origin, spacing=spacing)
     with pytest.raises(ValueError, match="outside the domain"):
         orthofront.stream_surface(field, "line:10,10,10:11,10,10")
+    # An empty surface comes with a warning, as on the command line.
+    with pytest.warns(RuntimeWarning, match="no faces"):
+        empty = orthofront.stream_surface("saddle", "line:-1,1,0:1,1,0", steps=0, edge=0.05)
+    assert len(empty.faces) == 0
     # (x, y) seed points on a 3D unsteady field would sit at z = 0 without a word.
     planar = np.array([[1.0, 1.0], [1.5, 1.0]])
     with pytest.raises(ValueError, match=r"\(n, 2\) points"):
