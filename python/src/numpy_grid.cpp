@@ -73,6 +73,15 @@ GridGeometry geometry_of(const FloatArray& values, py::ssize_t first_axis, int& 
 
 std::vector<double> times_of(const py::object& times, std::size_t steps) {
   if (times.is_none()) throw py::type_error("a series needs times (one per step)");
+  // datetime64 / timedelta64 would be cast to their integer ticks (nanoseconds, days, ...)
+  // and taken as seconds: refused, with the conversion to write.
+  if (const py::object dtype = py::getattr(times, "dtype", py::none()); !dtype.is_none()) {
+    const std::string kind = py::str(dtype.attr("kind"));
+    if (kind == "M" || kind == "m")
+      throw py::value_error(
+          "times are numpy datetime64/timedelta64: give seconds as numbers, e.g. "
+          "(times - times[0]) / np.timedelta64(1, 's'), and t0, t1 in the same seconds");
+  }
   auto list = times.cast<std::vector<double>>();
   if (list.size() != steps)
     throw py::value_error("times holds " + std::to_string(list.size()) + " values for " +

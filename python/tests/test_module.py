@@ -168,6 +168,10 @@ def test_bad_input_names_what_is_wrong(tmp_path):
         orthofront.Series(np.zeros((3, 4, 4, 2), dtype=np.float32), [0, 1])
     with pytest.raises(ValueError, match="increasing"):
         orthofront.Series(np.zeros((2, 4, 4, 2), dtype=np.float32), [1, 0])
+    # datetime64 times (as xarray gives them) would be read as nanoseconds.
+    stamps = np.array(["2024-01-01", "2024-01-02"], dtype="datetime64[ns]")
+    with pytest.raises(ValueError, match="datetime64"):
+        orthofront.Series(np.zeros((2, 4, 4, 2), dtype=np.float32), stamps)
     missing = str(tmp_path / "missing.vti")
     with pytest.raises((OSError, ValueError), match="missing.vti"):
         orthofront.Field.open(missing)
