@@ -342,6 +342,11 @@ TEST_CASE("NetCDF: a NetCDF-4 file of several steps on a metric grid, with missi
   ok(nc_close(nc));
 
   namespace io = orthofront::io;
+  // lonlat=metres cannot apply to a grid in metres: refused, not ignored.
+  io::NetcdfOptions metres;
+  metres.lonlat = io::LonLatMetric::metres;
+  CHECK_THROWS_WITH(io::open_netcdf_series({file}, metres),
+                    Catch::Contains("lonlat=metres") && Catch::Contains("not longitude/latitude"));
   const auto s = io::open_netcdf_series({file});
   const io::NetcdfDescription& d = *io::netcdf_description(*s);
   CHECK(d.format == "NetCDF-4");

@@ -674,6 +674,13 @@ void NetcdfSeries::open_first(const NcFile& f) {
   const Axis& ax = axes_[d - 1];
   const Axis& ay = axes_[d - 2];
   lonlat_ = is_longitude(ax) && is_latitude(ay);
+  // A choice that cannot apply is refused rather than ignored.
+  if (!lonlat_ && options_.lonlat == LonLatMetric::metres)
+    throw InvalidArgument("'" + f.path().string() + "': lonlat=metres, but its grid is not " +
+                          "longitude/latitude (x = '" + ax.dimension + "'" +
+                          (ax.units.empty() ? "" : " in " + ax.units) + ", y = '" + ay.dimension +
+                          "'" + (ay.units.empty() ? "" : " in " + ay.units) +
+                          "); leave lonlat= out for a grid in metres");
   description_.lonlat = lonlat_;
   description_.metric = options_.lonlat;
   geometry_.dimension = static_cast<int>(d);
