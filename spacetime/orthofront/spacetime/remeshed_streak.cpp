@@ -96,6 +96,13 @@ class RemeshedStreakBuilder {
   template <class Keep>
   std::vector<Split> edges_where(const Keep& keep) const;
   bool split_pass(std::size_t& splits);
+  // v's label (s, τ), s taken across s = 0 of a closed seed to lie within ½ of near_s.
+  Eigen::Vector2d label_near(std::int32_t v, double near_s) const {
+    double sv = s_[idx(v)];
+    if (seed_.closed() && sv - near_s > 0.5) sv -= 1;
+    if (seed_.closed() && near_s - sv > 0.5) sv += 1;
+    return Eigen::Vector2d(sv, tau_[idx(v)]);
+  }
   // Signed area of f's labels (s, τ), in its corners' order.
   double label_area(std::int32_t f) const;
   // Whether a face beside the edge has its labels turned against its corners, which an
@@ -536,14 +543,9 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
 
 double RemeshedStreakBuilder::label_area(std::int32_t f) const {
   const auto& c = topo_.face(f);
-  const auto label = [&](std::int32_t v) {
-    double sv = s_[idx(v)];
-    const double s0 = s_[idx(c[0])];
-    if (seed_.closed() && sv - s0 > 0.5) sv -= 1;
-    if (seed_.closed() && s0 - sv > 0.5) sv += 1;
-    return Eigen::Vector2d(sv, tau_[idx(v)]);
-  };
-  const Eigen::Vector2d p = label(c[0]), q = label(c[1]) - p, r = label(c[2]) - p;
+  const double s0 = s_[idx(c[0])];
+  const Eigen::Vector2d p = label_near(c[0], s0), q = label_near(c[1], s0) - p,
+                        r = label_near(c[2], s0) - p;
   return q.x() * r.y() - q.y() * r.x();
 }
 
@@ -564,12 +566,6 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
   std::vector<std::size_t> redo;
   std::vector<Vec3> rx;
   std::vector<double> rfrom, rs;
-  const auto label = [&](std::int32_t v, double near_s) {
-    double sv = s_[idx(v)];
-    if (seed_.closed() && sv - near_s > 0.5) sv -= 1;
-    if (seed_.closed() && near_s - sv > 0.5) sv += 1;
-    return Eigen::Vector2d(sv, tau_[idx(v)]);
-  };
   for (const std::size_t k : which) {
     if (status[k] != ParticleStatus::moving) continue;
     const std::int32_t f = chosen[k].face;
@@ -584,7 +580,7 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
     // by interpolation below.
     if (error.norm() > (x_[idx(b)] - x_[idx(a)]).norm()) continue;
     const Eigen::Vector2d l0(ms[k], mtau[k]);
-    const Eigen::Vector2d la = label(a, ms[k]), lb = label(b, ms[k]), lo = label(o, ms[k]);
+    const Eigen::Vector2d la = label_near(a, ms[k]), lb = label_near(b, ms[k]), lo = label_near(o, ms[k]);
     Eigen::Vector2d l1;
     const Vec3 d = x_[idx(b)] - x_[idx(a)];
     if (topo_.neighbor(f, e) == none) {
@@ -616,7 +612,7 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
       std::int32_t other = none;
       for (const std::int32_t v : topo_.face(g))
         if (v != a && v != b) other = v;
-      const Eigen::Vector2d ld = label(other, ms[k]);
+      const Eigen::Vector2d ld = label_near(other, ms[k]);
       if (!(inside(la, lb, lo) || (std::abs((la - ld).x() * (lb - ld).y() - (la - ld).y() * (lb - ld).x()) > 0 &&
                                    inside(lb, la, ld))))
         continue;
