@@ -2,6 +2,8 @@
 
 #include <zlib.h>
 
+#include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <sstream>
 
@@ -80,6 +82,33 @@ std::string digest_text(std::uint64_t digest) {
 std::uint32_t state_checksum(std::string_view bytes) {
   return static_cast<std::uint32_t>(
       ::crc32(0L, reinterpret_cast<const Bytef*>(bytes.data()), static_cast<uInt>(bytes.size())));
+}
+
+// What identifies an input file's contents without reading all of it: its size, its
+// modification time and a CRC-32 of its first and last 64 KiB (headers, chunk indexes).
+nlohmann::json fingerprint(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return nullptr;
+  const auto modified = std::filesystem::last_write_time(path, ec);
+  if (ec) return nullptr;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return nullptr;
+  constexpr std::uintmax_t kSpan = 64 * 1024;
+  uLong crc = ::crc32(0L, Z_NULL, 0);
+  std::string buffer;
+  for (const std::uintmax_t begin : {std::uintmax_t{0}, size > kSpan ? size - kSpan : 0}) {
+    buffer.resize(static_cast<std::size_t>(std::min(kSpan, size - begin)));
+    in.seekg(static_cast<std::streamoff>(begin));
+    if (!in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()))) return nullptr;
+    crc = ::crc32(crc, reinterpret_cast<const Bytef*>(buffer.data()),
+                  static_cast<uInt>(buffer.size()));
+  }
+  return {{"size", size},
+          {"modified_ns", std::chrono::duration_cast<std::chrono::nanoseconds>(
+                              modified.time_since_epoch())
+                              .count()},
+          {"crc32_ends", static_cast<std::uint32_t>(crc)}};
 }
 
 }  // namespace
@@ -223,6 +252,71 @@ std::optional<nlohmann::json> CheckpointFolder::load_done(const std::string& sur
     throw InvalidArgument("checkpoint '" + path.string() +
                           "' belongs to another job file or version");
   return record["row"];
+}
+
+}  // namespace orthofront::cli
+
+namespace orthofront::cli {
+
+void CheckpointFolder::record_inputs(const std::vector<std::filesystem::path>& inputs,
+                                     int rank) const {
+  const std::filesystem::path path = folder_ / ("inputs-" + std::to_string(rank) + ".json");
+  nlohmann::json recorded = nlohmann::json::object();
+  if (std::filesystem::exists(path)) {
+    try {
+      recorded = nlohmann::json::parse(read_file(path));
+    } catch (const nlohmann::json::exception&) {
+      throw io::FormatError("corrupt checkpoint '" + path.string() + "': not the JSON it writes");
+    }
+  }
+  bool added = false;
+  for (const std::filesystem::path& input : inputs) {
+    const std::string key = std::filesystem::absolute(input).lexically_normal().string();
+    if (recorded.contains(key)) continue;  // checked when the job resumed, or new this run
+    recorded[key] = fingerprint(input);
+    added = true;
+  }
+  if (added || !std::filesystem::exists(path))
+    io::write_atomically(path, [&](std::ofstream& out) { out << recorded.dump(1) << '\n'; });
+}
+
+void CheckpointFolder::check_inputs() const {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("inputs-", 0) == 0 && entry.path().extension() == ".json")
+      check_inputs(entry.path());
+  }
+}
+
+void CheckpointFolder::check_inputs(const std::filesystem::path& path) const {
+  nlohmann::json recorded;
+  try {
+    recorded = nlohmann::json::parse(read_file(path));
+  } catch (const nlohmann::json::exception&) {
+    throw io::FormatError("corrupt checkpoint '" + path.string() + "': not the JSON it writes");
+  }
+  if (!recorded.is_object())
+    throw io::FormatError("corrupt checkpoint '" + path.string() + "': not the JSON it writes");
+  for (const auto& [file, then] : recorded.items()) {
+    const nlohmann::json now = fingerprint(file);
+    if (now == then) continue;
+    std::string what;
+    if (now.is_null())
+      what = "it cannot be read any more";
+    else if (!then.is_object() || now["size"] != then["size"])
+      what = "its size changed from " + (then.is_object() ? then["size"].dump() : "?") + " to " +
+             now["size"].dump() + " bytes";
+    else if (now["crc32_ends"] != then["crc32_ends"])
+      what = "its contents changed";
+    else
+      what = "it was modified (the same size and the same first and last 64 KiB, but a new "
+             "modification time)";
+    throw InvalidArgument("input '" + file + "' of the checkpoint in '" + folder_.string() +
+                          "' has changed since it was read: " + what +
+                          ". Resumed, the surfaces would mix two data sets; restore the file, or "
+                          "start afresh with --restart");
+  }
 }
 
 }  // namespace orthofront::cli

@@ -31,6 +31,7 @@
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/error.h"
+#include "orthofront/io/input_files.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
 #include "orthofront/io/report_json.h"
@@ -287,6 +288,7 @@ class BatchRun {
     const auto start = Clock::now();
     const std::unique_ptr<WorkSharing> sharing = start_work_sharing();
     const bool lead = sharing->rank() == 0;
+    rank_ = sharing->rank();
     std::error_code ec;
     std::filesystem::create_directories(job_.out, ec);
     // Rank 0 checks and prepares the folder; the others wait for its word.
@@ -403,6 +405,7 @@ class BatchRun {
     if (checkpoints_.exists()) {
       if (args_.resume) {
         checkpoints_.check_owner();
+        checkpoints_.check_inputs();
         return;
       }
       if (!args_.restart)
@@ -675,13 +678,19 @@ class BatchRun {
       if (interrupted()) throw;
       rows_[i] = summary_row(s, "failed", json(), seconds_since(t0), e.what(), "");
     }
-    checkpoints_.save_done(s.name, rows_[i]);
+    save_done(s.name, rows_[i]);
   }
 
   void fail(const SurfaceSpec& s, std::size_t i, const std::string& message) {
     rows_[i] = summary_row(s, "failed", json(), 0, message, "");
-    checkpoints_.save_done(s.name, rows_[i]);
+    save_done(s.name, rows_[i]);
     checkpoints_.remove_state(s.name);
+  }
+
+  // A finished surface's row, after the fingerprints of the files it read.
+  void save_done(const std::string& surface, const json& row) {
+    checkpoints_.record_inputs(io::noted_inputs(), rank_);
+    checkpoints_.save_done(surface, row);
   }
 
   void maybe_checkpoint(const std::vector<std::unique_ptr<SurfaceTask>>& tasks,
@@ -692,6 +701,7 @@ class BatchRun {
     if (!due && !interrupted() && !killed) return;
     if (killed) std::_Exit(9);  // as kill -9: nothing saved since the last checkpoint
     const auto t0 = Clock::now();
+    checkpoints_.record_inputs(io::noted_inputs(), rank_);
     for (std::size_t k = 0; k < tasks.size(); ++k)
       if (!finished[k]) checkpoints_.save_state(tasks[k]->spec().name, tasks[k]->state());
     last_checkpoint_ = Clock::now();
@@ -727,13 +737,14 @@ class BatchRun {
     } catch (const std::exception& e) {
       rows_[i] = summary_row(s, "failed", json(), seconds_since(t0), e.what(), "");
     }
-    checkpoints_.save_done(s.name, rows_[i]);
+    save_done(s.name, rows_[i]);
     checkpoints_.remove_state(s.name);
   }
 
   BatchJob job_;
   BatchArgs args_;
   CheckpointFolder checkpoints_;
+  int rank_ = 0;  // this process's rank (0 without MPI)
   std::vector<json> rows_;
   json passes_ = json::array();
   Clock::time_point last_checkpoint_;

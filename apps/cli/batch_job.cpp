@@ -488,6 +488,11 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
   std::map<std::string, std::string> seen;
   json expanded = json::array();
   for (const SurfaceSpec& s : job.surfaces) {
+    // The job's own files share the output folder with the surfaces'.
+    if (s.name == "summary")
+      throw InvalidArgument(job.file.string() + (s.line ? ":" + std::to_string(s.line) : "") +
+                            ": the name 'summary' is reserved for the job's summary.json and "
+                            "summary.txt; name the surface otherwise");
     if (!seen.emplace(s.name, s.seed).second)
       throw InvalidArgument(job.file.string() + (s.line ? ":" + std::to_string(s.line) : "") +
                             ": two surfaces are named '" + s.name + "'");

@@ -26,7 +26,8 @@ void add_engine_flags(CLI::App& c, StreamSurfaceOptions& o) {
                "at ~300 B a vertex, at most 50 M; the figure shown is for the memory available "
                "now)")
       ->capture_default_str();
-  c.add_option("--time-budget", o.time_budget_seconds, "Stop after this many seconds");
+  c.add_option("--time-budget", o.time_budget_seconds, "Stop after this many seconds")
+      ->check(CLI::PositiveNumber);
   c.add_option("--method", o.method, "orthogonal (flow-orthogonal fronts) or timeline (baseline)")
       ->transform(choices<Method>({{"orthogonal", Method::orthogonal},
                                    {"timeline", Method::timeline}}))

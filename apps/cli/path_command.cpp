@@ -13,6 +13,7 @@
 #include "cli/path_args.h"
 #include "cli/pictures.h"
 #include "cli/process_memory.h"
+#include "cli/quality_warnings.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "orthofront/error.h"
@@ -305,6 +306,9 @@ void add_path_command(CLI::App& app) {
                    "orthofront: warning: the surface has no faces (stopped: %s after %d "
                    "steps); check --t1, --steps, --edge and the flow along the seed\n",
                    to_string(result.report.stop_reason), result.report.steps);
+    std::fputs(degenerate_faces_warning(result.report.quality.degenerate_faces, mesh.face_count())
+                   .c_str(),
+               stderr);
     if (!pr.complete) {
       if (interrupted()) throw Error("interrupted: the surface built so far was written");
       if (capped)

@@ -10,7 +10,8 @@ namespace orthofront::cli {
 std::size_t peak_rss_bytes();
 /// This process's resident set now (/proc/self/statm).
 std::size_t current_rss_bytes();
-/// Memory the machine can still give (MemAvailable).
+/// Memory this process can still take: the least of the machine's MemAvailable, what its
+/// cgroups' memory limits leave and what RLIMIT_AS (ulimit -v) leaves of its address space.
 std::size_t available_memory_bytes();
 
 /// Bytes a mesh vertex costs with everything that grows with it (mesh, fronts, quality

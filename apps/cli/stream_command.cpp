@@ -5,6 +5,7 @@
 #include "cli/engine_options.h"
 #include "cli/pictures.h"
 #include "cli/process_memory.h"
+#include "cli/quality_warnings.h"
 #include "cli/surface_job.h"
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/error.h"
@@ -135,6 +136,8 @@ void add_stream_command(CLI::App& app) {
       std::cerr << "orthofront: warning: the surface has no faces (stopped: "
                 << to_string(result.report.stop_reason) << " after " << result.report.steps
                 << " steps); check --steps, --edge and the field's speed along the seed\n";
+    std::cerr << degenerate_faces_warning(result.report.quality.degenerate_faces,
+                                          result.mesh.face_count());
     if (result.report.stop_reason == StopReason::cancelled)
       throw Error("interrupted: the surface built so far was written");
   });

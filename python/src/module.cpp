@@ -323,8 +323,10 @@ PYBIND11_MODULE(_orthofront, m) {
            }),
            py::arg("values"), py::kw_only(), py::arg("origin") = py::none(),
            py::arg("spacing") = py::none(), py::arg("axes") = py::none(),
-           py::arg("zero_is_no_data") = false,
-           "values: (ny, nx, 2) or (nz, ny, nx, 3), x fastest; NaN is no data")
+           py::arg("zero_is_no_data") = true,
+           "values: (ny, nx, 2) or (nz, ny, nx, 3), x fastest. NaN is no data, and so are zero "
+           "vectors (land, solid cells), as in data files; zero_is_no_data=False makes zeros "
+           "flow (stagnation points of a sampled analytic field)")
       .def_static(
           "open",
           [](const std::string& spec) {
@@ -337,14 +339,17 @@ PYBIND11_MODULE(_orthofront, m) {
 
   py::class_<PySeries>(m, "Series", "A time series of vector grids: numpy steps or files")
       .def(py::init([](const FloatArray& values, const py::object& times, const py::object& origin,
-                       const py::object& spacing, const py::object& axes) {
-             return PySeries{std::shared_ptr<io::TimeSeries>(
-                                 series_from_array(values, times, origin, spacing, axes)),
+                       const py::object& spacing, const py::object& axes, bool zero_is_no_data) {
+             return PySeries{std::shared_ptr<io::TimeSeries>(series_from_array(
+                                 values, times, origin, spacing, axes, zero_is_no_data)),
                              "numpy array series"};
            }),
            py::arg("values"), py::arg("times"), py::kw_only(), py::arg("origin") = py::none(),
            py::arg("spacing") = py::none(), py::arg("axes") = py::none(),
-           "values: (nt, ny, nx, 2) or (nt, nz, ny, nx, 3); times: nt increasing numbers")
+           py::arg("zero_is_no_data") = true,
+           "values: (nt, ny, nx, 2) or (nt, nz, ny, nx, 3); times: nt increasing numbers. NaN "
+           "and zero vectors are no data, as in data files (zero_is_no_data=False: zeros are "
+           "flow)")
       .def_static(
           "open",
           [](const std::string& spec) {

@@ -102,7 +102,8 @@ VectorGrid grid_from_array(const FloatArray& values, const py::object& origin,
 std::unique_ptr<io::TimeSeries> series_from_array(const FloatArray& values, const py::object& times,
                                                   const py::object& origin,
                                                   const py::object& spacing,
-                                                  const py::object& axes) {
+                                                  const py::object& axes,
+                                                  bool zero_is_no_data) {
   int components = 0;
   if (values.ndim() < 1) throw py::value_error("a series needs a time axis");
   GridGeometry geometry = geometry_of(values, 1, components, origin, spacing, axes);
@@ -112,7 +113,8 @@ std::unique_ptr<io::TimeSeries> series_from_array(const FloatArray& values, cons
   for (std::size_t i = 0; i < steps; ++i)
     data[i].assign(values.data() + i * floats, values.data() + (i + 1) * floats);
   return std::make_unique<io::MemorySeries>(std::move(geometry), components, std::move(data),
-                                            times_of(times, steps), "numpy array series");
+                                            times_of(times, steps), "numpy array series",
+                                            zero_is_no_data);
 }
 
 py::dict mesh_to_dict(const Mesh& mesh) {

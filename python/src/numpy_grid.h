@@ -27,7 +27,8 @@ std::unique_ptr<io::TimeSeries> series_from_array(const FloatArray& values,
                                                   const pybind11::object& times,
                                                   const pybind11::object& origin,
                                                   const pybind11::object& spacing,
-                                                  const pybind11::object& axes);
+                                                  const pybind11::object& axes,
+                                                  bool zero_is_no_data);
 
 /// {"vertices": (n, 3) float64, "faces": (m, 4) int32 with -1 ending a triangle,
 ///  "attributes": {name: (n,) array}} with every recorded per-vertex attribute.

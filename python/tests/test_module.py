@@ -191,6 +191,24 @@ def test_bad_input_names_what_is_wrong(tmp_path):
         orthofront.streak_surface("unsteady-abc", planar, release="0:1", frames="1")
 
 
+def test_numpy_zeros_are_no_data_as_in_files_unless_told():
+    # u = 1 east where x < 1; zero vectors (a wall) where x >= 1.
+    x = np.linspace(0.0, 2.0, 21)
+    values = np.zeros((11, 21, 2), dtype=np.float32)
+    values[:, x < 1.0, 0] = 1.0
+    grid = dict(origin=(0.0, 0.0), spacing=(0.1, 0.1))
+    inside_wall = "line:1.5,0.2,0:1.5,0.8,0"
+    with pytest.raises(ValueError, match="no data"):
+        orthofront.stream_surface(orthofront.Field(values, **grid), inside_wall)
+    with pytest.raises(ValueError, match="zero velocity"):
+        orthofront.stream_surface(orthofront.Field(values, zero_is_no_data=False, **grid),
+                                  inside_wall)
+    steps = np.stack([values, values])
+    with pytest.raises(ValueError, match="no data"):
+        orthofront.path_surface(orthofront.Series(steps, [0.0, 1.0], **grid), inside_wall,
+                                t0=0, t1=1)
+
+
 def test_save_round_trips(tmp_path):
     values, origin, spacing = helix_grid(9)
     surface = orthofront.stream_surface(orthofront.Field(values, origin=origin, spacing=spacing),

@@ -338,6 +338,35 @@ TEST_CASE("batch: checkpoints of another job or version, or corrupt ones, are re
   CHECK(fs::exists(out / "s.vtp"));
 }
 
+TEST_CASE("batch: a job is not resumed over input data that changed since its checkpoint",
+          "[batch]") {
+  TempDir dir("batch-inputs");
+  const fs::path series = make_series(dir);
+  write_text(dir / "job.toml", "[job]\nfield = " + nlohmann::json(series.string()).dump() +
+                                   "\ncache_budget = \"8MiB\"\n[[surface]]\nname = \"p\"\n"
+                                   "seed = \"line:1.2,0.2,0:1.2,0.8,0\"\nedge = 0.02\n"
+                                   "seed_count = 12\nt0 = 1.0\nt1 = 7.0\n");
+  const fs::path out = dir / "out";
+  const std::string job = "batch " + quoted(dir / "job.toml") + " --out " + quoted(out);
+  REQUIRE(run(job + " --checkpoint-every 0.000001 --quiet --fail-after-steps 20").status == 9);
+  REQUIRE(fs::exists(out / ".checkpoint" / "p.state"));
+  const std::string inputs = read_text(out / ".checkpoint" / "inputs-0.json");
+  CHECK(inputs.find("gyre.h5") != std::string::npos);
+
+  // The series made anew from another flow (same grid and size, other values): refused.
+  REQUIRE(run("generate --field double-gyre:A=0.2 --resolution 64,32 --steps 41 --t1 8 --brick 16 "
+              "--out " +
+              quoted(series) + " --quiet")
+              .status == 0);
+  const auto resumed = run(job + " --resume");
+  INFO(resumed.output);
+  CHECK(resumed.status == 2);
+  CHECK(resumed.output.find("input '" + fs::absolute(series).lexically_normal().string() +
+                            "'") != std::string::npos);
+  CHECK(resumed.output.find("has changed since it was read") != std::string::npos);
+  CHECK_FALSE(fs::exists(out / "p.vtp"));
+}
+
 TEST_CASE("batch: a surface that fails is reported and the others are built", "[batch]") {
   TempDir dir("batch-fail");
   write_text(dir / "job.toml",
@@ -414,6 +443,12 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
               "\"line:0,0,0:1,0,0\"\n[[surface]]\nname = \"a\"\nseed = "
               "\"line:0,0,0:1,0,0\"\n");
   CHECK(m.find("two surfaces are named 'a'") != std::string::npos);
+  // Its report would be the job summary's file.
+  m = refused("summary.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"summary\"\nseed = "
+              "\"line:0,0,0:1,0,0\"\n");
+  CHECK(m.find("summary.toml:") != std::string::npos);
+  CHECK(m.find("the name 'summary' is reserved") != std::string::npos);
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
 }

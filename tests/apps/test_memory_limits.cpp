@@ -1,5 +1,9 @@
 // --memory and the limits derived from it: the vertex cap, path's cache budget, and what a run
 // that reaches the cap says and writes.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -66,6 +70,32 @@ TEST_CASE("memory limits: the vertex cap is half the memory at 300 B a vertex, a
   CHECK(rss <= peak_rss_bytes() + 4096);
   CHECK(format_memory(96 * kMiB) == "96 MiB");
   CHECK(format_memory(3 * 1024 * kMiB / 2) == "1.5 GiB");
+}
+
+TEST_CASE("memory limits: the memory available is bounded by ulimit -v (RLIMIT_AS)",
+          "[apps][memory]") {
+  using namespace orthofront::cli;
+  // In a child: the address space allowed is what it uses now plus 512 MiB.
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    std::size_t used = 0;
+    {
+      std::ifstream status("/proc/self/status");
+      for (std::string line; std::getline(status, line);)
+        if (line.rfind("VmSize:", 0) == 0) used = std::stoull(line.substr(7)) * 1024;
+    }
+    rlimit limit{};
+    limit.rlim_cur = used + 512 * kMiB;
+    limit.rlim_max = RLIM_INFINITY;
+    if (used == 0 || ::setrlimit(RLIMIT_AS, &limit) != 0) ::_exit(2);
+    const std::size_t available = available_memory_bytes();
+    ::_exit(available > 0 && available <= 512 * kMiB ? 0 : 1);
+  }
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
 }
 
 // The shape of the "one-year ocean" job: a path surface in a chaotic flow whose front stretches

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -124,6 +125,8 @@ TEST_CASE("NetCDF: daily CF files on a lon/lat grid read as one series", "[apps]
   CHECK(d.variables == std::vector<std::string>{"uo", "vo"});
   CHECK(d.lonlat);
   CHECK(d.files == 3);
+  CHECK(d.format ==
+        "mixed: NetCDF-3 classic (1 file), NetCDF-3 64-bit offset (1 file), NetCDF-4 (1 file)");
   // Natural order (day2 before day10); times in seconds since the first file's epoch.
   REQUIRE(series->step_count() == 3);
   CHECK(series->time(0) == 27010.0 * 86400);
@@ -535,3 +538,119 @@ TEST_CASE("NetCDF: the model converter takes a 2D product of daily NetCDF-3 file
   CHECK_FALSE(fs::exists(dir / "x.h5"));
 }
 #endif
+
+namespace {
+
+// A 2D step of u, v on dimensions (y, x) with no coordinate variables; `positions` adds 2D
+// longitude and latitude as a curvilinear model grid writes them (named by `coordinates`).
+void write_index_grid(const fs::path& file, const char* velocity_units, bool positions,
+                      bool staggered = false) {
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER, &nc));
+  int dy = 0, dx = 0, dxu = 0, vu = 0, vv = 0, vlon = 0, vlat = 0;
+  ok(nc_def_dim(nc, "y", 4, &dy));
+  ok(nc_def_dim(nc, "x", 5, &dx));
+  ok(nc_def_dim(nc, "x_u", 6, &dxu));
+  const int dims[2] = {dy, dx}, u_dims[2] = {dy, staggered ? dxu : dx};
+  ok(nc_def_var(nc, "u", NC_FLOAT, 2, u_dims, &vu));
+  ok(nc_def_var(nc, "v", NC_FLOAT, 2, dims, &vv));
+  for (const int v : {vu, vv}) {
+    if (velocity_units)
+      ok(nc_put_att_text(nc, v, "units", std::strlen(velocity_units), velocity_units));
+    if (positions) ok(nc_put_att_text(nc, v, "coordinates", 12, "TLONG TLAT  "));
+  }
+  if (positions) {
+    ok(nc_def_var(nc, "TLONG", NC_DOUBLE, 2, dims, &vlon));
+    ok(nc_put_att_text(nc, vlon, "units", 12, "degrees_east"));
+    ok(nc_def_var(nc, "TLAT", NC_DOUBLE, 2, dims, &vlat));
+    ok(nc_put_att_text(nc, vlat, "units", 13, "degrees_north"));
+  }
+  ok(nc_close(nc));
+}
+
+}  // namespace
+
+TEST_CASE("NetCDF: curvilinear grids and staggered grids and index grids in m/s are refused",
+          "[apps][netcdf]") {
+  TempDir dir;
+  namespace io = orthofront::io;
+  io::NetcdfOptions o;
+  o.dt = 1;
+  const auto open = [&](const fs::path& file) { return io::open_netcdf_series({file}, o); };
+
+  write_index_grid(dir / "curvilinear.nc", "cm/s", true);
+  CHECK_THROWS_WITH(open(dir / "curvilinear.nc"),
+                    Catch::Contains("variable 'u' lies on a curvilinear grid") &&
+                        Catch::Contains("'TLONG'(y, x), 'TLAT'(y, x)") &&
+                        Catch::Contains("1D coordinate variables"));
+  // Without the coordinates attribute the usual names still give the grid away.
+  write_index_grid(dir / "unitless.nc", nullptr, true);
+  CHECK_THROWS_WITH(open(dir / "unitless.nc"), Catch::Contains("curvilinear grid"));
+
+  // Index positions and m/s: refused; unitless velocities are cells per second, and read.
+  write_index_grid(dir / "index_ms.nc", "m s-1", false);
+  CHECK_THROWS_WITH(open(dir / "index_ms.nc"),
+                    Catch::Contains("dimension 'y' has no coordinate variable") &&
+                        Catch::Contains("'u' is in m s-1"));
+  write_index_grid(dir / "index.nc", nullptr, false);
+  CHECK(open(dir / "index.nc")->geometry().size[0] == 5);
+  // units= gives the units a file leaves out (and is held to them).
+  CHECK_THROWS_WITH(io::open_netcdf_series({dir / "index.nc"},
+                                           io::parse_netcdf_selector("u,v,dt=1,units=m/s")),
+                    Catch::Contains("'u' is in m/s"));
+  CHECK(io::parse_netcdf_selector("u,v,units=cm/s").velocity_units == "cm/s");
+  CHECK_THROWS_WITH(io::parse_netcdf_selector("u,v,units="), Catch::Contains("units="));
+
+  write_index_grid(dir / "cgrid.nc", nullptr, false, true);
+  CHECK_THROWS_WITH(open(dir / "cgrid.nc"),
+                    Catch::Contains("variable 'v' has dimension 'x' of length 5") &&
+                        Catch::Contains("staggered C grid"));
+}
+
+#ifdef ORTHOFRONT_POP_CONVERT
+TEST_CASE("NetCDF: the POP ocean files are refused as curvilinear naming ULON",
+          "[apps][netcdf][realdata]") {
+  const fs::path pop = fs::path(ORTHOFRONT_DATASETS_DIR) / "pop-southern-ocean";
+  if (!fs::exists(pop)) {
+    WARN("SKIPPED: " << pop << " is absent");
+    return;
+  }
+  const auto r = cli_test::run("info " + quoted(fs::path(
+                                   (pop / "t.x1_SAMOC_flux.169000.nc").string() +
+                                   ":UVEL,VVEL,WVEL,dt=86400")));
+  INFO(r.output);
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Catch::Contains("curvilinear grid") && Catch::Contains("'ULON'") &&
+                           Catch::Contains("orthofront-pop-convert"));
+}
+#endif
+
+TEST_CASE("NetCDF: a header declaring more than the file can hold is refused before allocating",
+          "[apps][netcdf]") {
+  // 1000^3 points of u, v, w (12 GB a step as float) in a NetCDF-4 file of some 40 KB: no data
+  // was ever written.
+  TempDir dir;
+  const fs::path file = dir / "huge.nc";
+  int nc = 0;
+  ok(nc_create(file.c_str(), NC_CLOBBER | NC_NETCDF4, &nc));
+  int dims[3] = {}, ids[3] = {}, axes[3] = {};
+  const char* names[3] = {"z", "y", "x"};
+  for (int a = 0; a < 3; ++a) {
+    ok(nc_def_dim(nc, names[a], 1000, &dims[a]));
+    ok(nc_def_var(nc, names[a], NC_DOUBLE, 1, &dims[a], &axes[a]));
+    ok(nc_put_att_text(nc, axes[a], "units", 1, "m"));
+  }
+  const char* components[3] = {"u", "v", "w"};
+  for (int c = 0; c < 3; ++c) ok(nc_def_var(nc, components[c], NC_FLOAT, 3, dims, &ids[c]));
+  ok(nc_enddef(nc));
+  std::vector<double> coordinate(1000);
+  for (std::size_t i = 0; i < coordinate.size(); ++i) coordinate[i] = static_cast<double>(i);
+  for (int a = 0; a < 3; ++a) ok(nc_put_var_double(nc, axes[a], coordinate.data()));
+  ok(nc_close(nc));
+  REQUIRE(fs::file_size(file) < 1'000'000);
+  const auto r = cli_test::run("info " + quoted(fs::path(file.string() + ":u,v,w,dt=1")));
+  INFO(r.output);
+  CHECK(r.status == 2);
+  CHECK_THAT(r.output, Catch::Contains("declares 1000000000 points per step") &&
+                           Catch::Contains("more than its") && Catch::Contains("huge.nc"));
+}

@@ -156,6 +156,22 @@ TEST_CASE("an empty surface is written with a warning", "[cli][stream]") {
   CHECK(fs::exists(dir / "x.vtp"));
 }
 
+TEST_CASE("a seed along a stream line through a critical point gets a warning", "[cli][stream]") {
+  // The saddle's x axis is a stream line through its critical point: the seed is carried along
+  // itself and every face has no area.
+  const fs::path dir = fresh_dir("stream-degenerate");
+  const Outcome o = run("stream --field saddle --seed line:-1,0,0:1,0,0 --steps 20 --out " +
+                        (dir / "x.vtp").string());
+  INFO(o.output);
+  CHECK(o.status == 0);
+  CHECK(o.output.find("warning: 43 of 43 faces are degenerate (no area)") != std::string::npos);
+  // Across the flow: no warning.
+  const Outcome across = run("stream --field saddle --seed line:-1,1,0:1,1,0 --steps 20 --out " +
+                             (dir / "y.vtp").string());
+  CHECK(across.status == 0);
+  CHECK(across.output.find("degenerate (no area)") == std::string::npos);
+}
+
 TEST_CASE("two runs writing the same mesh and report leave a matching pair", "[cli][stream]") {
   const fs::path dir = fresh_dir("stream-race");
   const std::string mesh = (dir / "s.vtp").string(), report = (dir / "s.json").string();

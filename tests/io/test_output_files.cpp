@@ -11,6 +11,8 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/input_files.h"
 #include "orthofront/io/mesh_series.h"
+#include "orthofront/io/open_field.h"
+#include "orthofront/io/readable_file.h"
 #include "orthofront/mesh/mesh.h"
 #include "temp_dir.h"
 
@@ -105,4 +107,30 @@ TEST_CASE("a collection has one writer: a second is refused while the first writ
   orthofront::io::MeshSeriesWriter again(pvd);
   again.add_frame(mesh, 1);
   CHECK(again.frames() == 1);
+}
+
+TEST_CASE("inputs that are not files are named for what they are", "[io][input]") {
+  const TempDir dir("input-kinds");
+  using orthofront::io::why_unreadable;
+  fs::create_directories(dir / "folder.nc");
+  fs::create_symlink(dir / "loop.vdb", dir / "loop.vdb");
+  fs::create_symlink(dir / "nowhere.h5", dir / "dangling.h5");
+  REQUIRE(::mkfifo((dir / "fifo.vti").c_str(), 0600) == 0);
+  write_text(dir / "plain.vec", "x");
+  CHECK(why_unreadable(dir / "folder.nc") == "it is a directory");
+  CHECK(why_unreadable(dir / "loop.vdb") == "a loop of symbolic links");
+  CHECK(why_unreadable(dir / "dangling.h5") == "a dangling symbolic link");
+  CHECK(why_unreadable(dir / "fifo.vti") == "not a regular file (a device, a FIFO or a socket)");
+  CHECK(why_unreadable(dir / "none.nrrd") == "no such file");
+  CHECK(why_unreadable(dir / "plain.vec").empty());
+  // Every reader says so, naming the file.
+  for (const auto& [name, reason] :
+       {std::pair<const char*, const char*>{"folder.nc", "it is a directory"},
+        {"loop.vdb", "a loop of symbolic links"},
+        {"dangling.h5", "a dangling symbolic link"},
+        {"fifo.vti", "not a regular file"}}) {
+    INFO(name);
+    CHECK_THROWS_WITH(orthofront::io::open_field((dir / name).string()),
+                      Catch::Contains((dir / name).string()) && Catch::Contains(reason));
+  }
 }

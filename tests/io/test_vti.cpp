@@ -194,6 +194,32 @@ TEST_CASE("vti: choosing the array and 2D images", "[vti]") {
                  Contains("velocity (2 components)"));
 }
 
+TEST_CASE("vti: points ParaView marks invalid (vtkValidPointMask = 0) are no data", "[vti]") {
+  // As ResampleToImage writes a slice: one z plane of spacing 0, Int8 mask, values where the mask
+  // is 0 that are not zero.
+  TempDir dir("vti");
+  write_file(dir / "masked.vti",
+             "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+             "<ImageData WholeExtent=\"0 2 0 1 0 0\" Origin=\"0 0 0\" Spacing=\"1 1 0\">\n"
+             "<Piece Extent=\"0 2 0 1 0 0\"><PointData Vectors=\"U\">\n"
+             "<DataArray type=\"Float32\" Name=\"U\" NumberOfComponents=\"2\" "
+             "format=\"ascii\">1 0 2 0 3 0 4 0 5 0 6 0</DataArray>\n"
+             "<DataArray type=\"Int8\" Name=\"vtkValidPointMask\" format=\"ascii\">1 1 0 1 0 1"
+             "</DataArray>\n</PointData></Piece></ImageData></VTKFile>\n");
+  const VectorGrid grid = read_vti(dir / "masked.vti");
+  REQUIRE(grid.values.size() == 12);
+  for (std::size_t p = 0; p < 6; ++p) {
+    INFO("point " << p);
+    if (p == 2 || p == 4) {
+      CHECK(std::isnan(grid.values[2 * p]));
+      CHECK(std::isnan(grid.values[2 * p + 1]));
+    } else {
+      CHECK(grid.values[2 * p] == static_cast<float>(p + 1));
+      CHECK(grid.values[2 * p + 1] == 0.0f);
+    }
+  }
+}
+
 TEST_CASE("vti: bad files are rejected naming the file and the value", "[vti]") {
   TempDir dir("vti");
   const VectorGrid grid = sample_grid(5, 4, 3);

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -167,6 +168,7 @@ void read_in_child(const std::string& file, const std::string& format,
   const std::size_t mapped = mapped_bytes();
   // Buffered output would otherwise be written twice, once by the child.
   std::fflush(nullptr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(fds[0]);
@@ -174,6 +176,10 @@ void read_in_child(const std::string& file, const std::string& format,
     throw IoError("cannot read " + file + ": fork: " + std::strerror(errno));
   }
   if (pid == 0) {
+    // The child dies with the thread that forked it (the parent killed, say), instead of
+    // reading on for up to its time limit; a parent gone before this line is seen too.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(3);
     ::close(fds[0]);
     run_child(fds[1], read, limits, mapped);
   }

@@ -91,7 +91,8 @@ DataFile open_netcdf(const DataFileSpec& spec) {
   file.details.emplace_back("variables", vars + " (" + d.found_by + ")");
   file.details.emplace_back("coordinates", d.coordinates);
   file.details.emplace_back("time", d.time);
-  file.details.emplace_back("velocity units", d.velocity_units.empty() ? "-" : d.velocity_units);
+  file.details.emplace_back("velocity units", (d.velocity_units.empty() ? "-" : d.velocity_units) +
+                                                 std::string(d.velocity_units_given ? " (given by units=)" : ""));
   if (d.lonlat) file.details.emplace_back("lon/lat", d.metric_note);
   file.details.emplace_back("no data", d.fill);
 #endif

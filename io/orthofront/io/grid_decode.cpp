@@ -10,16 +10,14 @@
 
 #include "orthofront/io/error.h"
 #include "orthofront/io/input_files.h"
+#include "orthofront/io/readable_file.h"
 
 namespace orthofront::io::detail {
 
 std::string read_file_bytes(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw IoError("cannot read " + path.string() + ": it is a directory");
   // A device or pipe (/dev/zero, a FIFO) has no end: reading it would allocate without bound.
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
-    throw IoError("cannot read " + path.string() + ": not a regular file");
+  if (const std::string why = why_unreadable(path); !why.empty())
+    throw IoError("cannot read " + path.string() + ": " + why);
   note_input(path);
   errno = 0;
   std::ifstream in(path, std::ios::binary);
@@ -28,6 +26,7 @@ std::string read_file_bytes(const std::filesystem::path& path) {
                   std::generic_category().message(errno != 0 ? errno : EIO));
   }
   std::string data;
+  std::error_code ec;
   if (const auto size = std::filesystem::file_size(path, ec); !ec) {
     data.resize(static_cast<std::size_t>(size));
     in.read(data.data(), static_cast<std::streamsize>(size));

@@ -44,12 +44,13 @@ bool same_geometry(const GridGeometry& a, const GridGeometry& b) {
 
 MemorySeries::MemorySeries(GridGeometry geometry, int components,
                            std::vector<std::vector<float>> steps, std::vector<double> times,
-                           std::string description)
+                           std::string description, bool zero_is_no_data)
     : geometry_(std::move(geometry)),
       components_(components),
       steps_(std::move(steps)),
       times_(std::move(times)),
-      description_(std::move(description)) {
+      description_(std::move(description)),
+      zero_is_no_data_(zero_is_no_data) {
   if (steps_.empty()) throw InvalidArgument(description_ + ": a time series needs a step");
   if (times_.size() != steps_.size())
     throw InvalidArgument(description_ + ": " + std::to_string(steps_.size()) + " steps but " +

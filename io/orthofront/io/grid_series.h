@@ -43,7 +43,8 @@ class MemorySeries final : public TimeSeries {
   /// `steps[i]` holds geometry.point_count() * components floats at `times[i]`. Throws
   /// InvalidArgument for no step, a step of another size, or times that do not increase.
   MemorySeries(GridGeometry geometry, int components, std::vector<std::vector<float>> steps,
-               std::vector<double> times, std::string description);
+               std::vector<double> times, std::string description, bool zero_is_no_data = false);
+  bool zero_is_no_data() const override { return zero_is_no_data_; }
   std::size_t step_count() const override { return steps_.size(); }
   double time(std::size_t step) const override { return times_.at(step); }
   const GridGeometry& geometry() const override { return geometry_; }
@@ -62,6 +63,7 @@ class MemorySeries final : public TimeSeries {
   std::vector<std::vector<float>> steps_;
   std::vector<double> times_;
   std::string description_;
+  bool zero_is_no_data_;
 };
 
 /// One file per step. The first file is read when the series is opened (geometry and component

@@ -21,6 +21,7 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/hdf5_detail.h"
 #include "orthofront/io/input_files.h"
+#include "orthofront/io/readable_file.h"
 
 namespace orthofront::io {
 
@@ -118,11 +119,8 @@ struct Hdf5TimeSeries::Impl {
     detail::silence_hdf5();
     detail::register_blosc_filter();
     d.file = path;
-    std::error_code error;
-    if (!std::filesystem::exists(path, error))
-      throw IoError("cannot open " + path.string() + ": no such file");
-    if (std::filesystem::is_directory(path, error))
-      throw IoError("cannot open " + path.string() + ": it is a directory");
+    if (const std::string why = why_unreadable(path); !why.empty())
+      throw IoError("cannot open " + path.string() + ": " + why);
     if (H5Fis_hdf5(path.c_str()) <= 0)
       throw FormatError(path.string() + " is not an HDF5 file (or cannot be read)");
     if (!vetting_child) vet_hdf5_file(path, group_path, read_options);

@@ -51,6 +51,14 @@ void note_input(const std::filesystem::path& path) {
   r.files.push_back({s.st_dev, s.st_ino, path});
 }
 
+std::vector<std::filesystem::path> noted_inputs() {
+  Inputs& r = inputs();
+  const std::lock_guard<std::mutex> hold(r.mutex);
+  std::vector<std::filesystem::path> paths;
+  for (const Input& i : r.files) paths.push_back(i.path);
+  return paths;
+}
+
 std::optional<std::filesystem::path> input_named_by(const std::filesystem::path& path) {
   struct stat s {};
   if (::stat(path.c_str(), &s) != 0) return std::nullopt;

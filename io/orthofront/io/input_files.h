@@ -5,6 +5,7 @@
 /// program may read a file and later write it anew).
 #include <filesystem>
 #include <optional>
+#include <vector>
 
 namespace orthofront::io {
 
@@ -20,6 +21,10 @@ class InputScope {
 
 /// Notes `path` (an existing file being read) as an input of the open job, if there is one.
 void note_input(const std::filesystem::path& path);
+
+/// Every input noted in the open job so far, by the name it was first read under (empty outside
+/// any scope).
+std::vector<std::filesystem::path> noted_inputs();
 
 /// The noted input that `path` names (the same file, by any name or link), or nothing.
 std::optional<std::filesystem::path> input_named_by(const std::filesystem::path& path);

@@ -10,10 +10,12 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <sstream>
 
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_series.h"
 #include "orthofront/io/input_files.h"
+#include "orthofront/io/readable_file.h"
 
 namespace orthofront::io {
 
@@ -46,9 +48,8 @@ std::string number(double value) {
 class NcFile {
  public:
   explicit NcFile(const std::filesystem::path& path) : path_(path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-      throw IoError("cannot open '" + path.string() + "': no such file");
+    if (const std::string why = why_unreadable(path); !why.empty())
+      throw IoError("cannot open '" + path.string() + "': " + why);
     const int status = nc_open(path.c_str(), NC_NOWRITE, &id_);
     if (status != NC_NOERR)
       throw FormatError("cannot read '" + path.string() + "' as NetCDF: " + nc_strerror(status));
@@ -422,6 +423,60 @@ bool is_latitude(const Axis& a) {
          ((n == "lat" || n == "latitude" || n == "nav_lat") && u.rfind("degree", 0) == 0);
 }
 
+// Variables that place a grid's points on the Earth: named by the velocity's CF `coordinates`
+// attribute, or by a longitude/latitude standard name, units or a usual name (POP's ULONG,
+// NEMO's nav_lon, ROMS's lon_rho, WRF's XLONG, ...).
+bool names_position(const NcFile& f, int v, const std::vector<std::string>& listed) {
+  const std::string name = f.variable_name(v);
+  if (std::find(listed.begin(), listed.end(), name) != listed.end()) return true;
+  const std::string sn = f.text(v, "standard_name"), u = lower(f.units(v)), n = lower(name);
+  if (sn == "longitude" || sn == "latitude" || sn == "grid_longitude" || sn == "grid_latitude")
+    return true;
+  if (u == "degrees_east" || u == "degree_east" || u == "degrees_north" || u == "degree_north")
+    return true;
+  for (const char* usual : {"lon", "lat", "longitude", "latitude", "nav_lon", "nav_lat", "ulon",
+                            "ulat", "tlon", "tlat", "ulong", "tlong", "glamt", "gphit", "xlong",
+                            "xlat", "lon_rho", "lat_rho", "lon_u", "lat_u", "lon_v", "lat_v",
+                            "geolon", "geolat"})
+    if (n == usual) return true;
+  return false;
+}
+
+// A curvilinear grid (2D longitude and latitude, as ocean and atmosphere models write them) read
+// by index would integrate m/s as cells per second: it is refused, naming the variables.
+void refuse_curvilinear(const NcFile& f, int velocity, const std::vector<std::string>& spatial) {
+  std::vector<std::string> listed;
+  {
+    std::istringstream words(f.text(velocity, "coordinates"));
+    for (std::string w; words >> w;) listed.push_back(w);
+  }
+  std::string found;
+  int count = 0;
+  for (const std::string& name : f.variable_names()) {
+    const int v = *f.variable(name);
+    if (v == velocity || !names_position(f, v, listed)) continue;
+    std::vector<std::string> dims;
+    std::size_t shared = 0;
+    for (const int d : f.dimensions(v)) {
+      dims.push_back(f.dimension_name(d));
+      if (std::find(spatial.begin(), spatial.end(), dims.back()) != spatial.end()) ++shared;
+    }
+    if (shared < 2) continue;  // a 1D coordinate, or a variable of another grid
+    std::string list;
+    for (const std::string& d : dims) list += (list.empty() ? "" : ", ") + d;
+    found += (found.empty() ? "'" : ", '") + name + "'(" + list + ")";
+    ++count;
+  }
+  if (count == 0) return;
+  throw FormatError(
+      "'" + f.path().string() + "': variable '" + f.variable_name(velocity) +
+      "' lies on a curvilinear grid: its points are placed by " + found +
+      ", not by one coordinate per axis. orthofront reads NetCDF grids whose axes are 1D "
+      "coordinate variables (uniform or rectilinear, in metres or longitude/latitude); read by "
+      "index, its velocities would be taken as cells per second. Resample it onto a rectilinear "
+      "grid first (POP output: datasets-scripts' orthofront-pop-convert)");
+}
+
 // Everything one file contributes: its steps and where each component lives.
 struct FileLayout {
   std::filesystem::path path;
@@ -478,9 +533,17 @@ NetcdfSeries::NetcdfSeries(const std::vector<std::filesystem::path>& files,
   if (files.empty()) throw InvalidArgument("a NetCDF series needs at least one file");
   if (!(options.earth_radius > 0 && std::isfinite(options.earth_radius)))
     throw InvalidArgument("NetCDF: radius must be > 0 metres, got " + number(options.earth_radius));
+  std::vector<std::pair<std::string, std::size_t>> formats;  // each format and its file count
   for (std::size_t i = 0; i < files.size(); ++i) {
     const NcFile f(files[i]);
     if (i == 0) open_first(f);
+    const std::string format = f.format();
+    auto known = std::find_if(formats.begin(), formats.end(),
+                              [&](const auto& entry) { return entry.first == format; });
+    if (known == formats.end())
+      formats.emplace_back(format, 1);
+    else
+      ++known->second;
     FileLayout layout;
     layout.path = files[i];
     // The same variables on the same grid in every file.
@@ -506,7 +569,11 @@ NetcdfSeries::NetcdfSeries(const std::vector<std::filesystem::path>& files,
                             (spatial < axes_.size()
                                  ? "'" + axes_[spatial].dimension + "' of length " +
                                        std::to_string(axes_[spatial].length)
-                                 : std::string("no further dimension")));
+                                 : std::string("no further dimension")) +
+                            (c > 0 ? " (its components lie on different grids, as on a "
+                                     "staggered C grid; orthofront reads components that "
+                                     "share one grid: interpolate them onto it first)"
+                                   : ""));
         ++spatial;
       }
       if (spatial != axes_.size())
@@ -516,6 +583,12 @@ NetcdfSeries::NetcdfSeries(const std::vector<std::filesystem::path>& files,
     }
     read_times(f, layout, i == 0);
     files_.push_back(std::move(layout));
+  }
+  if (formats.size() > 1) {
+    description_.format = "mixed:";
+    for (const auto& [format, count] : formats)
+      description_.format += (format == formats.front().first ? " " : ", ") + format + " (" +
+                             std::to_string(count) + (count == 1 ? " file)" : " files)");
   }
   for (const FileLayout& l : files_) {
     first_step_.push_back(times_.size());
@@ -633,6 +706,27 @@ void NetcdfSeries::open_first(const NcFile& f) {
     }
     axes_.push_back(std::move(a));
   }
+  {
+    std::vector<std::string> spatial;
+    for (const Axis& a : axes_) spatial.push_back(a.dimension);
+    const bool lonlat_axes = axes_.size() >= 2 && is_longitude(axes_.back()) &&
+                             is_latitude(axes_[axes_.size() - 2]);
+    // 2D longitude and latitude beside 1D lon/lat axes repeat them; beside anything else they
+    // are the grid.
+    if (!lonlat_axes) refuse_curvilinear(f, vars[0], spatial);
+    // Index positions with velocities in m/s would be read as cells per second.
+    const std::string velocity_units =
+        options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
+    for (const Axis& a : axes_)
+      if (a.from_index && speed_unit(velocity_units))
+        throw FormatError("'" + f.path().string() + "': dimension '" + a.dimension +
+                          "' has no coordinate variable, so its points are at index 0, 1, ..., "
+                          "but '" + variables_[0] + "' is in " + velocity_units +
+                          ": read so, it would move in cells per second. Add a coordinate "
+                          "variable '" + a.dimension + "(" + a.dimension +
+                          ")' in metres or degrees (or give the velocities in cells per second "
+                          "without units)");
+  }
   if (axes_.size() < 2 || axes_.size() > 3)
     throw FormatError("'" + f.path().string() + "': variable '" + variables_[0] + "' has " +
                       std::to_string(axes_.size()) +
@@ -666,8 +760,31 @@ void NetcdfSeries::open_first(const NcFile& f) {
     }
   }
   source_points_ = points;
+  // A header may declare far more values than the file holds (a damaged or hostile file):
+  // before anything is allocated, the components of one step must fit in the file, compressed
+  // by deflate at most (it expands at most ~1,032 times).
+  {
+    std::uint64_t declared = 0;
+    for (const int v : vars) {
+      std::size_t size = 0;
+      f.check(nc_inq_type(f.id(), f.type(v), nullptr, &size), "type of " + f.variable_name(v));
+      declared += points * size;
+    }
+    std::error_code ec;
+    const std::uint64_t file_bytes = std::filesystem::file_size(f.path(), ec);
+    constexpr std::uint64_t kDeflateExpansion = 1032, kSlack = 1u << 20;
+    if (!ec && declared > kDeflateExpansion * file_bytes + kSlack)
+      throw FormatError("'" + f.path().string() + "': its header declares " +
+                        std::to_string(points) + " points per step for each of " +
+                        std::to_string(vars.size()) + " components (" +
+                        std::to_string(declared >> 20) + " MiB a step), more than its " +
+                        std::to_string(file_bytes) +
+                        " bytes can hold even compressed; a damaged header? Not read");
+  }
   for (const int v : vars) rules_.push_back(no_data_rules(f, v));
-  description_.velocity_units = f.units(vars[0]);
+  description_.velocity_units =
+      options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
+  description_.velocity_units_given = !options_.velocity_units.empty();
 
   // The output grid: x fastest (the file's last dimension).
   const std::size_t d = axes_.size();
@@ -697,7 +814,8 @@ void NetcdfSeries::open_first(const NcFile& f) {
     if (!factor)
       throw FormatError("'" + f.path().string() + "': variable '" + variables_[0] +
                         "' has units '" + description_.velocity_units +
-                        "' on a lon/lat grid; only m/s and cm/s can be related to degrees");
+                        "' on a lon/lat grid; only m/s and cm/s can be related to degrees (if the file "
+                        "does not say, give them: FILE.nc:...,units=m/s)");
     velocity_factor_ = *factor;
     latitude_ = ay.coordinates;
     const std::vector<double>& lon = ax.coordinates;
@@ -956,7 +1074,11 @@ NetcdfOptions parse_netcdf_selector(const std::string& selector) {
                                 " must be a number > 0");
         return x;
       };
-      if (key == "lonlat") {
+      if (key == "units") {
+        if (value.empty())
+          throw InvalidArgument("NetCDF selector: units= needs the velocities' units (m/s, cm/s)");
+        o.velocity_units = value;
+      } else if (key == "lonlat") {
         if (value == "degrees")
           o.lonlat = LonLatMetric::degrees;
         else if (value == "metres" || value == "meters")
@@ -970,7 +1092,7 @@ NetcdfOptions parse_netcdf_selector(const std::string& selector) {
         o.earth_radius = positive("radius (metres)");
       } else {
         throw InvalidArgument("NetCDF selector: unknown key '" + key +
-                              "' (known: lonlat, dt, radius; other items name variables)");
+                              "' (known: lonlat, dt, radius, units; other items name variables)");
       }
     }
     if (end == std::string::npos) break;

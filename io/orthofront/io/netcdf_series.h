@@ -36,9 +36,12 @@ struct NetcdfOptions {
   double earth_radius = 6371000.0;  ///< metres (IUGG mean radius)
   /// Seconds between steps for files without a CF time coordinate (0: such files are refused).
   double dt = 0;
+  /// Units of the velocity components, replacing what the files say (or do not say).
+  std::string velocity_units;
 };
 
-/// Parses a selector "u,v[,w][,lonlat=degrees|metres][,dt=SECONDS][,radius=METRES]" (the part of
+/// Parses a selector "u,v[,w][,lonlat=degrees|metres][,dt=SECONDS][,radius=METRES][,units=U]"
+/// (the part of
 /// FILE.nc:SELECTOR after the colon). Throws InvalidArgument naming a bad item.
 NetcdfOptions parse_netcdf_selector(const std::string& selector);
 
@@ -47,7 +50,8 @@ struct NetcdfDescription {
   std::string format;                  ///< "NetCDF-3 classic", "NetCDF-4", ...
   std::vector<std::string> variables;  ///< the components read
   std::string found_by;                ///< "named", "CF standard_name" or "variable names"
-  std::string velocity_units;          ///< as the file states them
+  std::string velocity_units;          ///< as the file states them, or as the selector gives
+  bool velocity_units_given = false;   ///< from the selector's units=
   std::string time;                    ///< "seconds since 1950-01-01 00:00:00 (calendar noleap)"
   std::string coordinates;             ///< axes, their names, units and kind
   bool lonlat = false;

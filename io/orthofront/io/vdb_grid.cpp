@@ -22,6 +22,7 @@
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_decode.h"
 #include "orthofront/io/input_files.h"
+#include "orthofront/io/readable_file.h"
 #include "orthofront/io/vdb_detail.h"
 #include "orthofront/io/vdb_module.h"
 
@@ -309,11 +310,8 @@ LoadedVdbGrid select_vdb_grid(const openvdb::GridPtrVec& grids, const std::strin
 
 openvdb::GridPtrVecPtr read_vdb_file(const std::filesystem::path& path) {
   module::initialize_openvdb();
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe || std::filesystem::is_directory(path))
-      throw IoError("cannot read " + path.string() + ": no such file or not readable");
-  }
+  if (const std::string why = why_unreadable(path); !why.empty())
+    throw IoError("cannot read " + path.string() + ": " + why);
   note_input(path);
   vet_vdb_file(path, path.string());
   try {
@@ -356,11 +354,8 @@ openvdb::GridPtrVecPtr read_vdb_stream(std::istream& in, const std::string& file
 LoadedVdbGrid load_vdb_grid(const std::filesystem::path& path, const std::string& selector,
                             const std::string& where) {
   module::initialize_openvdb();
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe || std::filesystem::is_directory(path))
-      throw IoError("cannot read " + path.string() + ": no such file or not readable");
-  }
+  if (const std::string why = why_unreadable(path); !why.empty())
+    throw IoError("cannot read " + path.string() + ": " + why);
   note_input(path);
   vet_vdb_file(path, where);
   openvdb::GridPtrVec chosen;
@@ -532,11 +527,8 @@ namespace module {
 
 std::vector<VdbGridInfo> list_vdb_grids(const std::filesystem::path& path) {
   initialize_openvdb();
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe || std::filesystem::is_directory(path))
-      throw IoError("cannot read " + path.string() + ": no such file or not readable");
-  }
+  if (const std::string why = why_unreadable(path); !why.empty())
+    throw IoError("cannot read " + path.string() + ": " + why);
   detail::vet_vdb_file(path, path.string());
   openvdb::GridPtrVecPtr grids;
   try {

@@ -98,7 +98,18 @@ class VtiParser {
         }
       }
       const std::size_t tuples = static_cast<std::size_t>(n[0] * n[1] * n[2]);
-      const std::vector<float> values = decode(*ref, what, tuples * nc);
+      std::vector<float> values = decode(*ref, what, tuples * nc);
+      // ParaView's resampling (ResampleToImage, ResampleWithDataset) marks the points that lie
+      // outside the mesh it sampled with vtkValidPointMask = 0, and writes zeros there: no data.
+      if (const ArrayRef* mask = find(piece, "vtkValidPointMask"); mask && mask != ref) {
+        const std::string mask_what = "piece " + std::to_string(p) + " point data '" + mask->name + "'";
+        if (mask->components != 1) throw error(mask_what + " has " + std::to_string(mask->components) + " components, not 1");
+        const std::vector<float> valid = decode(*mask, mask_what, tuples);
+        for (std::size_t t = 0; t < tuples; ++t)
+          if (valid[t] == 0.0f)
+            for (std::size_t c = 0; c < nc; ++c)
+              values[t * nc + c] = std::numeric_limits<float>::quiet_NaN();
+      }
       std::size_t at = 0;
       for (std::int64_t k = 0; k < n[2]; ++k) {
         for (std::int64_t j = 0; j < n[1]; ++j) {
