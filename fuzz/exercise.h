@@ -10,9 +10,10 @@
 namespace orthofront::fuzz {
 
 /// The fuzz targets by name ("grid_nrrd", "hdf5", "parse_seed", ...).
-const char* const kTargets[] = {"grid_vec",  "grid_am",   "grid_nrrd", "grid_vti",    "grid_vtk",
-                                "grid_vdb",  "vdb_file",  "hdf5",      "mesh_vtp",    "mesh_ply",
-                                "mesh_obj",  "parse_seed", "parse_field", "parse_bytes"};
+const char* const kTargets[] = {"grid_vec",  "grid_am",    "grid_nrrd",   "grid_nhdr",   "grid_vti",
+                                "grid_vtk",  "grid_vdb",   "vdb_file",    "hdf5",        "netcdf",
+                                "pvd",       "mesh_vtp",   "mesh_ply",    "mesh_obj",    "parse_seed",
+                                "parse_field", "parse_bytes", "job_file", "checkpoint"};
 
 /// Runs target `target` on `input`. Returns false when the reader returned something
 /// inconsistent (values missing from a grid, a face naming a vertex that does not exist).

@@ -9,7 +9,7 @@ bin="${ORTHOFRONT:-$here/../build/apps/orthofront}"
 [ -x "$bin" ] || { echo "make_corpus.sh: no orthofront binary at $bin (set ORTHOFRONT)" >&2; exit 2; }
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-mkdir -p "$out"/{grid_vec,grid_am,grid_nrrd,grid_vti,grid_vtk,grid_vdb,vdb_file,hdf5,mesh_vtp,mesh_ply,mesh_obj,parse_seed,parse_field,parse_bytes}
+mkdir -p "$out"/{grid_vec,grid_am,grid_nrrd,grid_nhdr,grid_vti,grid_vtk,grid_vdb,vdb_file,hdf5,netcdf,pvd,mesh_vtp,mesh_ply,mesh_obj,parse_seed,parse_field,parse_bytes,job_file,checkpoint}
 
 python3 - "$work" <<'PY'
 import struct, sys, zlib, base64, os
@@ -57,12 +57,66 @@ def vti(encoding):
             f'</ImageData>\n</VTKFile>\n')
 for e in ('ascii', 'binary', 'zlib'):
     open(f'{w}/{e}.vti', 'w').write(vti(e))
+
+# A detached NRRD header, a NUL, then its data file's bytes (the grid_nhdr target splits them).
+open(f'{w}/a.nhdr', 'wb').write(hdr.replace(b'NRRD0004', b'NRRD0004') +
+                                 b'endian: little\nencoding: raw\ndata file: data.raw\n\0' + le)
+
+# A classic NetCDF-3 file (the format is plain big-endian records): x(x), y(y), time(time) with
+# units, and u, v of (time, y, x); one step.
+def nc_name(n):
+    b = n.encode()
+    return struct.pack('>i', len(b)) + b + b'\0' * (-len(b) % 4)
+def nc_text_att(name, text):
+    b = text.encode()
+    return nc_name(name) + struct.pack('>ii', 2, len(b)) + b + b'\0' * (-len(b) % 4)
+dims = [('time', 0), ('y', ny), ('x', nx)]  # time: the record dimension
+variables = [('time', [0], [('units', 'days since 2000-01-01')], 6),
+             ('y', [1], [('units', 'm')], 6), ('x', [2], [('units', 'm')], 6),
+             ('u', [0, 1, 2], [('units', 'm s-1')], 5), ('v', [0, 1, 2], [('units', 'm s-1')], 5)]
+def header(begins):
+    h = b'CDF\x01' + struct.pack('>i', 1)
+    h += struct.pack('>ii', 10, len(dims)) + b''.join(nc_name(n) + struct.pack('>i', l) for n, l in dims)
+    h += struct.pack('>ii', 0, 0)
+    h += struct.pack('>ii', 11, len(variables))
+    for (name, ids, atts, kind), begin in zip(variables, begins):
+        size = (8 if kind == 6 else 4) * (1 if ids == [0] else nx * ny if ids[0] == 0 else dict(dims)[name])
+        h += nc_name(name) + struct.pack('>i', len(ids)) + b''.join(struct.pack('>i', i) for i in ids)
+        h += struct.pack('>ii', 12, len(atts)) + b''.join(nc_text_att(a, t) for a, t in atts)
+        h += struct.pack('>iii', kind, size, begin)
+    return h
+fixed = {'y': struct.pack('>%dd' % ny, *range(ny)), 'x': struct.pack('>%dd' % nx, *range(nx))}
+record = {'time': struct.pack('>d', 0.0), 'u': struct.pack('>%df' % (nx * ny), *([1.0] * nx * ny)),
+          'v': struct.pack('>%df' % (nx * ny), *([0.5] * nx * ny))}
+length = len(header([0] * len(variables)))
+at = length
+order = [v[0] for v in variables]
+offsets = {}
+for name in ('y', 'x'):
+    offsets[name] = at
+    at += len(fixed[name])
+for name in ('time', 'u', 'v'):
+    offsets[name] = at
+    at += len(record[name])
+data = header([offsets[n] for n in order])
+assert len(data) == length
+data += fixed['y'] + fixed['x'] + record['time'] + record['u'] + record['v']
+open(f'{w}/a.nc', 'wb').write(data)
+
+# A ParaView collection of the two steps the pvd target puts beside it.
+open(f'{w}/a.pvd', 'w').write(
+    '<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0">\n<Collection>\n'
+    '<DataSet timestep="0" part="0" file="a.vti"/>\n<DataSet timestep="1.5" file="b.vti"/>\n'
+    '</Collection>\n</VTKFile>\n')
 PY
 cp "$work/a.vec" "$out/grid_vec/"
 cp "$work/a.am" "$out/grid_am/"
 cp "$work"/*.nrrd "$out/grid_nrrd/"
 cp "$work"/*.vtk "$out/grid_vtk/"
 cp "$work"/*.vti "$out/grid_vti/"
+cp "$work/a.nhdr" "$out/grid_nhdr/"
+cp "$work/a.nc" "$out/netcdf/"
+cp "$work/a.pvd" "$out/pvd/"
 
 # OpenVDB and HDF5 files from the project's writers.
 "$bin" convert "$work/raw.nrrd" --out "$out/grid_vdb/a.vdb" --quiet
@@ -85,6 +139,37 @@ for ext in vtp ply obj; do
   "$bin" stream --field saddle --seed line:-0.5,0.5,0:0.5,0.5,0 --seed-count 4 --steps 4 \
     --out "$work/m.$ext" >/dev/null
   cp "$work/m.$ext" "$out/mesh_$ext/"
+done
+
+# Job files, and a checkpoint state of one (its payload: the magic and CRC-32 are the target's).
+cat >"$work/job.toml" <<'TOML'
+[job]
+field = "double-gyre"
+[defaults]
+edge = 0.05
+seed_count = 8
+[[surface]]
+name = "s"
+kind = "stream"
+field = "saddle3d"
+seed = "line:-3,1,1:-3,1,3"
+steps = 400
+[[rake]]
+name = "r"
+seed = "line:0.2,0.2,0:0.2,0.8,0"
+offset = [0.3, 0.0]
+count = 2
+t1 = 2.0
+TOML
+cp "$work/job.toml" "$out/job_file/"
+printf '%s\n' '{"job": {"field": "saddle3d"}, "surface": [{"name": "a", "kind": "stream", "seed": "line:-3,1,1:-3,1,3", "steps": 40}]}' >"$out/job_file/job.json"
+"$bin" batch "$work/job.toml" --out "$work/batch" --checkpoint-every 0.000001 --fail-after-steps 5 \
+  --quiet >/dev/null 2>&1 || true
+for state in "$work"/batch/.checkpoint/*.state; do
+  [ -f "$state" ] || continue
+  magic=22  # "orthofront-checkpoint\n"
+  size=$(stat -c %s "$state")
+  tail -c +$((magic + 1)) "$state" | head -c $((size - magic - 4)) >"$out/checkpoint/$(basename "$state")"
 done
 
 # Text syntaxes.

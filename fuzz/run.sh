@@ -12,8 +12,8 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
-all=(grid_vec grid_am grid_nrrd grid_vti grid_vtk grid_vdb vdb_file hdf5 mesh_vtp mesh_ply mesh_obj
-     parse_seed parse_field parse_bytes)
+all=(grid_vec grid_am grid_nrrd grid_nhdr grid_vti grid_vtk grid_vdb vdb_file hdf5 netcdf pvd
+     mesh_vtp mesh_ply mesh_obj parse_seed parse_field parse_bytes job_file checkpoint)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 build="$root/build-fuzz"

@@ -1,5 +1,6 @@
 // `orthofront generate`: samples an analytic field (steady, or unsteady as a time series) onto a
 // uniform grid and writes the project's HDF5 layout, streaming a series step by step.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -76,6 +77,22 @@ void run_generate(const GenerateArgs& args) {
   SampleOptions sampling;
   sampling.resolution = parse_resolution(args.resolution);
   if (!args.box.empty()) sampling.box = parse_box(args.box);
+  // One step is sampled in memory: a resolution whose step cannot fit is refused before anything
+  // is allocated (or written), naming the sizes.
+  {
+    double step_bytes = 3.0 * sizeof(float);
+    for (const std::int64_t n : sampling.resolution) step_bytes *= static_cast<double>(std::max<std::int64_t>(n, 1));
+    const std::size_t available = available_memory_bytes();
+    if (available > 0 && step_bytes > 0.5 * static_cast<double>(available))
+      throw InvalidArgument("--resolution " + args.resolution + ": one step of " +
+                            std::to_string(sampling.resolution[0]) + " x " +
+                            std::to_string(sampling.resolution[1]) + " x " +
+                            std::to_string(sampling.resolution[2]) + " points needs " +
+                            format_memory(step_bytes >= 0x1p62 ? std::size_t{1} << 62
+                                                               : static_cast<std::size_t>(step_bytes)) +
+                            " in memory, more than half of the " + format_memory(available) +
+                            " available; lower --resolution (" + args.out + " was not written)");
+  }
 
   const auto start = std::chrono::steady_clock::now();
   std::size_t steps_written = 1;

@@ -15,6 +15,9 @@ struct PathArgs {
   std::string field, seed, out, report, budget;  // budget: empty = a quarter of --memory
   int seed_count = 20;
   double t0 = 0, t1 = 1, time_scale = 0, max_band = 0, band_ramp = 1.0;
+  // --t0 and --t1 as given (numbers, durations or dates: time_arg.h), resolved into t0 and t1
+  // once the field is open.
+  std::string t0_text = "0", t1_text = "1";
   bool spacetime_out = false, flat = false, quiet = false, no_prefetch = false, warm = false;
   std::string cache_unit = "brick";
   std::string device;                 // empty: per vertex through the streamed field

@@ -16,6 +16,7 @@
 #include "cli/quality_warnings.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
+#include "cli/time_arg.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -75,8 +76,16 @@ class PathStatus {
 void add_path_flags(CLI::App& command, PathArgs& args) {
   command.add_option("--seed-count", args.seed_count, "Vertices on the seed curve")
       ->capture_default_str();
-  command.add_option("--t0", args.t0, "Seed time")->capture_default_str();
-  command.add_option("--t1", args.t1, "End time: the surface stops where its path lines reach it")
+  command
+      .add_option("--t0", args.t0_text,
+                  "Seed time: a number in the field's time unit; for NetCDF series also a date "
+                  "(2002-01-01, '2002-01-01 06:00') or a duration after the first step "
+                  "('10 days')")
+      ->capture_default_str();
+  command
+      .add_option("--t1", args.t1_text,
+                  "End time: the surface stops where its path lines reach it (as --t0; a "
+                  "duration counts from t0: '30 days')")
       ->capture_default_str();
   command
       .add_option("--time-scale", args.time_scale,
@@ -202,17 +211,27 @@ void add_path_command(CLI::App& app) {
 
     spacetime::PathSurfaceResult result;
     std::size_t cache_budget = 0;  // streamed runs only
+    bool zero_is_no_data = false;  // the rule the data was read by (analytic flows: zeros flow)
+    const auto resolve_times = [&](const io::TimeSeries* series) {
+      args->t0 = resolve_time(args->t0_text, "--t0", series ? series->time(0) : 0.0, series);
+      args->t1 = resolve_time(args->t1_text, "--t1", args->t0, series);
+      o.t0 = args->t0;
+      o.t1 = args->t1;
+    };
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
                               "' is an analytic field (sample it with `generate` first)");
+      resolve_times(nullptr);
       const auto flow = make_unsteady_field(args->field);
       result = spacetime::build_path_surface(*flow, seed, args->seed_count, o);
     } else {
       const std::unique_ptr<io::TimeSeries> series =
           io::open_time_series(args->field, "path surfaces");
+      resolve_times(series.get());
       const spacetime::CacheOptions co = path_cache_options(*args);
       cache_budget = co.budget_bytes;
+      zero_is_no_data = series->zero_is_no_data();
       spacetime::BrickCache cache(*series, co);
       if (args->warm) {
         spacetime::PathSurfaceOptions cold = o;
@@ -252,6 +271,7 @@ void add_path_command(CLI::App& app) {
     if (!args->report.empty()) {
       nlohmann::json report = io::to_json(result.report);
       report["field"] = args->field;
+      report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
       report["seed_count"] = args->seed_count;
       report["output"] = args->out;

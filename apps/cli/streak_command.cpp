@@ -31,62 +31,6 @@ namespace orthofront::cli {
 
 namespace {
 
-double parse_time(const std::string& text, const std::string& option) {
-  std::size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(value))
-    throw InvalidArgument(option + ": '" + text + "' is not a finite number");
-  return value;
-}
-
-std::vector<std::string> split_on(const std::string& text, char separator) {
-  std::vector<std::string> parts;
-  std::size_t begin = 0;
-  for (;;) {
-    const std::size_t end = text.find(separator, begin);
-    parts.push_back(text.substr(begin, end - begin));
-    if (end == std::string::npos) return parts;
-    begin = end + 1;
-  }
-}
-
-// "T0:T1".
-std::pair<double, double> parse_release(const std::string& text) {
-  const auto parts = split_on(text, ':');
-  if (parts.size() != 2)
-    throw InvalidArgument("--release '" + text + "': expected T0:T1 (the release interval)");
-  return {parse_time(parts[0], "--release"), parse_time(parts[1], "--release")};
-}
-
-// "t1,t2,..." or "start:end:count" (count times from start to end, both included).
-std::vector<double> parse_frames(const std::string& text) {
-  std::vector<double> frames;
-  if (text.find(':') != std::string::npos) {
-    const auto parts = split_on(text, ':');
-    if (parts.size() != 3)
-      throw InvalidArgument("--frames '" + text +
-                            "': expected START:END:COUNT or a list t1,t2,...");
-    const double a = parse_time(parts[0], "--frames"), b = parse_time(parts[1], "--frames");
-    const double n = parse_time(parts[2], "--frames");
-    if (!(n >= 1 && n <= 100000 && n == std::floor(n)))
-      throw InvalidArgument("--frames '" + text +
-                            "': COUNT must be a whole number from 1 to 100000");
-    if (n == 1) return {b};
-    const int count = static_cast<int>(n);
-    for (int i = 0; i + 1 < count; ++i) frames.push_back(a + (b - a) * i / (n - 1));
-    frames.push_back(b);  // exactly END, whatever the rounding
-    return frames;
-  }
-  for (const std::string& part : split_on(text, ','))
-    frames.push_back(parse_time(part, "--frames"));
-  return frames;
-}
-
 // One status line on stderr (terminals only): simulated time, frames written, particles.
 class StreakStatus {
  public:
@@ -117,90 +61,6 @@ class StreakStatus {
   double last_ = -1;
 };
 
-nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
-  const QualityReport& q = f.quality;
-  return {{"index", f.index},       {"time", f.time},       {"vertices", f.vertices},
-          {"faces", f.faces},       {"rows", f.rows},       {"stopped_particles", f.dead_particles},
-          {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"area", f.area},
-          {"boundary_length", f.boundary_length}, {"vertex_estimate", f.vertex_estimate},
-          {"pieces", f.pieces}, {"area_pruned", f.area_pruned}, {"quality", io::to_json(q)}};
-}
-
-nlohmann::json report_json(const spacetime::StreakReport& r) {
-  nlohmann::json frames = nlohmann::json::array();
-  for (const auto& f : r.frames) frames.push_back(frame_json(f));
-  return {
-      {"dimension", r.dimension},
-      {"streamed", r.streamed},
-      {"complete", r.complete},
-      {"message", r.message},
-      {"insertion", spacetime::to_string(r.insertion)},
-      {"mesh", r.mesh},
-      {"release",
-       {{"begin", r.release_begin},
-        {"end", r.release_end},
-        {"step", r.release_step},
-        {"rows", r.rows_released},
-        {"rows_between_breaks", r.rows_released_between},
-        {"seed_count", r.seed_count}}},
-      {"time_reached", r.time_reached},
-      {"particle_steps", r.particle_steps},
-      {"particle_time", r.particle_time},
-      {"evaluations", r.evaluations},
-      {"intervals", r.intervals},
-      {"refinement",
-       {{"s_insertions", r.s_insertions},
-        {"rows_inserted", r.rows_inserted},
-        {"row_particles", r.row_particles},
-        {"exact_insertions", r.exact_insertions},
-        {"interpolated_insertions", r.interpolated_insertions},
-        {"s_removals", r.s_removals},
-        {"rows_removed", r.rows_removed},
-        {"splits", r.splits},
-        {"collapses", r.collapses},
-        {"flips", r.flips},
-        {"steered_insertions", r.steered_insertions},
-        {"diverged_insertions", r.diverged_insertions},
-        {"steps_shortened", r.steps_shortened},
-        {"faces_turned", r.faces_turned},
-        {"faces_removed_at_stops", r.faces_removed_at_stops},
-        {"strip_faces_skipped", r.strip_faces_skipped},
-        {"faces_pruned", r.faces_pruned},
-        {"area_pruned", r.area_pruned}}},
-      {"particles",
-       {{"max", r.max_particles}, {"left_domain", r.left_domain}, {"no_data", r.no_data}}},
-      {"frames", frames},
-      {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
-      {"slow_evaluations", r.slow_evaluations},
-      {"device", r.device.empty() ? nlohmann::json()
-                                  : nlohmann::json({{"backend", r.device},
-                                                    {"slabs", r.bulk.slabs},
-                                                    {"particle_steps", r.bulk.particle_steps},
-                                                    {"compute_seconds", r.bulk.compute_seconds},
-                                                    {"upload_seconds", r.bulk.upload_seconds},
-                                                    {"bytes_uploaded", r.bulk.bytes_uploaded},
-                                                    {"steps_loaded", r.bulk.steps_loaded},
-                                                    {"steps_read_ahead", r.bulk.steps_read_ahead},
-                                                    {"download_seconds", r.bulk.download_seconds},
-                                                    {"pinned_seconds", r.bulk.pinned_seconds},
-                                                    {"bytes_downloaded", r.bulk.bytes_downloaded},
-                                                    {"overlap_seconds", r.bulk.overlap_seconds},
-                                                    {"catch_up_calls", r.catch_up_calls},
-                                                    {"catch_up_particles", r.catch_up_particles},
-                                                    {"catch_up_seconds", r.catch_up_seconds},
-                                                    {"catch_up_call_seconds", r.catch_up_call_seconds}})},
-      {"seconds",
-       {{"total", r.total_seconds},
-        {"advect", r.advect_seconds},
-        {"take", r.take_seconds},
-        {"refine", r.refine_seconds},
-        {"coarsen", r.coarsen_seconds},
-        {"frames", r.frame_seconds},
-        {"frames_finish", r.frame_finish_seconds},
-        {"wait", r.wait_seconds},
-        {"io", r.io_seconds},
-        {"decode", r.decode_seconds}}}};
-}
 
 // The flow-orthogonal route: one space-time surface from a point, written as one mesh.
 void run_spacetime_route(const StreakArgs& args) {
@@ -220,8 +80,8 @@ void run_spacetime_route(const StreakArgs& args) {
                           args.field + "'");
   const auto flow = make_unsteady_field(args.field);
   spacetime::SpacetimeStreakOptions o;
-  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
-  o.t_end = parse_frames(args.frames).back();
+  std::tie(o.release_begin, o.release_end) = parse_streak_release(args.release);
+  o.t_end = parse_streak_frames(args.frames).back();
   o.engine.edge = args.edge;
   o.engine.max_steps = 10'000'000;
   if (args.max_vertices > 0) o.engine.max_vertices = args.max_vertices;
@@ -264,7 +124,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
   if (!args.report.empty()) io::check_writable(args.report);
   const auto flow = make_unsteady_field(args.field);
   spacetime::StreakLineSurfaceOptions o;
-  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
+  std::tie(o.release_begin, o.release_end) = parse_streak_release(args.release);
   o.seed_count = args.seed_count;
   o.path.engine.edge = args.edge;
   o.path.engine.max_steps = 10'000'000;
@@ -277,7 +137,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
   std::size_t derived = 0, evaluations = 0;
   double seconds = 0;
   bool complete = true;
-  for (const double t : parse_frames(args.frames)) {
+  for (const double t : parse_streak_frames(args.frames)) {
     o.observation_time = t;
     spacetime::StreakLineSurface w = spacetime::build_streak_line_surface(*flow, seed, o);
     if (!w.path.complete) {
@@ -334,16 +194,6 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
 }
 
 }  // namespace
-
-std::pair<double, double> parse_streak_release(const std::string& text) {
-  return parse_release(text);
-}
-std::vector<double> parse_streak_frames(const std::string& text) {
-  return parse_frames(text);
-}
-nlohmann::json streak_report_json(const spacetime::StreakReport& report) {
-  return report_json(report);
-}
 
 void add_streak_flags(CLI::App& command, StreakArgs& args) {
   command.add_option("--release", args.release, "Release interval T0:T1")->required();
@@ -428,8 +278,8 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   if (command.count("--max-vertices") > 0) caps.max_vertices = args.max_vertices;
   apply_memory_flag(command, args.limits, caps);
   spacetime::StreakOptions o;
-  std::tie(o.release_begin, o.release_end) = parse_release(args.release);
-  o.frames = parse_frames(args.frames);
+  std::tie(o.release_begin, o.release_end) = parse_streak_release(args.release);
+  o.frames = parse_streak_frames(args.frames);
   o.edge = args.edge;
   o.split = args.split;
   o.merge = args.merge;
@@ -496,6 +346,7 @@ void add_streak_command(CLI::App& app) {
 
     spacetime::StreakReport result;
     std::size_t cache_budget = 0;
+    bool zero_is_no_data = false;  // the rule the data was read by (analytic flows: zeros flow)
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
@@ -508,13 +359,15 @@ void add_streak_command(CLI::App& app) {
       spacetime::CacheOptions co;
       co.budget_bytes = streak_cache_budget(*args);
       cache_budget = co.budget_bytes;
+      zero_is_no_data = series->zero_is_no_data();
       spacetime::BrickCache cache(*series, co);
       result = spacetime::build_streak_surface(cache, seed, o, sink);
     }
     status.finish();
     if (!args->report.empty()) {
-      nlohmann::json report = report_json(result);
+      nlohmann::json report = streak_report_json(result);
       report["field"] = args->field;
+      report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
       report["output"] = args->out;
       report["frames_written"] = writer.frames();

@@ -255,6 +255,20 @@ def render_surface(surface, png, color_by=None, size=(1024, 768), title=None):
 
     png = str(png)
     temporary = png + ".part"
+    try:
+        _draw(renderer, size, temporary)
+        if not os.path.isfile(temporary) or os.path.getsize(temporary) == 0:
+            raise RuntimeError("%s: VTK wrote no picture" % png)
+        os.replace(temporary, png)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+    return png
+
+
+def _draw(renderer, size, path):
+    """Renders `renderer` off screen at `size` into the PNG file `path`."""
+    import vtk
     with display():
         window = vtk.vtkRenderWindow()
         window.SetOffScreenRendering(1)
@@ -273,14 +287,10 @@ def render_surface(surface, png, color_by=None, size=(1024, 768), title=None):
         shrink.SetOutputDimensions(int(size[0]), int(size[1]), 1)
         shrink.InterpolateOn()
         writer = vtk.vtkPNGWriter()
-        writer.SetFileName(temporary)
+        writer.SetFileName(path)
         writer.SetInputConnection(shrink.GetOutputPort())
         writer.Write()
         window.Finalize()
-    if not os.path.isfile(temporary) or os.path.getsize(temporary) == 0:
-        raise RuntimeError("%s: VTK wrote no picture" % png)
-    os.replace(temporary, png)
-    return png
 
 
 def _quality_of(report):
@@ -331,9 +341,14 @@ def plot_histograms(report, out, title=None):
     if extension not in (".svg", ".png"):
         raise ValueError("%s: histograms are written as .svg or .png" % out)
     temporary = out + ".part"
-    figure.savefig(temporary, format=extension[1:], dpi=100)
-    plt.close(figure)
-    os.replace(temporary, out)
+    try:
+        figure.savefig(temporary, format=extension[1:], dpi=100)
+        os.replace(temporary, out)
+    finally:
+        plt.close(figure)
+        # A full disk or a failed draw leaves no half-written file behind.
+        if os.path.exists(temporary):
+            os.remove(temporary)
     return out
 
 

@@ -12,6 +12,7 @@
 
 #include "cli/engine_options.h"
 #include "cli/path_args.h"
+#include "cli/time_arg.h"
 #include "cli/seed_spec.h"
 #include "cli/streak_args.h"
 #include "cli/streak_report.h"
@@ -176,6 +177,10 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   args.field = series.name;
   check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
                     series.name);
+  // Numbers, or for NetCDF series dates and durations, as the command line takes them.
+  const io::TimeSeries* timed = analytic ? nullptr : series.series.get();
+  args.t0 = cli::resolve_time(args.t0_text, "t0", timed ? timed->time(0) : 0.0, timed);
+  args.t1 = cli::resolve_time(args.t1_text, "t1", args.t0, timed);
   spacetime::PathSurfaceOptions o = cli::path_options(args);
   InterruptCheck interrupt;
   o.progress = [&](const spacetime::PathProgress&) { return interrupt.keep_going(); };

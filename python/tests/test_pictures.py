@@ -51,6 +51,27 @@ def test_histograms_from_a_report(tmp_path):
     assert pixels.shape[:2] == (380, 1000)
 
 
+def test_a_failed_write_leaves_no_partial_file(tmp_path, monkeypatch):
+    """A write that fails half way (a full disk, say) leaves neither the file nor its .part."""
+    import matplotlib.figure
+    surface = orthofront.stream_surface("abc", "line:0,0,0:1,0,0", steps=20)
+
+    def half_written(self, path, **kwargs):
+        with open(path, "wb") as out:
+            out.write(b"<svg")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", half_written)
+    out = tmp_path / "abc.histograms.svg"
+    try:
+        preview.plot_histograms(surface.report, out)
+    except OSError:
+        pass
+    else:
+        raise AssertionError("the failed write was not reported")
+    assert sorted(os.listdir(tmp_path)) == []
+
+
 def test_commands_write_a_preview_and_histograms(tmp_path, orthofront_binary):
     env = dict(os.environ, ORTHOFRONT_HISTOGRAMS="1")
     env.pop("DISPLAY", None)  # the helper starts its own Xvfb

@@ -137,6 +137,15 @@ TEST_CASE("bad paths and values fail with a message naming them", "[apps][genera
     CHECK_THAT(r.output, Catch::Contains("no/s.h5"));
     CHECK(dir.empty());
   }
+  SECTION("generate of a grid that cannot fit in memory is refused before allocating") {
+    const Run r = run("generate --field saddle3d --resolution 100000,100000,100000 --out " +
+                      at(dir, "huge.h5"));
+    CHECK(r.status == 2);
+    CHECK_THAT(r.output, Catch::Contains("--resolution 100000,100000,100000") &&
+                             Catch::Contains("more than half of the") &&
+                             Catch::Contains("huge.h5 was not written"));
+    CHECK(dir.empty());
+  }
   SECTION("generate with bad values leaves nothing") {
     for (const std::string& args :
          {std::string("--field nosuch --resolution 5,5,5"),

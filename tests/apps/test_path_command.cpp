@@ -69,6 +69,7 @@ TEST_CASE("path command: analytic field, report with c and the time band", "[app
               dir / "log") == 0);
   const nlohmann::json j = nlohmann::json::parse(read_text(report));
   CHECK(j["complete"] == true);
+  CHECK(j["zero_vectors"] == "flow");  // an analytic flow's zeros are stagnation points
   // The summary gives the quality figures of the report.
   char quads[64];
   std::snprintf(quads, sizeof quads, "%.1f%% quads",

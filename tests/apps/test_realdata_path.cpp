@@ -127,6 +127,7 @@ TEST_CASE("a path surface of the backward-facing step over its whole series, wri
   const auto r = nlohmann::json::parse(text_of(report));
   CHECK(r["complete"].get<bool>());
   CHECK(r["path"]["positions"] == "x, y, c t");
+  CHECK(r["zero_vectors"] == "no data");  // the step's wall, as the .vti files have it
   CHECK(r["path"]["cache"]["max_reads_of_a_unit"].get<int>() == 1);
   const double c = r["path"]["time_scale"].get<double>();
   const orthofront::Mesh mesh = orthofront::io::read_mesh(out);

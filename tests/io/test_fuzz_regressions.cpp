@@ -43,4 +43,22 @@ TEST_CASE("the fuzz exercise refuses a target it does not have", "[fuzz]") {
   CHECK(orthofront::fuzz::exercise("parse_seed", "line:0,0,0:1,1,1"));
   CHECK(orthofront::fuzz::exercise("parse_bytes", "512MiB"));
   CHECK(orthofront::fuzz::exercise("parse_field", "saddle"));
+  // The targets of several files: each valid input is read through, each damaged one refused.
+  using orthofront::fuzz::exercise;
+  CHECK(exercise("pvd", "<VTKFile type=\"Collection\"><Collection><DataSet timestep=\"0\" "
+                        "file=\"a.vti\"/><DataSet timestep=\"1\" file=\"b.vti\"/></Collection>"
+                        "</VTKFile>"));
+  CHECK(exercise("pvd", "<VTKFile type=\"Collection\"><Collection><DataSet timestep=\"0\" "
+                        "file=\"../../etc/none.vti\"/>"));
+  std::string nhdr = "NRRD0004\ntype: float\ndimension: 4\nsizes: 3 2 2 2\nencoding: raw\n"
+                     "endian: little\ndata file: data.raw\n";
+  nhdr.push_back('\0');
+  nhdr.append(3 * 8 * sizeof(float), '\0');
+  CHECK(exercise("grid_nhdr", nhdr));
+  CHECK(exercise("grid_nhdr", nhdr.substr(0, nhdr.size() - 5)));  // data cut short
+  CHECK(exercise("job_file", "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\n"
+                             "kind = \"stream\"\nseed = \"line:0,0,0:1,0,0\"\n"));
+  CHECK(exercise("job_file", "[[surface]\nname = "));
+  CHECK(exercise("checkpoint", std::string("\x05\0\0\0\0\0\0\0abc", 11)));
+  CHECK(exercise("netcdf", "CDF\x01\0\0\0\0"));
 }

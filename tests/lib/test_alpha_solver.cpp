@@ -347,7 +347,7 @@ TEST_CASE("alpha solver: squares that underflow or lose digits leave nothing wro
   CHECK(wide.result.min_pivot == Approx(1e-280).epsilon(1e-12));
 }
 
-TEST_CASE("alpha solver stays exact on fronts of 100,000 vertices", "[solve]") {
+TEST_CASE("alpha solver stays exact on fronts of 100,000 vertices", "[solve][heavy]") {
   // Rounding in the squared recurrence must not pile up along a long front.
   AlphaSolver solver;
   Rng rng(23);

@@ -292,7 +292,7 @@ TEST_CASE("a corrupt brick mid-run stops the surface, names file, step and brick
 
 TEST_CASE("the README's out-of-core recipe, small: t = 0 to 20 on a budget the whole-step cache "
           "cannot use",
-          "[spacetime][bricks][path]") {
+          "[spacetime][bricks][path][heavy]") {
   // Same shape as the README recipe (double-gyre-3d, 2:1:1 grid, 201 steps to t = 20, seed line
   // at mid-depth), 8x fewer points per axis, budget scaled with the data.
   TempDir dir("recipe");

@@ -186,7 +186,7 @@ StreakOptions gyre_options(ParticleInsertion insertion) {
 TEST_CASE("bulk advection: a streak surface on the CPU backend follows its path lines, a small "
           "budget, particles sent up and down each interval instead of kept by the backend, and "
           "moves in turn with refinement instead of beside it give the same frames bit for bit",
-          "[spacetime][advect][streak]") {
+          "[spacetime][advect][streak][heavy]") {
   const auto flow = make_unsteady_field("double-gyre");
   const GridGeometry grid = uniform_grid(flow->domain(), 2, 201);
   const SampledTimeSeries series(*flow, grid, uniform_times(0, 5, 50));

@@ -25,8 +25,12 @@ std::string hdf5_error_cause() {
 }
 
 void silence_hdf5() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+  // A thread-safe HDF5 keeps the automatic printing setting per thread: readers run on pipeline
+  // and TBB threads too.
+  thread_local bool silenced = false;
+  if (silenced) return;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  silenced = true;
 }
 
 namespace {

@@ -14,6 +14,7 @@
 
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_series.h"
+#include "orthofront/io/hdf5_detail.h"
 #include "orthofront/io/input_files.h"
 #include "orthofront/io/readable_file.h"
 
@@ -48,6 +49,9 @@ std::string number(double value) {
 class NcFile {
  public:
   explicit NcFile(const std::filesystem::path& path) : path_(path) {
+    // NetCDF-4 files are HDF5 files: netCDF-C probes attributes that may be absent, and HDF5
+    // would print each miss on stderr.
+    detail::silence_hdf5();
     if (const std::string why = why_unreadable(path); !why.empty())
       throw IoError("cannot open '" + path.string() + "': " + why);
     const int status = nc_open(path.c_str(), NC_NOWRITE, &id_);
@@ -497,6 +501,12 @@ class NetcdfSeries final : public TimeSeries {
   RawStep read_raw(std::size_t step) const override;
   void decode(const RawStep& raw, std::span<float> values) const override;
   const NetcdfDescription& description() const { return description_; }
+  std::optional<double> time_of_date(const std::string& date) const {
+    if (!epoch_) return std::nullopt;
+    return parse_time_units("seconds since " + date, calendar_, "date '" + date + "'")
+               .epoch_seconds -
+           *epoch_;
+  }
 
  private:
   void open_first(const NcFile& f);
@@ -1140,6 +1150,11 @@ NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std
 const NetcdfDescription* netcdf_description(const TimeSeries& series) {
   const auto* s = dynamic_cast<const NetcdfSeries*>(&series);
   return s ? &s->description() : nullptr;
+}
+
+std::optional<double> netcdf_time_of_date(const TimeSeries& series, const std::string& date) {
+  const auto* s = dynamic_cast<const NetcdfSeries*>(&series);
+  return s ? s->time_of_date(date) : std::nullopt;
 }
 
 }  // namespace orthofront::io

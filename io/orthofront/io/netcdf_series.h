@@ -74,6 +74,11 @@ std::unique_ptr<TimeSeries> open_netcdf_series(const std::vector<std::filesystem
 /// The description of a series opened by open_netcdf_series (nullptr for other series).
 const NetcdfDescription* netcdf_description(const TimeSeries& series);
 
+/// The time of `date` ("YYYY-MM-DD[ hh:mm[:ss]][Z|±hh:mm]", in the series' CF calendar) as the
+/// series' steps carry it: seconds since its epoch. nullopt for a series not opened by
+/// open_netcdf_series or one without a CF time coordinate; FormatError for a malformed date.
+std::optional<double> netcdf_time_of_date(const TimeSeries& series, const std::string& date);
+
 /// One whole variable of a NetCDF file, unpacked: scale_factor / add_offset applied, and
 /// _FillValue, missing_value and values outside valid_min / valid_max / valid_range NaN (the
 /// rules of the series above), for readers of layouts other than CF grids (curvilinear models).
