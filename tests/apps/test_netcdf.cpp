@@ -307,6 +307,8 @@ TEST_CASE("NetCDF: info and convert read the files directly", "[apps][netcdf]") 
   CHECK(info.output.find("uo, vo (CF standard_name)") != std::string::npos);
   CHECK(info.output.find("seconds since 1950-01-01 (calendar noleap") != std::string::npos);
   CHECK(info.output.find("degrees per second on a sphere") != std::string::npos);
+  CHECK(info.output.find("zeros mean:   flow (critical points); land is the fill value") !=
+        std::string::npos);
   const fs::path h5 = dir / "days.h5";
   const auto c = cli_test::run("convert " + quoted(days / "day*.nc") + " --out " + quoted(h5));
   INFO(c.output);

@@ -95,6 +95,7 @@ DataFile open_netcdf(const DataFileSpec& spec) {
                                                  std::string(d.velocity_units_given ? " (given by units=)" : ""));
   if (d.lonlat) file.details.emplace_back("lon/lat", d.metric_note);
   file.details.emplace_back("no data", d.fill);
+  file.details.emplace_back("zeros mean", "flow (critical points); land is the fill value");
 #endif
   return file;
 }

@@ -8,10 +8,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
+#include <mutex>
 #include <optional>
+#include <set>
 #include <sstream>
 
+#include "orthofront/io/child_read.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/grid_series.h"
 #include "orthofront/io/hdf5_detail.h"
@@ -1111,8 +1115,58 @@ NetcdfOptions parse_netcdf_selector(const std::string& selector) {
   return o;
 }
 
+namespace {
+
+// netCDF-C, and libhdf5 under NetCDF-4, trust a file's header: a damaged one can make them
+// allocate what it declares or crash (fuzzing found a null dereference in NC3_open's cleanup).
+// So `read` runs first in a child process under a memory and time limit (child_read.h), once per
+// set of files and their sizes and times in this process; an error there is the error here.
+void vet_netcdf(const std::vector<std::filesystem::path>& files, const std::function<void()>& read) {
+  thread_local bool vetting = false;
+  if (vetting || files_trusted() || files.empty()) return;
+  std::string key;
+  std::uintmax_t bytes = 0;
+  for (const std::filesystem::path& file : files) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    const auto time = std::filesystem::last_write_time(file, ec);
+    bytes += ec ? 0 : size;
+    key += file.string() + '\n' + std::to_string(size) + '\n' +
+           std::to_string(time.time_since_epoch().count()) + '\n';
+  }
+  static std::mutex mutex;
+  static std::set<std::string> vetted;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (vetted.count(key) != 0) return;
+  }
+  ChildReadLimits limits;
+  const std::uintmax_t cap = std::uintmax_t{1} << 40;
+  limits.memory_bytes = static_cast<std::size_t>((std::uintmax_t{1} << 30) + 4 * std::min(bytes, cap));
+  limits.seconds = child_read_seconds(static_cast<std::size_t>(std::min(bytes, cap)));
+  const std::string what =
+      files.front().string() +
+      (files.size() > 1 ? " (and " + std::to_string(files.size() - 1) + " more files)" : "");
+  read_in_child(what, "NetCDF",
+                [&] {
+                  vetting = true;
+                  read();
+                },
+                limits);
+  const std::lock_guard<std::mutex> lock(mutex);
+  vetted.insert(key);
+}
+
+}  // namespace
+
 std::unique_ptr<TimeSeries> open_netcdf_series(const std::vector<std::filesystem::path>& files,
                                                const NetcdfOptions& options) {
+  vet_netcdf(files, [&] {
+    const NetcdfSeries series(files, options);
+    std::vector<float> values(series.step_floats());
+    series.read(0, values);
+    if (series.step_count() > 1) series.read(series.step_count() - 1, values);
+  });
   return std::make_unique<NetcdfSeries>(files, options);
 }
 
@@ -1120,6 +1174,7 @@ std::optional<double> metres_per_second(const std::string& units) { return speed
 
 NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std::string& name,
                                     std::size_t max_values) {
+  vet_netcdf({file}, [&] { (void)read_netcdf_variable(file, name, max_values); });
   const NcFile f(file);
   const std::optional<int> v = f.variable(name);
   if (!v) {
