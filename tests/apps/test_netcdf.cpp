@@ -676,7 +676,7 @@ TEST_CASE("NetCDF: --t0 and --t1 take dates in the series' calendar and duration
   TempDir dir;
   const fs::path days = write_days(dir);
   const std::string field = " --field " + quoted(days / "day*.nc") +
-                            " --seed line:12,2,0:12,6,0 --edge 0.05 --quiet --out ";
+                            " --seed line:12,2,0:12,6,0 --edge 0.1 --quiet --out ";
   const auto by_number = cli_test::run("path" + field + quoted(dir / "numbers.vtp") +
                                        " --t0 2333664000 --t1 2333707200");
   const auto by_date = cli_test::run("path" + field + quoted(dir / "dates.vtp") +
