@@ -5,6 +5,7 @@
 #include <netcdf.h>
 
 #include <catch2/catch.hpp>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -701,4 +702,55 @@ TEST_CASE("NetCDF: --t0 and --t1 take dates in the series' calendar and duration
   const auto bad = cli_test::run("path" + field + quoted(dir / "b.vtp") + " --t0 2024-13-01");
   CHECK(bad.status == 2);
   CHECK(bad.output.find("--t0 '2024-13-01': not a date") != std::string::npos);
+}
+
+TEST_CASE("NetCDF: velocities in m/s or cm/s move positions in the axes' own length units",
+          "[apps][netcdf]") {
+  // Every component 1 in the file's velocity unit: x, y in km and z in m with m/s; all in metres
+  // with cm/s. An axis in hPa (pressure levels) cannot be related to m/s.
+  TempDir dir;
+  namespace io = orthofront::io;
+  const auto write = [&](const fs::path& file, const char* xy_units, const char* z_units,
+                         const char* velocity_units) {
+    int nc = 0;
+    ok(nc_create(file.c_str(), NC_CLOBBER, &nc));
+    int dims[3] = {}, axes[3] = {}, ids[3] = {};
+    const char* names[3] = {"z", "y", "x"};
+    for (int a = 0; a < 3; ++a) {
+      ok(nc_def_dim(nc, names[a], 3, &dims[a]));
+      ok(nc_def_var(nc, names[a], NC_DOUBLE, 1, &dims[a], &axes[a]));
+      const char* units = a == 0 ? z_units : xy_units;
+      ok(nc_put_att_text(nc, axes[a], "units", std::strlen(units), units));
+    }
+    const char* components[3] = {"u", "v", "w"};
+    for (int c = 0; c < 3; ++c) {
+      ok(nc_def_var(nc, components[c], NC_DOUBLE, 3, dims, &ids[c]));
+      ok(nc_put_att_text(nc, ids[c], "units", std::strlen(velocity_units), velocity_units));
+    }
+    ok(nc_enddef(nc));
+    const double coordinate[3] = {0, 1, 2};
+    for (int a = 0; a < 3; ++a) ok(nc_put_var_double(nc, axes[a], coordinate));
+    const std::vector<double> one(27, 1.0);
+    for (int c = 0; c < 3; ++c) ok(nc_put_var_double(nc, ids[c], one.data()));
+    ok(nc_close(nc));
+  };
+  io::NetcdfOptions o;
+  o.dt = 1;
+  const auto first_vector = [&](const fs::path& file) {
+    const auto series = io::open_netcdf_series({file}, o);
+    std::vector<float> values(series->step_floats());
+    series->read(0, values);
+    return std::array<float, 3>{values[0], values[1], values[2]};
+  };
+  write(dir / "km.nc", "km", "m", "m s-1");
+  CHECK(first_vector(dir / "km.nc") == std::array<float, 3>{0.001f, 0.001f, 1.0f});
+  write(dir / "cm.nc", "m", "m", "cm/s");
+  CHECK(first_vector(dir / "cm.nc") == std::array<float, 3>{0.01f, 0.01f, 0.01f});
+  write(dir / "plain.nc", "m", "m", "m/s");
+  CHECK(first_vector(dir / "plain.nc") == std::array<float, 3>{1.0f, 1.0f, 1.0f});
+  write(dir / "hpa.nc", "m", "hPa", "m/s");
+  CHECK_THROWS_WITH(first_vector(dir / "hpa.nc"),
+                    Catch::Contains("axis 'z' is in 'hPa', not a length"));
+  const auto d = io::netcdf_description(*io::open_netcdf_series({dir / "km.nc"}, o));
+  CHECK_THAT(d->coordinates, Catch::Contains("x velocities m s-1 x 0.001"));
 }

@@ -341,6 +341,22 @@ std::optional<double> speed_unit(const std::string& units) {
   return std::nullopt;
 }
 
+// Metres in one unit of a coordinate's length units, or nullopt when they are not a length.
+std::optional<double> length_unit(const std::string& units) {
+  const std::string u = lower(trim(units));
+  if (u == "m" || u == "metre" || u == "metres" || u == "meter" || u == "meters") return 1.0;
+  if (u == "km" || u == "kilometre" || u == "kilometres" || u == "kilometer" ||
+      u == "kilometers")
+    return 1000.0;
+  if (u == "cm" || u == "centimetre" || u == "centimetres" || u == "centimeter" ||
+      u == "centimeters")
+    return 0.01;
+  if (u == "mm" || u == "millimetre" || u == "millimetres" || u == "millimeter" ||
+      u == "millimeters")
+    return 0.001;
+  return std::nullopt;
+}
+
 // ---- Variables ------------------------------------------------------------------------------
 
 // CF standard names of the components, by axis.
@@ -529,6 +545,10 @@ class NetcdfSeries final : public TimeSeries {
   std::vector<Axis> axes_;              // spatial, file order: slowest first (z, y, x)
   std::size_t source_points_ = 0;       // points of one variable in one step
   double velocity_factor_ = 1;          // to m/s (lon/lat only)
+  // Per output component (x, y, z): from the velocities' units to the axis's units per second
+  // (a grid in km with velocities in m/s, one in metres with cm/s); lon/lat's x and y use the
+  // sphere's factors instead.
+  std::array<double, 3> axis_factor_{1, 1, 1};
   // -1 where the vertical axis is depth (positive down) and w is upward, as CF's vertical
   // velocities are: a particle rising moves to smaller depth.
   double vertical_sign_ = 1;
@@ -861,6 +881,28 @@ void NetcdfSeries::open_first(const NcFile& f) {
           "within 0.1° of a pole";
     }
   }
+  // Velocities in a speed unit move positions in the axes' own length units; an axis whose
+  // units are not a length cannot be related to them.
+  {
+    const std::optional<double> speed = speed_unit(description_.velocity_units);
+    const auto per_second = [&](const Axis& a) -> double {
+      if (!speed) return 1.0;                 // unitless velocities: axis units per second
+      if (a.units.empty()) return *speed;     // a coordinate without units: metres
+      const std::optional<double> metres = length_unit(a.units);
+      if (!metres)
+        throw FormatError("'" + f.path().string() + "': axis '" + a.dimension + "' is in '" +
+                          a.units + "', not a length, but '" + variables_[0] + "' is in " +
+                          description_.velocity_units +
+                          ": the two cannot be related (a longitude or latitude axis needs CF "
+                          "units degrees_east / degrees_north or its standard_name)");
+      return *speed / *metres;
+    };
+    if (!lonlat_) {
+      axis_factor_[0] = per_second(ax);
+      axis_factor_[1] = per_second(ay);
+    }
+    if (d == 3) axis_factor_[2] = per_second(axes_[0]);
+  }
   // Uniform axes stay uniform (cheaper lookups); others are rectilinear.
   bool uniform = true;
   for (std::size_t a = 0; a < d; ++a) {
@@ -893,6 +935,11 @@ void NetcdfSeries::open_first(const NcFile& f) {
                              (wrap_ ? "; global in longitude, seam closed" : "") +
                              (vertical_sign_ < 0 ? "; z is depth: upward w moves to smaller z"
                                                  : "");
+  for (std::size_t a = lonlat_ ? 2 : 0; a < d; ++a)
+    if (axis_factor_[a] != 1.0)
+      description_.coordinates += std::string("; ") + "xyz"[a] + " velocities " +
+                                  description_.velocity_units + " x " + number(axis_factor_[a]) +
+                                  " (to the axis's units per second)";
   std::string fill;
   const NoDataRules& r = rules_[0];
   if (r.fill) fill += "_FillValue " + number(*r.fill);
@@ -1021,7 +1068,7 @@ void NetcdfSeries::decode(const RawStep& raw, std::span<float> values) const {
       const std::size_t sk = d == 3 && axes_[0].flipped ? nz - 1 - k : k;
       const std::size_t sj = axes_[d - 2].flipped ? ny - 1 - j : j;
       // Degrees per second per m/s at this latitude (lon/lat in degrees only).
-      double east = 1, north = 1;
+      double east = axis_factor_[0], north = axis_factor_[1];
       bool pole = false;
       if (lonlat_) {
         east = north = velocity_factor_;
@@ -1053,8 +1100,7 @@ void NetcdfSeries::decode(const RawStep& raw, std::span<float> values) const {
         o[1] = static_cast<float>(v[1] * north);
         // A 3D grid with u and v only: w = 0.
         if (components_ == 3)
-          o[2] = comps == 3 ? static_cast<float>(vertical_sign_ * v[2] *
-                                                 (lonlat_ ? velocity_factor_ : 1))
+          o[2] = comps == 3 ? static_cast<float>(vertical_sign_ * v[2] * axis_factor_[2])
                             : 0.0f;
       }
     }
