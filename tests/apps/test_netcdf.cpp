@@ -561,13 +561,19 @@ namespace {
 // A 2D step of u, v on dimensions (y, x) with no coordinate variables; `positions` adds 2D
 // longitude and latitude as a curvilinear model grid writes them (named by `coordinates`).
 void write_index_grid(const fs::path& file, const char* velocity_units, bool positions,
-                      bool staggered = false) {
+                      bool staggered = false, bool metric_axes = false) {
   int nc = 0;
   ok(nc_create(file.c_str(), NC_CLOBBER, &nc));
-  int dy = 0, dx = 0, dxu = 0, vu = 0, vv = 0, vlon = 0, vlat = 0;
+  int dy = 0, dx = 0, dxu = 0, vu = 0, vv = 0, vlon = 0, vlat = 0, vx = 0, vy = 0;
   ok(nc_def_dim(nc, "y", 4, &dy));
   ok(nc_def_dim(nc, "x", 5, &dx));
   ok(nc_def_dim(nc, "x_u", 6, &dxu));
+  if (metric_axes) {  // a projected grid: x, y in metres, lon/lat beside them
+    ok(nc_def_var(nc, "x", NC_DOUBLE, 1, &dx, &vx));
+    ok(nc_put_att_text(nc, vx, "units", 1, "m"));
+    ok(nc_def_var(nc, "y", NC_DOUBLE, 1, &dy, &vy));
+    ok(nc_put_att_text(nc, vy, "units", 1, "m"));
+  }
   const int dims[2] = {dy, dx}, u_dims[2] = {dy, staggered ? dxu : dx};
   ok(nc_def_var(nc, "u", NC_FLOAT, 2, u_dims, &vu));
   ok(nc_def_var(nc, "v", NC_FLOAT, 2, dims, &vv));
@@ -581,6 +587,12 @@ void write_index_grid(const fs::path& file, const char* velocity_units, bool pos
     ok(nc_put_att_text(nc, vlon, "units", 12, "degrees_east"));
     ok(nc_def_var(nc, "TLAT", NC_DOUBLE, 2, dims, &vlat));
     ok(nc_put_att_text(nc, vlat, "units", 13, "degrees_north"));
+  }
+  ok(nc_enddef(nc));
+  if (metric_axes) {
+    const double metres[5] = {0, 1000, 2000, 3000, 4000};
+    ok(nc_put_var_double(nc, vx, metres));
+    ok(nc_put_var_double(nc, vy, metres));
   }
   ok(nc_close(nc));
 }
@@ -603,6 +615,9 @@ TEST_CASE("NetCDF: curvilinear grids and staggered grids and index grids in m/s 
   // Without the coordinates attribute the usual names still give the grid away.
   write_index_grid(dir / "unitless.nc", nullptr, true);
   CHECK_THROWS_WITH(open(dir / "unitless.nc"), Catch::Contains("curvilinear grid"));
+  // Beside axes in metres (a projected grid) 2D lon/lat are auxiliary: read in metres.
+  write_index_grid(dir / "projected.nc", "m/s", true, false, true);
+  CHECK(open(dir / "projected.nc")->geometry().spacing.x() == 1000);
 
   // Index positions and m/s: refused; unitless velocities are cells per second, and read.
   write_index_grid(dir / "index_ms.nc", "m s-1", false);

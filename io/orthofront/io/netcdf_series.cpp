@@ -745,9 +745,11 @@ void NetcdfSeries::open_first(const NcFile& f) {
     for (const Axis& a : axes_) spatial.push_back(a.dimension);
     const bool lonlat_axes = axes_.size() >= 2 && is_longitude(axes_.back()) &&
                              is_latitude(axes_[axes_.size() - 2]);
-    // 2D longitude and latitude beside 1D lon/lat axes repeat them; beside anything else they
-    // are the grid.
-    if (!lonlat_axes) refuse_curvilinear(f, vars[0], spatial);
+    // 2D longitude and latitude beside 1D lon/lat axes repeat them, and beside axes in metres
+    // (a projected grid) they are auxiliary; beside anything else they are the grid.
+    const bool metric_axes = axes_.size() >= 2 && length_unit(axes_.back().units) &&
+                             length_unit(axes_[axes_.size() - 2].units);
+    if (!lonlat_axes && !metric_axes) refuse_curvilinear(f, vars[0], spatial);
     // Index positions with velocities in m/s would be read as cells per second.
     const std::string velocity_units =
         options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
