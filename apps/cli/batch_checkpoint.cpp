@@ -19,7 +19,7 @@ namespace {
 // 2: the report stores clamped-α and insertion-fallback counts by cause; 3: stall cuts, gaps
 // closed and the gap-closing time; 4: front vertices beside a missed seed shot, and the shots
 // skipped; 5: triangles by cause; 6: the seed-shot time limit and the shots over budget.
-constexpr std::uint32_t kFormat = 7;  // 7: a CRC-32 of the state follows it
+constexpr std::uint32_t kFormat = 8;  // 7: a CRC-32 of the state follows it; 8: path states lift time from t0
 constexpr char kMagic[] = "orthofront-checkpoint\n";
 
 std::string read_file(const std::filesystem::path& path) {

@@ -139,6 +139,34 @@ TEST_CASE("path surface: a steady 2D flow lifted equals the stream surface of (v
   CHECK(path.path.time_reached == Approx(t1).epsilon(1e-3));
 }
 
+TEST_CASE("path surface: a surface that starts at a large time (seconds since 1950) is the one "
+          "that starts at 0",
+          "[spacetime][path]") {
+  // Real data count time from an epoch: t0 ~ 2.3e9 s. The lifted coordinate counts from t0, so
+  // the front's steps keep their digits: the same mesh, shifted in time, and the same stop.
+  const auto sinus = make_analytic_field("sinus");
+  const Steady flow(*sinus, 2);
+  const double start = 2333664000.0;
+  PathSurfaceOptions o = path_options(0.0, 3.0, 0.2);
+  o.time_scale = 1.5;
+  const SeedCurve seed = SeedCurve::line(Vec3(-2, 0, 0), Vec3(2, 0, 0));
+  const PathSurfaceResult near = build_path_surface(flow, seed, 12, o);
+  o.t0 += start;
+  o.t1 += start;
+  const PathSurfaceResult far = build_path_surface(flow, seed, 12, o);
+  REQUIRE(near.mesh.vertex_count() > 100);
+  CHECK(far.mesh.vertex_count() == near.mesh.vertex_count());
+  CHECK(far.mesh.face_count() == near.mesh.face_count());
+  CHECK(far.report.stop_reason == near.report.stop_reason);
+  CHECK(far.path.time_reached - start == Approx(near.path.time_reached).margin(1e-6));
+  double worst = 0;
+  for (std::size_t i = 0; i < near.mesh.vertex_count() && i < far.mesh.vertex_count(); ++i) {
+    const Vec3 shifted = far.spacetime_positions[i] - Vec3(0, 0, start);
+    worst = std::max(worst, (shifted - near.spacetime_positions[i]).norm());
+  }
+  CHECK(worst < 1e-6);
+}
+
 TEST_CASE("path surface: every vertex lies on the path line of its seed parameter",
           "[spacetime][path]") {
   struct Case {

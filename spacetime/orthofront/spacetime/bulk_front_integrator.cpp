@@ -91,7 +91,7 @@ bool BulkFrontIntegrator<N>::integrate(std::span<const Vec<N>> x, std::span<cons
 template <int N>
 void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const double> tau,
                                  std::span<IntegrationResult<N>> out, bool forward) {
-  const double c = options_.time_scale;
+  const double c = options_.time_scale, t_ref = options_.time_origin;
   index_.clear();
   for (std::size_t i = 0; i < x.size(); ++i)
     if (forward ? tau[i] > 0 : tau[i] < 0) index_.push_back(i);
@@ -107,7 +107,7 @@ void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const doub
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = index_[k];
     for (int a = 0; a < 3; ++a) batch_.x[static_cast<std::size_t>(a)][k] = a < d ? x[i][a] : 0.0;
-    const double t = x[i][d] / c;
+    const double t = x[i][d] / c + t_ref;
     // Pseudo-time along the lifted field is physical time (its last component is c = dτ/ds).
     const double end = std::clamp(t + tau[i], options_.times.begin, options_.times.end);
     batch_.t[k] = t;
@@ -123,7 +123,7 @@ void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const doub
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = index_[k];
     IntegrationResult<N>& r = out[i];
-    const double t0 = x[i][d] / c;
+    const double t0 = x[i][d] / c + t_ref;
     const double t = batch_.t[k];
     for (int a = 0; a < d; ++a) r.x[a] = batch_.x[static_cast<std::size_t>(a)][k];
     r.evaluations = static_cast<int>(std::min<std::uint32_t>(
@@ -133,18 +133,18 @@ void BulkFrontIntegrator<N>::run(std::span<const Vec<N>> x, std::span<const doub
         // At its end: the whole span, or the surface's time range ended it first.
         r.status = t == t0 + tau[i] ? FieldStatus::inside : FieldStatus::outside;
         r.reached = r.status == FieldStatus::inside ? tau[i] : t - t0;
-        r.x[d] = r.status == FieldStatus::inside ? x[i][d] + c * tau[i] : c * t;
+        r.x[d] = r.status == FieldStatus::inside ? x[i][d] + c * tau[i] : c * (t - t_ref);
         break;
       case advect::ParticleStatus::no_data:
         r.status = FieldStatus::no_data;
         r.reached = t - t0;
-        r.x[d] = c * t;
+        r.x[d] = c * (t - t_ref);
         break;
       case advect::ParticleStatus::left_domain:
       case advect::ParticleStatus::time_bounds:
         r.status = FieldStatus::outside;
         r.reached = t - t0;
-        r.x[d] = c * t;
+        r.x[d] = c * (t - t_ref);
         break;
     }
   }

@@ -25,7 +25,8 @@ namespace orthofront::spacetime {
 inline constexpr std::size_t kCudaFrontBreakEven = advect::kCudaFrontBreakEven;
 
 struct BulkFrontOptions {
-  double time_scale = 1;            ///< c of the lifted coordinate τ = c t
+  double time_scale = 1;            ///< c of the lifted coordinate τ = c (t - time_origin)
+  double time_origin = 0;           ///< t at τ = 0
   TimeRange times;                  ///< the surface's [t0, t1]: a vertex stops at its end
   advect::MethodOptions method;
   std::size_t min_vertices = 0;     ///< smaller fronts go per vertex through the engine's field

@@ -13,7 +13,9 @@ namespace orthofront::spacetime {
 
 /// Lifted field for N = d + 1 (N = 3 for 2D flows, N = 4 for 3D flows).
 ///
-/// Coordinates X = (x_1..x_d, τ) with τ = c t, so t = τ / c. V(X) = (v(x, τ/c), c).
+/// Coordinates X = (x_1..x_d, τ) with τ = c (t - t_ref), so t = τ / c + t_ref. V(X) = (v(x, t), c).
+/// The origin t_ref (the surface's t0) keeps τ small: times of real data (seconds since 1950,
+/// some 2e9) would leave τ few significant digits for the front's steps.
 /// Jacobian by the chain rule: ∂V/∂X = [[∂v/∂x, ∂v/∂τ], [0, 0]] with ∂v/∂τ = (1/c) ∂v/∂t
 /// (the last column is ∂v/∂t divided by c, not multiplied).
 /// Domain: the flow's spatial box (first d axes) times [c t_begin, c t_end]; a stream line that
@@ -28,8 +30,9 @@ class LiftedField final : public Field<N> {
 
   /// Throws InvalidArgument for a flow of the wrong dimension, c <= 0 or a time range that is
   /// empty or outside the flow's.
-  LiftedField(const UnsteadyField& flow, double time_scale, TimeRange times)
-      : flow_(flow), c_(time_scale), times_(times) {
+  LiftedField(const UnsteadyField& flow, double time_scale, TimeRange times,
+              double time_origin = 0)
+      : flow_(flow), c_(time_scale), t_ref_(time_origin), times_(times) {
     if (flow.dimension() != d)
       throw InvalidArgument("lifted field: a " + std::to_string(N) + "D space-time field needs a " +
                             std::to_string(d) + "D flow, '" + flow.describe() + "' is " +
@@ -47,8 +50,8 @@ class LiftedField final : public Field<N> {
     const Box<3> box = flow.domain();
     box_.lo.template head<d>() = box.lo.template head<d>();
     box_.hi.template head<d>() = box.hi.template head<d>();
-    box_.lo[d] = c_ * times_.begin;
-    box_.hi[d] = c_ * times_.end;
+    box_.lo[d] = c_ * (times_.begin - t_ref_);
+    box_.hi[d] = c_ * (times_.end - t_ref_);
   }
 
   FieldStatus velocity(const Vec<N>& X, Vec<N>& V) const override {
@@ -75,19 +78,21 @@ class LiftedField final : public Field<N> {
   }
   Box<N> domain() const override { return box_; }
   double next_kink(const Vec<N>& X, const Vec<N>& W, double after, double before) const override {
-    return flow_.next_kink(spatial(X), time(X), spatial(W), W[d] / c_, after, before);
+    return flow_.next_kink(spatial(X), time(X), spatial(W), time(W), after, before);
   }
   std::string describe() const override {
     return "spacetime(c=" + std::to_string(c_) + "):" + flow_.describe();
   }
 
   double time_scale() const { return c_; }
+  /// t at τ = 0.
+  double time_origin() const { return t_ref_; }
   TimeRange times() const { return times_; }
   /// Lifted point of (x, t).
   Vec<N> lift(const Vec3& x, double t) const {
     Vec<N> X;
     X.template head<d>() = x.template head<d>();
-    X[d] = c_ * t;
+    X[d] = c_ * (t - t_ref_);
     return X;
   }
   /// Spatial point of X (z = 0 for 2D flows) and its physical time.
@@ -96,11 +101,14 @@ class LiftedField final : public Field<N> {
     x.template head<d>() = X.template head<d>();
     return x;
   }
-  double time(const Vec<N>& X) const { return X[d] / c_; }
+  double time(const Vec<N>& X) const { return X[d] / c_ + t_ref_; }
+  /// Physical time of a lifted coordinate τ.
+  double time_of(double tau) const { return tau / c_ + t_ref_; }
 
  private:
   const UnsteadyField& flow_;
   double c_;
+  double t_ref_;
   TimeRange times_;
   Box<N> box_;
 };

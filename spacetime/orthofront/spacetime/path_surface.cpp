@@ -218,7 +218,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       observed_ = {o.t0, o.t0};
     }
     c_ = pr.time_scale;
-    lifted_ = std::make_unique<LiftedField<N>>(tracked_, c_, TimeRange{o.t0, o.t1});
+    lifted_ = std::make_unique<LiftedField<N>>(tracked_, c_, TimeRange{o.t0, o.t1}, o.t0);
     seed_.parameters = seed3.parameters;
     seed_.closed = seed3.closed;
     seed_.point = [curve = curve_, lifted = lifted_.get(), t0 = o.t0](double s) {
@@ -290,7 +290,8 @@ class PathRun final : public PathSurfaceBuilder::Impl {
   double front_time() override {
     const FrontSnapshot f = builder_->front();
     double t = kInf;
-    for (std::size_t i = N - 1; i < f.positions.size(); i += N) t = std::min(t, f.positions[i] / c_);
+    for (std::size_t i = N - 1; i < f.positions.size(); i += N)
+      t = std::min(t, lifted_->time_of(f.positions[i]));
     return t;
   }
 
@@ -301,7 +302,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     for (std::size_t i = 0; i + N <= f.positions.size(); i += N) {
       FrontSample sample;
       for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i + static_cast<std::size_t>(a)];
-      sample.t = f.positions[i + N - 1] / c_;
+      sample.t = lifted_->time_of(f.positions[i + N - 1]);
       sample.time_scale = c_;
       // Where the band of another surface replaced this one's, read the velocity (a slow-path
       // pin): a vertex taken for still would be given the reach of a whole front step in time.
@@ -351,7 +352,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     Mesh& mesh = result_.mesh;
     for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
       if constexpr (N == 3) {
-        const double t = mesh.positions[i][2] / c_;
+        const double t = lifted_->time_of(mesh.positions[i][2]);
         result_.spacetime_positions.emplace_back(mesh.positions[i][0], mesh.positions[i][1], t);
         mesh.positions[i][2] = 0;
         mesh.time[i] = t;
@@ -445,6 +446,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
     if (automatic && min_vertices == 0) min_vertices = kCudaFrontBreakEven;
     BulkFrontOptions bo;
     bo.time_scale = c_;
+    bo.time_origin = o_.t0;
     bo.times = {o_.t0, o_.t1};
     bo.min_vertices = min_vertices;
     bulk_min_vertices_ = min_vertices;
@@ -482,7 +484,7 @@ class PathRun final : public PathSurfaceBuilder::Impl {
       FrontSample& sample = samples_[i];
       sample.x.setZero();
       for (int a = 0; a < N - 1; ++a) sample.x[a] = f.positions[i * N + static_cast<std::size_t>(a)];
-      sample.t = f.positions[i * N + N - 1] / c_;
+      sample.t = lifted_->time_of(f.positions[i * N + N - 1]);
       if (!run_.streamed->resident_velocity(sample.x, sample.t, sample.v)) sample.v.setZero();
     }
     try {
