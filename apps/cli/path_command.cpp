@@ -89,8 +89,8 @@ void add_path_flags(CLI::App& command, PathArgs& args) {
       ->capture_default_str();
   command
       .add_option("--time-scale", args.time_scale,
-                  "c of the lifted time coordinate tau = c t (length per time unit); 0: median "
-                  "seed speed at t0")
+                  "c of the lifted time coordinate tau = c (t - t0) (length per time unit); 0: "
+                  "median seed speed at t0")
       ->capture_default_str();
   command.add_option("--cache-budget", args.budget,
                      "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
