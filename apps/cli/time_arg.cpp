@@ -33,7 +33,7 @@ std::optional<double> seconds_per(const std::string& unit) {
 // True when the series' times are seconds (a NetCDF series with a CF time coordinate).
 bool times_in_seconds(const io::TimeSeries* series) {
 #ifdef ORTHOFRONT_HAVE_NETCDF
-  return series != nullptr && io::netcdf_time_of_date(*series, "2000-01-01").has_value();
+  return series != nullptr && io::netcdf_has_calendar(*series);
 #else
   (void)series;
   return false;

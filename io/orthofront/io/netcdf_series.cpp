@@ -521,6 +521,7 @@ class NetcdfSeries final : public TimeSeries {
   RawStep read_raw(std::size_t step) const override;
   void decode(const RawStep& raw, std::span<float> values) const override;
   const NetcdfDescription& description() const { return description_; }
+  bool has_calendar() const { return epoch_.has_value(); }
   std::optional<double> time_of_date(const std::string& date) const {
     if (!epoch_) return std::nullopt;
     return parse_time_units("seconds since " + date, calendar_, "date '" + date + "'")
@@ -740,6 +741,9 @@ void NetcdfSeries::open_first(const NcFile& f) {
     }
     axes_.push_back(std::move(a));
   }
+  description_.velocity_units =
+      options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
+  description_.velocity_units_given = !options_.velocity_units.empty();
   {
     std::vector<std::string> spatial;
     for (const Axis& a : axes_) spatial.push_back(a.dimension);
@@ -751,8 +755,7 @@ void NetcdfSeries::open_first(const NcFile& f) {
                              length_unit(axes_[axes_.size() - 2].units);
     if (!lonlat_axes && !metric_axes) refuse_curvilinear(f, vars[0], spatial);
     // Index positions with velocities in m/s would be read as cells per second.
-    const std::string velocity_units =
-        options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
+    const std::string& velocity_units = description_.velocity_units;
     for (const Axis& a : axes_)
       if (a.from_index && speed_unit(velocity_units))
         throw FormatError("'" + f.path().string() + "': dimension '" + a.dimension +
@@ -818,9 +821,6 @@ void NetcdfSeries::open_first(const NcFile& f) {
                         " bytes can hold even compressed; a damaged header? Not read");
   }
   for (const int v : vars) rules_.push_back(no_data_rules(f, v));
-  description_.velocity_units =
-      options_.velocity_units.empty() ? f.units(vars[0]) : options_.velocity_units;
-  description_.velocity_units_given = !options_.velocity_units.empty();
 
   // The output grid: x fastest (the file's last dimension).
   const std::size_t d = axes_.size();
@@ -1253,6 +1253,11 @@ NetcdfVariable read_netcdf_variable(const std::filesystem::path& file, const std
 const NetcdfDescription* netcdf_description(const TimeSeries& series) {
   const auto* s = dynamic_cast<const NetcdfSeries*>(&series);
   return s ? &s->description() : nullptr;
+}
+
+bool netcdf_has_calendar(const TimeSeries& series) {
+  const auto* s = dynamic_cast<const NetcdfSeries*>(&series);
+  return s != nullptr && s->has_calendar();
 }
 
 std::optional<double> netcdf_time_of_date(const TimeSeries& series, const std::string& date) {

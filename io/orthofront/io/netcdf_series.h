@@ -79,6 +79,10 @@ const NetcdfDescription* netcdf_description(const TimeSeries& series);
 /// open_netcdf_series or one without a CF time coordinate; FormatError for a malformed date.
 std::optional<double> netcdf_time_of_date(const TimeSeries& series, const std::string& date);
 
+/// True for a series opened by open_netcdf_series whose times come from a CF time coordinate
+/// (seconds since its epoch, in a calendar), not from dt=.
+bool netcdf_has_calendar(const TimeSeries& series);
+
 /// One whole variable of a NetCDF file, unpacked: scale_factor / add_offset applied, and
 /// _FillValue, missing_value and values outside valid_min / valid_max / valid_range NaN (the
 /// rules of the series above), for readers of layouts other than CF grids (curvilinear models).
