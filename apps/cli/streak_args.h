@@ -15,7 +15,7 @@ struct StreakArgs {
   std::string field, seed, release, frames, out, report, budget, insertion = "exact";
   std::string route = "direct", point, device, device_memory, mesh = "remeshed";
   int seed_count = 0, releases_per_break = 1;
-  double edge = 0.05, split = 1.5, merge = 0.5, collapse = 0.75, prune = 0.5,
+  double edge = 0.05, split = 1.5, merge = 0.5, collapse = 0.75, prune = 0.75,
          release_step = 0;
   std::size_t max_vertices = 0;
   bool quiet = false;

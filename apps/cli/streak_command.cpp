@@ -227,7 +227,9 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
   command
       .add_option("--prune", args.prune,
                   "--mesh remeshed: remove filaments of dye narrower than this many edge lengths "
-                  "(a mesh with edges of one edge length cannot resolve them; 0 keeps them all)")
+                  "(a mesh with edges of one edge length cannot resolve them, and its faces there "
+                  "are slivers; at most split/2, the default with a smaller --split; 0 keeps them "
+                  "all)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command.add_option("--split", args.split, "Split edges longer than this many edge lengths")
@@ -285,7 +287,8 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.merge = args.merge;
   o.mesh = args.mesh == "rows" ? spacetime::StreakMesh::rows : spacetime::StreakMesh::remeshed;
   o.collapse = args.collapse;
-  o.prune = args.prune;
+  // The default width is the widest split allows: a smaller --split narrows it with it.
+  o.prune = command.count("--prune") > 0 ? args.prune : std::min(args.prune, 0.5 * args.split);
   o.release_step = args.release_step;
   o.releases_per_break = args.releases_per_break;
   o.seed_count = args.seed_count;

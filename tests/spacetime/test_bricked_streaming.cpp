@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -744,4 +745,36 @@ TEST_CASE("bricked series: NaN and infinite samples are no data at every weight,
   CHECK(checked == 3 * 10 * 8 * 6);
   // Each bad sample takes the cells around it: their inner points, and points on their faces.
   CHECK(no_data >= 3 * 8);
+}
+
+TEST_CASE("locate_time finds the interval upper_bound finds: even and uneven steps, the ends and repeats",
+          "[spacetime]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const std::vector<std::vector<double>> series = {
+      {0, 1},
+      {0, 0.5, 1, 1.5, 2, 2.5},
+      {1e9, 1e9 + 3600, 1e9 + 7200, 1e9 + 10800},
+      {0, 0.001, 0.002, 5, 9, 10, 10.5, 40},  // uneven: the walk gives way to the search
+      {0, 1, 1, 2, 3},                        // a repeated time
+  };
+  for (const auto& times : series) {
+    std::vector<double> probes = times;
+    for (int i = 0; i < 200; ++i) probes.push_back(times.front() + unit(rng) * (times.back() - times.front()));
+    for (const double t : probes) {
+      const auto it = std::upper_bound(times.begin(), times.end(), t);
+      const std::size_t want = std::min(
+          static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - times.begin() - 1, 0)), times.size() - 2);
+      std::size_t k = 99;
+      double w = -1;
+      REQUIRE(locate_time(times, t, k, w));
+      CHECK(k == want);
+      CHECK(w == (t - times[want]) / (times[want + 1] - times[want]));
+    }
+    std::size_t k = 0;
+    double w = 0;
+    CHECK_FALSE(locate_time(times, times.front() - 1e-3, k, w));
+    CHECK_FALSE(locate_time(times, times.back() + 1e-3, k, w));
+    CHECK_FALSE(locate_time(times, std::nan(""), k, w));
+  }
 }

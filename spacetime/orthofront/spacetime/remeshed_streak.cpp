@@ -1,5 +1,6 @@
 #include "orthofront/spacetime/remeshed_streak.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -30,6 +31,19 @@ double seconds_since(Clock::time_point start) {
 std::string number(double value) { return format_parameter(value); }
 
 std::size_t idx(std::int32_t i) { return static_cast<std::size_t>(i); }
+
+// Adds the seconds of its scope to a report's total.
+class InsertTimer {
+ public:
+  explicit InsertTimer(double& total) : total_(total), start_(Clock::now()) {}
+  InsertTimer(const InsertTimer&) = delete;
+  InsertTimer& operator=(const InsertTimer&) = delete;
+  ~InsertTimer() { total_ += seconds_since(start_); }
+
+ private:
+  double& total_;
+  Clock::time_point start_;
+};
 
 // Interior angle at p of the triangle (p, q, r).
 double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
@@ -71,6 +85,7 @@ class RemeshedStreakBuilder {
     status_.push_back(status);
     id_.push_back(next_id_++);
     on_chain_.push_back(0);
+    label_exact_.push_back(1);
     return v;
   }
   bool alive(std::int32_t v) const { return status_[idx(v)] == ParticleStatus::moving; }
@@ -121,10 +136,17 @@ class RemeshedStreakBuilder {
                           std::vector<double>& ms, std::vector<double>& mtau);
   void collapse_pass();
   std::size_t flip_pass();  // returns the flips made
+  void flip_around_reshaped();
+  double smallest_angle(std::int32_t a, std::int32_t b, std::int32_t c, const Vec3& xa) const;
+  void smooth_pass();
+  // face_flags_[f] = flag(f, scratch ring) for every live face, in parallel.
+  template <class Flag>
+  void flag_faces(const Flag& flag);
   // How wide the filament is at face f, or infinity where f is not on one: f has a boundary
   // edge, every corner on the boundary and none on the newest row (the youngest strip is thin
   // where the flow is slow).
-  double filament_width(std::int32_t f) const;
+  double filament_width(std::int32_t f, std::vector<Topology::HalfEdge>& ring) const;
+  bool wants_flip(std::int32_t f, int e, double split2) const;
   void prune(std::int32_t f);
   void prune_pass();
   bool collapsible(std::int32_t u, std::int32_t w) const;
@@ -158,7 +180,12 @@ class RemeshedStreakBuilder {
   std::vector<ParticleStatus> status_;
   std::vector<std::int32_t> id_;
   std::vector<char> on_chain_;
-  mutable std::vector<Topology::HalfEdge> ring_;  // scratch for fans
+  std::vector<char> label_exact_;  // the particle lies on its label's path (it was not interpolated)
+  std::vector<Topology::HalfEdge> ring_;  // scratch for fans
+  // Scratch of the sweeps: a per-face-slot flag computed in parallel, and what a sweep changed.
+  std::vector<std::uint8_t> face_flags_;
+  std::vector<char> changed_faces_, changed_vertices_;
+  std::vector<std::int32_t> reshaped_;  // vertices whose fans splits and collapses changed
   // Edges (by their particles' ids) whose collapse was refused, and the pass to try again at.
   std::unordered_map<std::uint64_t, std::size_t> refused_;
   std::size_t collapse_passes_ = 0;
@@ -303,7 +330,7 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     const Vec3 before = normal(c[0], c[1], c[2]);
     const Vec3 after = (moved[idx(c[1])] - moved[idx(c[0])]).cross(moved[idx(c[2])] - moved[idx(c[0])]);
     if (after.dot(before) > 0) continue;
-    if (filament_width(fi) < width_)
+    if (filament_width(fi, ring_) < width_)
       turned_filament.push_back(fi);
     else
       ++turned;
@@ -312,6 +339,7 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     report_.advect_seconds += seconds_since(start);
     return Move::retry;
   }
+  changed_vertices_.assign(x_.size(), 0);
   for (const std::int32_t f : turned_filament)
     if (topo_.face_alive(f)) prune(f);
   report_.faces_turned += turned;
@@ -354,18 +382,26 @@ bool RemeshedStreakBuilder::advance_to(double t_to) {
 
 template <class Keep>
 std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_where(const Keep& keep) const {
-  std::vector<Split> edges;
-  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
-    const auto fi = static_cast<std::int32_t>(f);
-    if (!topo_.face_alive(fi)) continue;
-    const auto& c = topo_.face(fi);
-    for (int e = 0; e < 3; ++e) {
-      const std::int32_t g = topo_.neighbor(fi, e);
-      if (g != none && g < fi) continue;  // each edge once
-      const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
-      if (keep(length)) edges.push_back({fi, e, length});
+  // Chunks of faces are measured in parallel and joined in face order: the list (and so every
+  // pass that sorts it stably) is the one a single sweep makes.
+  constexpr std::size_t chunk = 2048;
+  const std::size_t slots = topo_.face_slots();
+  std::vector<std::vector<Split>> parts((slots + chunk - 1) / chunk);
+  tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t part) {
+    for (std::size_t f = part * chunk; f < std::min(slots, (part + 1) * chunk); ++f) {
+      const auto fi = static_cast<std::int32_t>(f);
+      if (!topo_.face_alive(fi)) continue;
+      const auto& c = topo_.face(fi);
+      for (int e = 0; e < 3; ++e) {
+        const std::int32_t g = topo_.neighbor(fi, e);
+        if (g != none && g < fi) continue;  // each edge once
+        const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+        if (keep(length)) parts[part].push_back({fi, e, length});
+      }
     }
-  }
+  });
+  std::vector<Split> edges;
+  for (const auto& part : parts) edges.insert(edges.end(), part.begin(), part.end());
   return edges;
 }
 
@@ -403,7 +439,13 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     if (seed_.closed() && ms[k] >= 1) ms[k] -= 1;
     mtau[k] = 0.5 * (tau_[idx(a)] + tau_[idx(b)]);
     const bool young = t_ - mtau[k] <= 4 * (t_ - previous_t_);
-    const bool exact = o_.insertion == ParticleInsertion::exact && !labels_tangled(chosen[k]);
+    // An end placed by interpolation does not lie on its label's path, so the path of the label
+    // midpoint has no reason to pass near the edge: it mostly lands off it, and would be
+    // integrated from its release only to be replaced by interpolation below.
+    const bool ends_exact = label_exact_[idx(a)] && label_exact_[idx(b)];
+    if (o_.insertion == ParticleInsertion::exact && !ends_exact && !young) ++report_.inexact_ends;
+    const bool exact =
+        o_.insertion == ParticleInsertion::exact && ends_exact && !labels_tangled(chosen[k]);
     if (exact || young || previous_t_ >= t_ || mtau[k] > previous_t_) {
       exact_of.push_back(k);
       exact_x.push_back(seed_point(ms[k]));
@@ -415,15 +457,18 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   }
   if (o_.insertion == ParticleInsertion::exact) report_.diverged_insertions += near_of.size();
   std::vector<ParticleStatus> exact_status(exact_x.size()), near_status(near_x.size());
-  if (!exact_x.empty() &&
-      !no_error(advect_from_release(access_, map_, exact_x, exact_from, t_, exact_status,
-                                    report_.evaluations)))
-    return false;
-  if (!near_x.empty()) {
-    if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
-    const std::vector<double> from(near_x.size(), previous_t_);
-    report_.evaluations += map_.advect_all(near_x, from, t_, near_status);
-    if (access_.prepare && !no_error(access_.prepare(t_, t_))) return false;
+  {
+    const InsertTimer timer(report_.insert_seconds);
+    if (!exact_x.empty() &&
+        !no_error(advect_from_release(access_, map_, exact_x, exact_from, t_, exact_status,
+                                      report_.evaluations)))
+      return false;
+    if (!near_x.empty()) {
+      if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
+      const std::vector<double> from(near_x.size(), previous_t_);
+      report_.evaluations += map_.advect_all(near_x, from, t_, near_status);
+      if (access_.prepare && !no_error(access_.prepare(t_, t_))) return false;
+    }
   }
   std::vector<ParticleStatus> status(n);
   std::vector<Vec3> before(n);
@@ -458,6 +503,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
       fx[i] = 0.5 * (previous_x_[idx(c[chosen[far[i]].edge])] +
                      previous_x_[idx(c[(chosen[far[i]].edge + 1) % 3])]);
     }
+    const InsertTimer timer(report_.insert_seconds);
     if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
     const std::vector<double> from(far.size(), previous_t_);
     report_.evaluations += map_.advect_all(fx, from, t_, fst);
@@ -515,6 +561,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     const bool chain_edge = on_chain_[idx(a)] && on_chain_[idx(b)] &&
                             topo_.neighbor(chosen[k].face, chosen[k].edge) == none;
     const std::int32_t m = topo_.split(chosen[k].face, chosen[k].edge);
+    reshaped_.push_back(m);
     x_.push_back(x[k]);
     previous_x_.push_back(was);
     s_.push_back(ms[k]);
@@ -522,6 +569,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     status_.push_back(status[k]);
     id_.push_back(next_id_++);
     on_chain_.push_back(0);
+    label_exact_.push_back(exact_placed[k]);
     if (chain_edge) {
       // The newest row gains the particle between a and b.
       const auto ia = std::find(chain_.begin(), chain_.end(), a);
@@ -628,8 +676,11 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
   }
   if (redo.empty()) return true;
   std::vector<ParticleStatus> rst(redo.size());
-  if (!no_error(advect_from_release(access_, map_, rx, rfrom, t_, rst, report_.evaluations)))
-    return false;
+  {
+    const InsertTimer timer(report_.insert_seconds);
+    if (!no_error(advect_from_release(access_, map_, rx, rfrom, t_, rst, report_.evaluations)))
+      return false;
+  }
   report_.steered_insertions += redo.size();
   for (std::size_t i = 0; i < redo.size(); ++i) {
     const std::size_t k = redo[i];
@@ -749,50 +800,213 @@ void RemeshedStreakBuilder::collapse_pass() {
       on_chain_[idx(u)] = 0;
     }
     topo_.collapse(u, w);  // u has no face left: it is no longer moved, and compact() drops it
+    reshaped_.push_back(w);
     ++report_.collapses;
   }
   report_.coarsen_seconds += seconds_since(start);
 }
 
+bool RemeshedStreakBuilder::wants_flip(std::int32_t fi, int e, double split2) const {
+  const std::int32_t g = topo_.neighbor(fi, e);
+  const auto& c = topo_.face(fi);
+  const std::int32_t a = c[e], b = c[(e + 1) % 3], p = c[(e + 2) % 3];
+  const auto& gc = topo_.face(g);
+  std::int32_t q = none;
+  for (const std::int32_t v : gc)
+    if (v != a && v != b) q = v;
+  const Vec3 &xa = x_[idx(a)], &xb = x_[idx(b)], &xp = x_[idx(p)], &xq = x_[idx(q)];
+  // Delaunay: the angles opposite the edge sum to more than π, i.e. the sine of their sum
+  // is negative (times the four edge lengths: no trigonometry); and no edge that splits.
+  const Vec3 pa = xa - xp, pb = xb - xp, qa = xa - xq, qb = xb - xq;
+  const double sine_sum = pa.cross(pb).norm() * qa.dot(qb) + pa.dot(pb) * qa.cross(qb).norm();
+  if (!(sine_sum < -1e-9 * std::sqrt(pa.squaredNorm() * pb.squaredNorm() *
+                                     qa.squaredNorm() * qb.squaredNorm())))
+    return false;
+  if ((xp - xq).squaredNorm() > split2) return false;
+  // The new faces (a, q, p) and (q, b, p) keep the side of the old ones, which lie nearly
+  // flat across the edge (a flip across a crease would change the surface).
+  const Vec3 n1 = normal(a, q, p), n2 = normal(q, b, p);
+  const Vec3 nf = normal(a, b, p), ng = normal(b, a, q);
+  const double lf = nf.norm(), lg = ng.norm();
+  if (!(nf.dot(ng) > 0.9 * lf * lg)) return false;
+  const Vec3 mean = nf / lf + ng / lg;
+  return n1.dot(mean) > 0 && n2.dot(mean) > 0;
+}
+
+template <class Flag>
+void RemeshedStreakBuilder::flag_faces(const Flag& flag) {
+  face_flags_.assign(topo_.face_slots(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, topo_.face_slots(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<Topology::HalfEdge> ring;
+                      for (std::size_t f = r.begin(); f < r.end(); ++f) {
+                        const auto fi = static_cast<std::int32_t>(f);
+                        if (topo_.face_alive(fi)) face_flags_[f] = flag(fi, ring);
+                      }
+                    });
+}
+
 std::size_t RemeshedStreakBuilder::flip_pass() {
   const std::size_t before = report_.flips;
   const double split2 = std::pow(o_.split * o_.edge, 2);
+  // The test reads positions and the two faces alone: it runs for every edge at once, and the
+  // sweep (in face order, as flips depend on earlier ones) repeats it where a flip changed a face.
+  flag_faces([&](std::int32_t fi, std::vector<Topology::HalfEdge>&) {
+    std::uint8_t bits = 0;
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(fi, e);
+      if (g != none && g > fi && wants_flip(fi, e, split2)) bits |= std::uint8_t(1u << e);
+    }
+    return bits;
+  });
+  changed_faces_.assign(topo_.face_slots(), 0);
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
     if (!topo_.face_alive(fi)) continue;
     for (int e = 0; e < 3; ++e) {
       const std::int32_t g = topo_.neighbor(fi, e);
       if (g == none || g < fi) continue;
-      const auto& c = topo_.face(fi);
-      const std::int32_t a = c[e], b = c[(e + 1) % 3], p = c[(e + 2) % 3];
-      const auto& gc = topo_.face(g);
-      std::int32_t q = none;
-      for (const std::int32_t v : gc)
-        if (v != a && v != b) q = v;
-      const Vec3 &xa = x_[idx(a)], &xb = x_[idx(b)], &xp = x_[idx(p)], &xq = x_[idx(q)];
-      // Delaunay: the angles opposite the edge sum to more than π, i.e. the sine of their sum
-      // is negative (times the four edge lengths: no trigonometry); and no edge that splits.
-      const Vec3 pa = xa - xp, pb = xb - xp, qa = xa - xq, qb = xb - xq;
-      const double sine_sum = pa.cross(pb).norm() * qa.dot(qb) + pa.dot(pb) * qa.cross(qb).norm();
-      if (!(sine_sum < -1e-9 * std::sqrt(pa.squaredNorm() * pb.squaredNorm() *
-                                         qa.squaredNorm() * qb.squaredNorm())))
-        continue;
-      if ((xp - xq).squaredNorm() > split2) continue;
-      // The new faces (a, q, p) and (q, b, p) keep the side of the old ones, which lie nearly
-      // flat across the edge (a flip across a crease would change the surface).
-      const Vec3 n1 = normal(a, q, p), n2 = normal(q, b, p);
-      const Vec3 nf = normal(a, b, p), ng = normal(b, a, q);
-      const double lf = nf.norm(), lg = ng.norm();
-      if (!(nf.dot(ng) > 0.9 * lf * lg)) continue;
-      const Vec3 mean = nf / lf + ng / lg;
-      if (!(n1.dot(mean) > 0 && n2.dot(mean) > 0)) continue;
-      if (topo_.flip(fi, e)) ++report_.flips;
+      const bool want = changed_faces_[f] || changed_faces_[idx(g)] ? wants_flip(fi, e, split2)
+                                                         : (face_flags_[f] >> e & 1u) != 0;
+      if (want && topo_.flip(fi, e)) {
+        ++report_.flips;
+        changed_faces_[f] = changed_faces_[idx(g)] = 1;
+      }
     }
   }
   return report_.flips - before;
 }
 
-double RemeshedStreakBuilder::filament_width(std::int32_t f) const {
+double RemeshedStreakBuilder::smallest_angle(std::int32_t, std::int32_t b, std::int32_t c,
+                                             const Vec3& xa) const {
+  const Vec3& xb = x_[idx(b)];
+  const Vec3& xc = x_[idx(c)];
+  return std::min({angle_at(xa, xb, xc), angle_at(xb, xc, xa), angle_at(xc, xa, xb)});
+}
+
+void RemeshedStreakBuilder::smooth_pass() {
+  if (!o_.smooth) return;
+  const double good = 30.0 * M_PI / 180.0;
+  flag_faces([&](std::int32_t f, std::vector<Topology::HalfEdge>&) {
+    const auto& c = topo_.face(f);
+    return static_cast<std::uint8_t>(smallest_angle(c[0], c[1], c[2], x_[idx(c[0])]) < good);
+  });
+  // The particles that may move: those placed by interpolation (an exact particle would leave
+  // its label's path), not on the newest row, at a corner of a face with an angle under 30°.
+  std::vector<std::int32_t> candidates;
+  std::vector<char> seen(x_.size(), 0);
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    if (!face_flags_[f] || !topo_.face_alive(static_cast<std::int32_t>(f))) continue;
+    for (const std::int32_t v : topo_.face(static_cast<std::int32_t>(f)))
+      if (!seen[idx(v)] && !label_exact_[idx(v)] && !on_chain_[idx(v)] && alive(v)) {
+        seen[idx(v)] = 1;
+        candidates.push_back(v);
+      }
+  }
+  const double limit2 = std::pow(o_.split * o_.edge, 2);
+  for (const std::int32_t v : candidates) {
+    const bool boundary = topo_.fan(v, ring_);
+    if (ring_.empty()) continue;
+    const Vec3& xv = x_[idx(v)];
+    // The target: the mean of the apexes that would make each face around equilateral.
+    Vec3 target = Vec3::Zero();
+    for (const Topology::HalfEdge& h : ring_) {
+      const Vec3& xq = x_[idx(topo_.to(h))];
+      const Vec3& xr = x_[idx(topo_.opposite(h.face, h.edge))];
+      const Vec3 n = (xq - xv).cross(xr - xv);
+      const Vec3 across = n.cross(xr - xq);
+      if (!(across.squaredNorm() > 0)) continue;
+      target += 0.5 * (xq + xr) + (std::sqrt(3.0) / 2) * (xr - xq).norm() * across.normalized();
+    }
+    target /= static_cast<double>(ring_.size());
+    Vec3 d = target - xv;
+    if (boundary) {
+      // Along a straight boundary only (within 20°, as for collapses), toward the neighbour
+      // on the side it moves to and no further than halfway: the boundary keeps its shape.
+      const std::int32_t p = topo_.to(ring_.front());
+      const std::int32_t q = topo_.opposite(ring_.back().face, ring_.back().edge);
+      if (angle_at(xv, x_[idx(p)], x_[idx(q)]) < 160.0 * M_PI / 180.0) continue;
+      const Vec3 toward_q = x_[idx(q)] - xv, toward_p = x_[idx(p)] - xv;
+      const double along_q = d.dot(toward_q) / toward_q.squaredNorm();
+      const double along_p = d.dot(toward_p) / toward_p.squaredNorm();
+      d = along_q > along_p ? std::min(along_q, 0.5) * toward_q : std::min(along_p, 0.5) * toward_p;
+    } else {
+      Vec3 n = Vec3::Zero();
+      for (const Topology::HalfEdge& h : ring_) {
+        const auto& c = topo_.face(h.face);
+        n += normal(c[0], c[1], c[2]);
+      }
+      if (!(n.squaredNorm() > 0)) continue;
+      n.normalize();
+      d -= n * n.dot(d);
+    }
+    const Vec3 p = xv + 0.5 * d;
+    // Every face around keeps its side, no edge grows to split, and the smallest angle grows.
+    double before = M_PI, after = M_PI;
+    bool ok = true;
+    for (const Topology::HalfEdge& h : ring_) {
+      const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
+      const Vec3 was = (x_[idx(q)] - xv).cross(x_[idx(r)] - xv);
+      const Vec3 now = (x_[idx(q)] - p).cross(x_[idx(r)] - p);
+      if (!(now.dot(was) > 0.5 * now.norm() * was.norm()) || (x_[idx(q)] - p).squaredNorm() > limit2) {
+        ok = false;
+        break;
+      }
+      before = std::min(before, smallest_angle(v, q, r, xv));
+      after = std::min(after, smallest_angle(v, q, r, p));
+    }
+    if (!ok || !(after > before)) continue;
+    // The label (and the position one break ago) where p lies in the old fan.
+    for (const Topology::HalfEdge& h : ring_) {
+      const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
+      const Vec3 e1 = x_[idx(q)] - xv, e2 = x_[idx(r)] - xv, w = p - xv;
+      const double a11 = e1.dot(e1), a12 = e1.dot(e2), a22 = e2.dot(e2);
+      const double det = a11 * a22 - a12 * a12;
+      if (!(det > 0)) continue;
+      const double bq = (a22 * e1.dot(w) - a12 * e2.dot(w)) / det;
+      const double br = (a11 * e2.dot(w) - a12 * e1.dot(w)) / det;
+      if (bq < -1e-12 || br < -1e-12 || bq + br > 1 + 1e-12) continue;
+      const double bv = 1 - bq - br;
+      const double sv = s_[idx(v)];
+      const Eigen::Vector2d label =
+          bv * label_near(v, sv) + bq * label_near(q, sv) + br * label_near(r, sv);
+      previous_x_[idx(v)] = bv * previous_x_[idx(v)] + bq * previous_x_[idx(q)] + br * previous_x_[idx(r)];
+      x_[idx(v)] = p;
+      s_[idx(v)] = seed_.closed() ? label.x() - std::floor(label.x()) : std::clamp(label.x(), 0.0, 1.0);
+      tau_[idx(v)] = label.y();
+      ++report_.smoothed;
+      break;
+    }
+  }
+}
+
+void RemeshedStreakBuilder::flip_around_reshaped() {
+  const double split2 = std::pow(o_.split * o_.edge, 2);
+  std::vector<std::int32_t> work;
+  for (const std::int32_t v : reshaped_) {
+    topo_.fan(v, ring_);  // none for a particle that stopped
+    for (const Topology::HalfEdge& h : ring_) work.push_back(h.face);
+  }
+  // Each flip makes its edge Delaunay and may unmake the four around it: the two faces are
+  // looked at again. Bounded, as a flip's side conditions (creases, long edges) could cycle.
+  std::size_t budget = 16 * work.size() + 64;
+  while (!work.empty() && budget-- > 0) {
+    const std::int32_t f = work.back();
+    work.pop_back();
+    if (!topo_.face_alive(f)) continue;
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t g = topo_.neighbor(f, e);
+      if (g == none || !wants_flip(f, e, split2) || !topo_.flip(f, e)) continue;
+      ++report_.flips;
+      work.push_back(f);
+      work.push_back(g);
+      break;
+    }
+  }
+}
+
+double RemeshedStreakBuilder::filament_width(std::int32_t f,
+                                             std::vector<Topology::HalfEdge>& ring) const {
   constexpr double wide = std::numeric_limits<double>::infinity();
   const auto& c = topo_.face(f);
   for (const std::int32_t v : c)
@@ -814,7 +1028,7 @@ double RemeshedStreakBuilder::filament_width(std::int32_t f) const {
     case 1:
       // The face's height over its boundary edge, where the corner across lies on the boundary
       // too (on the filament's other side).
-      return topo_.fan(c[(outer + 2) % 3], ring_) ? area2 / length(outer) : wide;
+      return topo_.fan(c[(outer + 2) % 3], ring) ? area2 / length(outer) : wide;
     case 2: {
       // A loose end. Where one of its boundary edges caps the filament (the boundary turns by
       // more than 45° at both its ends), the filament is as wide as the face's smallest height;
@@ -822,9 +1036,9 @@ double RemeshedStreakBuilder::filament_width(std::int32_t f) const {
       const int e1 = (inner + 1) % 3, e2 = (inner + 2) % 3;  // boundary edges, meeting at c[e2]
       const int cap = length(e1) <= length(e2) ? e1 : e2;
       const std::int32_t far = cap == e1 ? c[e1] : c[(e2 + 1) % 3];  // the cap's other end
-      if (topo_.fan(far, ring_)) {
-        const std::int32_t p = topo_.to(ring_.front());
-        const std::int32_t q = topo_.opposite(ring_.back().face, ring_.back().edge);
+      if (topo_.fan(far, ring)) {
+        const std::int32_t p = topo_.to(ring.front());
+        const std::int32_t q = topo_.opposite(ring.back().face, ring.back().edge);
         if (angle_at(x_[idx(far)], x_[idx(p)], x_[idx(q)]) < 0.75 * M_PI)
           return area2 / std::max({length(0), length(1), length(2)});
       }
@@ -838,7 +1052,10 @@ double RemeshedStreakBuilder::filament_width(std::int32_t f) const {
 void RemeshedStreakBuilder::prune(std::int32_t f) {
   removed_.clear();
   report_.faces_pruned += topo_.remove_face(f, &removed_);
-  for (const auto& c : removed_) report_.area_pruned += 0.5 * normal(c[0], c[1], c[2]).norm();
+  for (const auto& c : removed_) {
+    report_.area_pruned += 0.5 * normal(c[0], c[1], c[2]).norm();
+    for (const std::int32_t v : c) changed_vertices_[idx(v)] = 1;
+  }
 }
 
 void RemeshedStreakBuilder::prune_pass() {
@@ -848,11 +1065,29 @@ void RemeshedStreakBuilder::prune_pass() {
   // parts is cut only where it is thinner than half the width (or where a face of it turns
   // over, see advance()): fewer pieces and less dye lost than cutting at the full width, for
   // slightly thinner faces.
-  const auto loose_end = [&](std::int32_t f) {
-    if (!topo_.face_alive(f) || !(filament_width(f) < width_)) return false;
+  //
+  // A face's width depends on its corners' fans alone, so it is measured for every face at
+  // once, and measured again in the sweeps only where a removal touched a corner (changed_vertices_).
+  const auto boundary_edges = [&](std::int32_t f) {
     int boundary = 0;
     for (int e = 0; e < 3; ++e) boundary += topo_.neighbor(f, e) == none ? 1 : 0;
-    return boundary >= 2;
+    return boundary;
+  };
+  constexpr std::uint8_t loose = 1, thin = 2;  // narrower than the width; than half of it
+  flag_faces([&](std::int32_t f, std::vector<Topology::HalfEdge>& ring) {
+    const double w = filament_width(f, ring);
+    return static_cast<std::uint8_t>((w < width_ && boundary_edges(f) >= 2 ? loose : 0) |
+                                     (w < 0.5 * width_ ? thin : 0));
+  });
+  changed_vertices_.assign(x_.size(), 0);
+  const auto touched = [&](std::int32_t f) {
+    const auto& c = topo_.face(f);
+    return changed_vertices_[idx(c[0])] || changed_vertices_[idx(c[1])] || changed_vertices_[idx(c[2])];
+  };
+  const auto loose_end = [&](std::int32_t f) {
+    if (!topo_.face_alive(f)) return false;
+    if (!touched(f)) return (face_flags_[idx(f)] & loose) != 0;
+    return filament_width(f, ring_) < width_ && boundary_edges(f) >= 2;
   };
   std::vector<std::int32_t> work;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
@@ -868,21 +1103,29 @@ void RemeshedStreakBuilder::prune_pass() {
   }
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
-    if (topo_.face_alive(fi) && filament_width(fi) < 0.5 * width_) prune(fi);
+    if (!topo_.face_alive(fi)) continue;
+    if (touched(fi) ? filament_width(fi, ring_) < 0.5 * width_ : (face_flags_[f] & thin) != 0)
+      prune(fi);
   }
 }
 
 bool RemeshedStreakBuilder::adapt() {
   const auto start = Clock::now();
   prune_pass();
+  // The move changed every face: one sweep over all of them. Splits and collapses change the
+  // faces around a vertex: the flips they call for are sought there.
+  flip_pass();
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
     std::size_t splits = 0;
+    reshaped_.clear();
     if (!split_pass(splits)) return false;
     if (splits == 0) break;
-    flip_pass();
+    flip_around_reshaped();
   }
+  reshaped_.clear();
   collapse_pass();
-  if (flip_pass() > 0) flip_pass();
+  flip_around_reshaped();
+  smooth_pass();
   report_.refine_seconds += seconds_since(start);
   return true;
 }
@@ -903,10 +1146,12 @@ void RemeshedStreakBuilder::compact() {
     status_[to] = status_[v];
     id_[to] = id_[v];
     on_chain_[to] = on_chain_[v];
+    label_exact_[to] = label_exact_[v];
     kept = std::max(kept, to + 1);
   }
   x_.resize(kept), previous_x_.resize(kept), s_.resize(kept), tau_.resize(kept);
   status_.resize(kept), id_.resize(kept), on_chain_.resize(kept);
+  label_exact_.resize(kept);
   std::vector<std::int32_t> chain;
   for (const std::int32_t v : chain_)
     if (index[idx(v)] != none) chain.push_back(index[idx(v)]);

@@ -79,7 +79,14 @@ struct StreakOptions {
   /// their boundary, which grows exponentially, would set the vertex count. A filament is eaten
   /// from its loose end while thinner than w, and cut where it is thinner than w/2 or a face of
   /// it turns over (faces touching the newest row are never pruned). 0 keeps every filament.
-  double prune = 0.5;
+  /// At most split/2; the default is that, as the strips of a narrower filament have angles
+  /// under 30°.
+  double prune = 0.75;
+  /// Remeshed: particles placed by interpolation at a corner of a face with an angle under 30°
+  /// move halfway toward the point that would make the faces around them equilateral (along
+  /// the surface, or along a straight boundary; their labels interpolated there) where that
+  /// widens the smallest angle. Exactly placed particles never move: they stay on their paths.
+  bool smooth = true;
   Tolerance tolerance{1e-10, 1e-10};
   /// Gridded series only: move particles by bulk advection (advect::BatchAdvector, DOPRI5 at
   /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
@@ -167,6 +174,10 @@ struct StreakReport {
   /// triangle turned), their exact path ended farther than a quarter of the edge from its
   /// midpoint, or it would have turned a face over (those go to the edge's midpoint).
   std::size_t diverged_insertions = 0;
+  /// Remeshed, exact insertion: of diverged_insertions, edges with an end that was itself placed
+  /// by interpolation (not on its label's path); they are interpolated without trying the path.
+  std::size_t inexact_ends = 0;
+  std::size_t smoothed = 0;  ///< Remeshed: particles moved by smoothing (counted per move)
   std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
   /// Remeshed: faces removed as filaments thinner than prune·ℓ (with the fans they would have
   /// pinched), and their area.
@@ -196,6 +207,7 @@ struct StreakReport {
   std::size_t rows_released_between = 0, release_calls = 0;
   double release_call_seconds = 0;
   double coarsen_seconds = 0;       ///< of refine_seconds
+  double insert_seconds = 0;        ///< of refine_seconds: moving inserted particles to now (remeshed)
   /// The driver's time on frames: their vertices and faces, and waiting for the frame before to
   /// be finished. Finishing a frame (quality, the sink) runs beside the particles' advance:
   /// frame_finish_seconds, summed over frames.

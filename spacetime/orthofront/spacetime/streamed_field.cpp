@@ -10,10 +10,27 @@
 namespace orthofront::spacetime {
 
 bool locate_time(const std::vector<double>& times, double t, std::size_t& k, double& w) {
-  if (times.size() < 2 || !(t >= times.front() && t <= times.back())) return false;
-  const auto it = std::upper_bound(times.begin(), times.end(), t);
-  k = static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - times.begin() - 1, 0));
-  k = std::min(k, times.size() - 2);
+  const std::size_t n = times.size();
+  if (n < 2 || !(t >= times.front() && t <= times.back())) return false;
+  // Called for every field evaluation: most series are evenly spaced, so the interval is guessed
+  // from the mean spacing and found by a short walk (a binary search where the walk is long).
+  // Either way k is the last interval start <= t, as upper_bound gives it.
+  const double span = times.back() - times.front();
+  const double guess = span > 0 ? (t - times.front()) / span * static_cast<double>(n - 1) : 0.0;
+  k = std::min(static_cast<std::size_t>(guess), n - 2);
+  for (int walk = 0;; ++walk) {
+    if (walk == 4) {
+      const auto it = std::upper_bound(times.begin(), times.end(), t);
+      k = std::min(static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - times.begin() - 1, 0)), n - 2);
+      break;
+    }
+    if (k > 0 && times[k] > t)
+      --k;
+    else if (k + 2 < n && times[k + 1] <= t)
+      ++k;
+    else
+      break;
+  }
   w = (t - times[k]) / (times[k + 1] - times[k]);
   return true;
 }
