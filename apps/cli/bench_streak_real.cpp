@@ -51,6 +51,7 @@ nlohmann::json row_json(const RealRow& r, double edge) {
           {"advect_seconds", rep.advect_seconds},
           {"refine_seconds", rep.refine_seconds},
           {"coarsen_seconds", rep.coarsen_seconds},
+          {"insert_seconds", rep.insert_seconds},
           {"frame_seconds", rep.frame_seconds + rep.frame_finish_seconds},
           {"exact_insertions", rep.exact_insertions},
           {"interpolated_insertions", rep.interpolated_insertions},
@@ -104,8 +105,8 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
   std::printf("\nReal data: %s, seed %s, release %s, frames %s, edge %g (runs stop after %g s)\n",
               a.field.c_str(), a.seed.c_str(), a.release.c_str(), a.frames.c_str(), a.edge,
               a.limit_seconds);
-  std::printf("%-36s %7s %8s %7s %7s %7s %7s %7s %9s %6s %6s %6s %6s %6s %7s\n", "run", "frames",
-              "t", "time s", "advect", "refine", "coarse", "refine%", "vertices", "xbound",
+  std::printf("%-36s %7s %8s %7s %7s %7s %7s %7s %7s %9s %6s %6s %6s %6s %6s %7s\n", "run",
+              "frames", "t", "time s", "advect", "refine", "insert", "coarse", "refine%", "vertices", "xbound",
               "pieces", "folds", "maxE/l", "p05", "pruned%");
   for (const RealRow& r : rows) {
     const auto& rep = r.report;
@@ -131,9 +132,9 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
     else
       std::snprintf(shape, sizeof shape, "%.1f", f.quality.triangle_min_angle_p05);
     std::printf(
-        "%-36s %7s %8.4f %7.1f %7.1f %7.1f %7.1f %7.1f %9zu %6s %6s %6zu %6.2f %6s %7.1f\n",
+        "%-36s %7s %8.4f %7.1f %7.1f %7.1f %7.1f %7.1f %7.1f %9zu %6s %6s %6zu %6.2f %6s %7.1f\n",
         r.name.c_str(), frames, rep.time_reached, rep.total_seconds, rep.advect_seconds,
-        rep.refine_seconds, rep.coarsen_seconds, 100 * rep.refine_seconds / rep.total_seconds,
+        rep.refine_seconds, rep.insert_seconds, rep.coarsen_seconds, 100 * rep.refine_seconds / rep.total_seconds,
         f.vertices, bound, pieces, folds, f.max_edge / a.edge, shape,
         100 * f.area_pruned / std::max(f.area + f.area_pruned, 1e-300));
   }
@@ -147,7 +148,8 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
                 100 * f.area_pruned / std::max(f.area + f.area_pruned, 1e-300));
   std::printf(
       "\nColumns: frames = frames written of those asked for; t = time reached; refine = "
-      "inserting (with the integrations of exact insertion), coarsen its part collapsing; "
+      "adapting the mesh, insert its part moving inserted particles to now (remeshed), "
+      "coarsen its part collapsing; "
       "xbound = the largest vertices / (1.155 area / l^2 + boundary / l) over the frames (- where not measured); folds "
       "= the most in any frame; p05 = 5th percentile of the triangles' smallest angles (deg, "
       "last frame; for quads N%%q: the share of quad angles within 90±10°); pruned%% = dye area pruned as thin filaments, of all dye.\n");

@@ -948,7 +948,8 @@ void RemeshedStreakBuilder::smooth_pass() {
       const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
       const Vec3 was = (x_[idx(q)] - xv).cross(x_[idx(r)] - xv);
       const Vec3 now = (x_[idx(q)] - p).cross(x_[idx(r)] - p);
-      if (!(now.dot(was) > 0.5 * now.norm() * was.norm()) || (x_[idx(q)] - p).squaredNorm() > limit2) {
+      if (!(now.dot(was) > 0.5 * now.norm() * was.norm()) || (x_[idx(q)] - p).squaredNorm() > limit2 ||
+          (x_[idx(r)] - p).squaredNorm() > limit2) {
         ok = false;
         break;
       }
