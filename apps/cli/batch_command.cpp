@@ -32,6 +32,7 @@
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/input_files.h"
+#include "orthofront/stage_timer.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/mesh_series.h"
 #include "orthofront/io/report_json.h"
@@ -45,10 +46,6 @@ namespace {
 
 using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 struct BatchArgs {
   std::string job, out;

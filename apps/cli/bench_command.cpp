@@ -17,6 +17,7 @@
 #include "orthofront/io/report_json.h"
 #include "orthofront/quality/quality.h"
 #include "orthofront/seed/seed.h"
+#include "orthofront/stage_timer.h"
 #include "orthofront/solve/alpha_solver.h"
 
 namespace orthofront::cli {
@@ -41,10 +42,6 @@ struct BenchArgs {
   std::size_t quality_grid_faces = 2'000'000;
   std::string json;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// The fastest of `repeats` runs (quality measurement left out: it is not part of Table 1).
 SurfaceResult best_run(const Field3& field, const Seed<3>& seed, StreamSurfaceOptions o,

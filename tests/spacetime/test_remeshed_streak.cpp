@@ -108,18 +108,26 @@ void require_valid(const StreakFrame& f) {
   }
 }
 
-}  // namespace
+// The double gyre case of the first tests: a short seed across the left gyre, three frames.
+SeedCurve double_gyre_seed() { return SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0)); }
 
-TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own path line",
-          "[spacetime][streak][remeshed]") {
-  const auto flow = make_unsteady_field("double-gyre");
-  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
+StreakOptions double_gyre_options() {
   StreakOptions o;
   o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;
   o.release_end = 4;
   o.frames = {1, 3, 6};
   o.edge = 0.02;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own path line",
+          "[spacetime][streak][remeshed]") {
+  const auto flow = make_unsteady_field("double-gyre");
+  const SeedCurve seed = double_gyre_seed();
+  StreakOptions o = double_gyre_options();
   StreakReport r;
   const std::vector<StreakFrame> frames = collect(*flow, seed, o, r);
   REQUIRE(r.complete);
@@ -301,13 +309,8 @@ TEST_CASE("remeshed streaks: streamed under a small budget give the frames of a 
 
 TEST_CASE("remeshed streaks smooth only particles placed by interpolation", "[spacetime][streak][remeshed]") {
   const auto flow = make_unsteady_field("double-gyre");
-  const SeedCurve seed = SeedCurve::line(Vec3(0.3, 0.3, 0), Vec3(0.3, 0.45, 0));
-  StreakOptions o;
-  o.mesh = StreakMesh::remeshed;
-  o.release_begin = 0;
-  o.release_end = 4;
-  o.frames = {1, 3, 6};
-  o.edge = 0.02;
+  const SeedCurve seed = double_gyre_seed();
+  StreakOptions o = double_gyre_options();
   const auto run = [&](bool smooth, StreakReport& r) {
     StreakOptions with = o;
     with.smooth = smooth;

@@ -6,12 +6,9 @@
 
 #include "orthofront/advect/batch_advector.h"
 #include "orthofront/error.h"
+#include "orthofront/stage_timer.h"
 
 namespace orthofront::advect {
-
-inline double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 /// Checks the options, counts the particles into `stats` and plans the slabs (plan_slabs).
 inline SlabPlan begin_call(const std::vector<double>& times, ParticleBatch& particles,

@@ -16,6 +16,7 @@
 #include "orthofront/field/field_spec.h"
 #include "orthofront/mesh/close_gaps.h"
 #include "orthofront/seed/seed_check.h"
+#include "orthofront/stage_timer.h"
 
 namespace orthofront {
 
@@ -44,23 +45,6 @@ const char* to_string(StopReason reason) {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-/// Adds the elapsed time of a scope to one stage counter.
-class StageTimer {
- public:
-  explicit StageTimer(double& sink) : sink_(sink), start_(Clock::now()) {}
-  ~StageTimer() { sink_ += seconds_since(start_); }
-  StageTimer(const StageTimer&) = delete;
-  StageTimer& operator=(const StageTimer&) = delete;
-
- private:
-  double& sink_;
-  Clock::time_point start_;
-};
-
 }  // namespace
 
 /// The driver (paper Figure 4): each step takes every front through the stall cut → velocity

@@ -11,13 +11,11 @@
 
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
+#include "orthofront/stage_timer.h"
 
 namespace orthofront::spacetime {
 namespace {
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 }  // namespace
 
 std::string format_bytes(std::size_t bytes) {

@@ -5,14 +5,12 @@
 #include <chrono>
 #include <memory>
 
+#include "orthofront/stage_timer.h"
+
 namespace orthofront::spacetime {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
 std::string brick_error(const io::TimeSeries& series, BrickKey key, bool whole_steps,
                         const char* what) {
   std::string text = "time step " + std::to_string(key.step);

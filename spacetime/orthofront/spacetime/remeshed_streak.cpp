@@ -15,6 +15,7 @@
 #include "orthofront/error.h"
 #include "orthofront/field/field_spec.h"
 #include "orthofront/mesh/triangle_topology.h"
+#include "orthofront/stage_timer.h"
 
 namespace orthofront::spacetime {
 
@@ -24,26 +25,10 @@ using Clock = std::chrono::steady_clock;
 using Topology = TriangleTopology;
 constexpr std::int32_t none = Topology::none;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 std::string number(double value) { return format_parameter(value); }
 
 std::size_t idx(std::int32_t i) { return static_cast<std::size_t>(i); }
 
-// Adds the seconds of its scope to a report's total.
-class InsertTimer {
- public:
-  explicit InsertTimer(double& total) : total_(total), start_(Clock::now()) {}
-  InsertTimer(const InsertTimer&) = delete;
-  InsertTimer& operator=(const InsertTimer&) = delete;
-  ~InsertTimer() { total_ += seconds_since(start_); }
-
- private:
-  double& total_;
-  Clock::time_point start_;
-};
 
 // Interior angle at p of the triangle (p, q, r).
 double angle_at(const Vec3& p, const Vec3& q, const Vec3& r) {
@@ -458,7 +443,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   if (o_.insertion == ParticleInsertion::exact) report_.diverged_insertions += near_of.size();
   std::vector<ParticleStatus> exact_status(exact_x.size()), near_status(near_x.size());
   {
-    const InsertTimer timer(report_.insert_seconds);
+    const StageTimer timer(report_.insert_seconds);
     if (!exact_x.empty() &&
         !no_error(advect_from_release(access_, map_, exact_x, exact_from, t_, exact_status,
                                       report_.evaluations)))
@@ -503,7 +488,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
       fx[i] = 0.5 * (previous_x_[idx(c[chosen[far[i]].edge])] +
                      previous_x_[idx(c[(chosen[far[i]].edge + 1) % 3])]);
     }
-    const InsertTimer timer(report_.insert_seconds);
+    const StageTimer timer(report_.insert_seconds);
     if (access_.prepare && !no_error(access_.prepare(previous_t_, t_))) return false;
     const std::vector<double> from(far.size(), previous_t_);
     report_.evaluations += map_.advect_all(fx, from, t_, fst);
@@ -677,7 +662,7 @@ bool RemeshedStreakBuilder::steer_to_midpoints(const std::vector<Split>& chosen,
   if (redo.empty()) return true;
   std::vector<ParticleStatus> rst(redo.size());
   {
-    const InsertTimer timer(report_.insert_seconds);
+    const StageTimer timer(report_.insert_seconds);
     if (!no_error(advect_from_release(access_, map_, rx, rfrom, t_, rst, report_.evaluations)))
       return false;
   }

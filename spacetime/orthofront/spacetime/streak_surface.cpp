@@ -23,6 +23,7 @@
 #include "orthofront/spacetime/remeshed_streak.h"
 #include "orthofront/spacetime/streak_flow_access.h"
 #include "orthofront/spacetime/streamed_field.h"
+#include "orthofront/stage_timer.h"
 
 namespace orthofront::spacetime {
 
@@ -37,10 +38,6 @@ const char* to_string(StreakMesh mesh) {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", value);
