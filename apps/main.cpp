@@ -13,8 +13,8 @@
 int main(int argc, char** argv) {
   // A surface's arrays grow by doubling and the quality measure allocates and frees large
   // scratch arrays: served from mmap, each of those touches fresh pages again. Keep blocks below
-  // 64 MiB on the heap and the heap's top mapped (Lorenz bench surface from the command line,
-  // median of 10: 199-211 -> 184-191 ms; stitch 60-64 -> 54-56 ms, quality 62-68 -> 55-56 ms).
+  // 64 MiB on the heap and the heap's top mapped, so the pages are reused instead of faulted in
+  // again (the stitch and quality stages gain most; docs/benchmarks/measurements.md).
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 128 << 20);
   mallopt(M_TOP_PAD, 16 << 20);

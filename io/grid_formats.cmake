@@ -18,8 +18,8 @@ target_sources(orthofront_io PRIVATE
 target_link_libraries(orthofront_io PRIVATE ZLIB::ZLIB BZip2::BZip2)
 
 # OpenVDB: sparse vector grids (reader, writer, time series) and the field that samples them,
-# in a module that orthofront_io loads on first use (vdb_module.h): linking libopenvdb cost
-# every process about 35 ms at start.
+# in a module that orthofront_io loads on first use (vdb_module.h): linked, libopenvdb's
+# start-up would be paid by every process, also those that read no .vdb file.
 add_library(orthofront_vdb SHARED
   orthofront/io/vdb_grid.cpp
   orthofront/io/vdb_field.cpp

@@ -1,7 +1,7 @@
 #pragma once
 /// A batch job file (TOML or JSON): the data set, defaults, and the surfaces to build, with
 /// generated families (a rake of seed lines, a grid of them, a sweep over t0). See
-/// examples/batch/README.md for the keys.
+/// docs/batch.md for the keys.
 #include <cstdint>
 #include <filesystem>
 #include <string>

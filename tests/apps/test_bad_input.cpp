@@ -1,7 +1,7 @@
 // Bad input on the command line, one case per row of docs/bad-input.md: the message names the
-// file or value at fault, the exit status is 2 (README: bad input; 3 is for internal errors), and
-// what is left on disk is checked (no output file, a partial mesh marked incomplete, or a
-// temporary that the next run removes).
+// file or value at fault, the exit status is 2 (docs/user-guide.md, exit status; 3 is for
+// internal errors), and what is left on disk is checked (no output file, a partial mesh marked
+// incomplete, or a temporary that the next run removes).
 #include <hdf5.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -400,8 +400,8 @@ TEST_CASE("bad input: corrupt HDF5 and OpenVDB files that crash or hang or flood
   for (const Case& c : cases) {
     const fs::path file = dir / (std::string("bad") + c.ext);
     fs::copy_file(regressions / c.file, file, fs::copy_options::overwrite_existing);
-    // The looping file: 2 s, not 10. The others keep the default limit: under a sanitizer and a
-    // loaded machine, reading the sparse one above took more than 2 s of CPU time.
+    // The looping file: 2 s, not 10. The others keep the default limit: under a sanitizer on a
+    // loaded machine, reading the sparse one above can take more than 2 s of CPU time.
     if (std::string(c.stream_words) == "did not finish")
       ::setenv("ORTHOFRONT_READ_TIMEOUT", "2", 1);
     else

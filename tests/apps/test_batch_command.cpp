@@ -195,8 +195,8 @@ TEST_CASE("batch: killed at any point and resumed, a job writes the files of an 
 
   SECTION("by SIGKILL at random moments, also while checkpoints are written") {
     const fs::path out = dir / "out-signal";
-    // Kill moments within an uninterrupted run's time, measured here: the whole job takes about
-    // 0.1 s on a fast machine, so fixed delays could outlast it and kill nothing.
+    // Kill moments within an uninterrupted run's time, measured here: on a fast machine the whole
+    // job is over so soon that fixed delays could outlast it and kill nothing.
     const auto begin = std::chrono::steady_clock::now();
     REQUIRE(run("batch " + job + " --out " + quoted(dir / "out-timed") +
                 " --checkpoint-every 0.000001 --quiet")

@@ -113,7 +113,7 @@ TEST_CASE("stream rejects bad input naming the value, with no output file", "[cl
   for (const Case& c : cases) {
     const Outcome o = run(c.args);
     INFO(c.what << ": " << o.output);
-    CHECK(o.status == 2);  // bad input (README); 3 would be an internal error
+    CHECK(o.status == 2);  // bad input (docs/user-guide.md); 3 would be an internal error
     CHECK(o.output.find(c.named) != std::string::npos);
     CHECK(folder_is_empty(dir));
   }
@@ -200,7 +200,7 @@ TEST_CASE("SIGTERM and SIGINT write the surface built so far, marked incomplete"
           "[cli][stream][signals]") {
   const fs::path dir = fresh_dir("stream-signal");
   // A long run: the Lorenz band at ℓ 0.25 until it leaves the domain, without the stall cut
-  // (at ℓ 0.5 the whole surface was built in 1.4 s, before the signal came at 1.5 s).
+  // (at ℓ 0.5 the whole surface could be finished before the signal came).
   const std::vector<std::string> args{"stream", "--field", "lorenz:reverse=1", "--seed",
                                       "circle:0,0,0:1.283,1,0:1", "--seed-count", "10", "--edge",
                                       "0.25", "--steps", "1000000", "--max-vertices", "100000000",

@@ -44,7 +44,7 @@ std::string base64_encode(std::string_view bytes) {
 
 void base64_encode(std::string_view bytes, std::string& out) {
   // Into a buffer sized once: appending a character at a time (a size check and a terminator
-  // each) took a cold Lorenz surface's .vtp writing 6 % of its process time.
+  // each) made encoding a visible part of writing a large .vtp.
   out.resize((bytes.size() + 2) / 3 * 4);
   char* o = out.data();
   std::size_t i = 0;
@@ -67,7 +67,7 @@ void base64_encode(std::string_view bytes, std::string& out) {
 
 bool base64_decode(std::string_view text, std::string& bytes) {
   // Written through a pointer into room for the most the text can hold, then cut to size:
-  // appending a byte at a time took half of reading a large .vtp.
+  // appending a byte at a time made decoding a large part of reading a large .vtp.
   bytes.resize(text.size() / 4 * 3 + 3);
   char* const begin = bytes.data();
   char* out = begin;

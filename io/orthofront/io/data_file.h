@@ -1,7 +1,7 @@
 #pragma once
 /// Gridded data files on the command line: "FILE.ext[:SELECTOR]" dispatched on the extension to
 /// a format's opener. `--field` (field_source) and `info` both go through this table; a format
-/// is one entry in data_file_formats() (data_files.cpp).
+/// is one entry in data_file_formats() (data_file.cpp).
 #include <filesystem>
 #include <memory>
 #include <optional>

@@ -57,8 +57,9 @@ struct Hdf5WriteOptions {
   bool shuffle = true;  ///< with gzip: byte-shuffle filter before deflate (smaller, faster)
   /// Upper bound on one chunk: a step (or steady field) larger than this is split into chunks of
   /// whole z-slices (2D: y-rows); a chunk never spans two steps. 16 MiB lets one step be
-  /// compressed and decoded on several cores (`orthofront bench-grid`: a 192 MiB gzip step reads
-  /// 2x faster on 2 cores than as one chunk); set it >= the step size for one chunk per step.
+  /// compressed and decoded on several cores, where one chunk a step is decoded by one
+  /// (`orthofront bench-grid`; docs/hdf5-layout.md); set it >= the step size for one chunk per
+  /// step.
   /// HDF5 caps chunks at 4 GiB.
   std::size_t max_chunk_bytes = std::size_t{16} << 20;
   /// Compress chunks in parallel here and store them with H5Dwrite_chunk (default), or let

@@ -354,8 +354,9 @@ struct Hdf5TimeSeries::Impl {
 
   /// The stored bytes of the chunk at `offset` of `set`; 0 for a chunk never written. For a
   /// filtered dataset with a step axis, one lookup in the chunk index: H5Dget_chunk_info_by_coord
-  /// walks every chunk stored before the one asked for (14.8 us a chunk on average in a 128^3
-  /// series of 2,624 chunks, against 0.2 us; it held reading a 256^3 series to 1.0-1.3 GB/s).
+  /// walks every chunk stored before the one asked for, so its cost grows with the chunk's place
+  /// in the index and held back the reading of large series (figures:
+  /// docs/benchmarks/measurements.md).
   /// Unfiltered, HDF5 1.10 reports the chunk's nominal size instead of the stored one (which
   /// H5Dread_chunk copies), and a chunk never written looks stored once HDF5 has filled it.
   hsize_t stored_chunk_bytes(hid_t set, const hsize_t* offset) const {
@@ -414,8 +415,9 @@ struct Hdf5TimeSeries::Impl {
           throw FormatError(what + ": more than 2^26 chunks (damaged file?)");
       }
       // HDF5 1.10 finds a chunk by coordinate with a linear scan of its index, so a walk of every
-      // chunk is quadratic (25,728 chunks: over 10 s). Up to 2,048 chunks all are checked; beyond,
-      // 256 spread evenly over the index, first and last included.
+      // chunk is quadratic in their number (tens of thousands of chunks take seconds). Up to
+      // 2,048 chunks all are checked; beyond, 256 spread evenly over the index, first and last
+      // included.
       constexpr std::uint64_t kAll = 2048, kSample = 256;
       const std::uint64_t checks = total <= kAll ? total : kSample;
       for (std::uint64_t k = 0; k < checks; ++k) {

@@ -1,8 +1,9 @@
 #pragma once
 /// The OpenVDB readers and writers (vdb_grid.h, vdb_field.h) live in a module of their own,
 /// liborthofront_vdb.so, which orthofront_io loads on first use: libopenvdb is bound eagerly
-/// (68,866 symbol relocations), which cost every process that links it about 35 ms at start,
-/// whether it reads a .vdb file or not. The module hands back this table; the functions of
+/// (tens of thousands of symbol relocations), which every process that links it pays for at
+/// start, whether it reads a .vdb file or not (docs/benchmarks/measurements.md, "The OpenVDB
+/// module"). The module hands back this table; the functions of
 /// vdb_grid.h and vdb_field.h forward to it.
 #include <filesystem>
 #include <memory>

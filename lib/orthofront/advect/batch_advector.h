@@ -175,12 +175,13 @@ class BatchAdvector {
 
 enum class Device : unsigned char { cpu, cuda, auto_select };
 
-/// Front size from which `--device auto` advances a surface's front on a CUDA device (measured
-/// with `orthofront bench-front` on an H100: README "A path surface's front on the GPU").
+/// Front size from which `--device auto` advances a surface's front on a CUDA device: below it,
+/// a call's latency costs more than the device saves (measured with `orthofront bench-front`:
+/// docs/benchmarks/README.md, "A path surface's front on the GPU").
 inline constexpr std::size_t kCudaFrontBreakEven = 4096;
-/// The same for a stream surface of a steady grid: a vertex-step there costs about 0.1 µs per
-/// vertex on 16 threads (no time interpolation), a fifth of a path surface's, and a CUDA call of
-/// 14,600 vertices 3.2 ms against 1.5 ms (README "Bulk advection on a GPU").
+/// The same for a stream surface of a steady grid: a vertex-step there is several times cheaper
+/// on the CPU than a path surface's (no time interpolation), so a CUDA call pays only for far
+/// larger fronts (figures: docs/benchmarks/measurements.md).
 inline constexpr std::size_t kCudaSteadyFrontBreakEven = 65536;
 const char* to_string(Device device);
 /// "cpu", "cuda" or "auto"; throws InvalidArgument naming the value otherwise.

@@ -101,9 +101,9 @@ class DeviceArray {
 
 /// Page-locked host memory (asynchronous uploads need it).
 /// Large buffers are mapped on transparent huge pages, faulted in by parallel first touches and
-/// then registered with the driver: on one H200 machine 1 GiB took 356-370 ms through
-/// cudaMallocHost (pinned 4 KiB page by page) against 160 ms to fault in 2 MiB pages on one
-/// thread and 19-26 ms to register them. Where that fails, cudaMallocHost.
+/// then registered with the driver: cudaMallocHost pins 4 KiB page by page, which takes several
+/// times longer for a buffer of a gigabyte (figures: docs/benchmarks/measurements.md). Where
+/// that fails, cudaMallocHost.
 class PinnedBuffer {
  public:
   explicit PinnedBuffer(std::size_t bytes) : bytes_(bytes) {
@@ -977,8 +977,8 @@ class CudaAdvector final : public BatchAdvector {
     if (n > lane.capacity) {
       check(cudaStreamSynchronize(s), "cudaStreamSynchronize");
       // Doubling from 64 Ki particles, in the stream's order: a streak surface's catch-ups grow
-      // from a thousand particles to millions, and each growth used to take 31 ms (pinned
-      // memory, and frees that waited for the resident set's move on the other stream).
+      // from a thousand particles to millions, and each growth is costly (pinned memory, and
+      // frees that wait for the resident set's move on the other stream), so there are few.
       const std::size_t c = std::max({n, 2 * lane.capacity, kLaneParticles});
       for (auto& x : lane.px) x = DeviceArray<double>(c, s);
       lane.pt = DeviceArray<double>(c, s);

@@ -87,8 +87,9 @@ ORTHOFRONT_HD inline bool point_is_zero(const float* p) {
 
 /// Multilinear value of one step at a located cell (multilinear::interpolate's operations in its
 /// order); false when a corner has no data. As in multilinear::value_is_finite, a corner's NaN or
-/// infinity shows in the value, which is checked instead of the 8 corners (checking them was 11 %
-/// of a CPU particle step); all-zero corners are looked for only where they mean no data.
+/// infinity shows in the value, which is checked instead of the 8 corners (checking them was a
+/// large share of a CPU particle step: docs/benchmarks/README.md); all-zero corners are looked
+/// for only where they mean no data.
 template <int Axes, int Components>
 ORTHOFRONT_HD inline bool interpolate_step(const float* base, const std::int64_t* stride,
                                            double tx, double ty, double tz, bool zero_is_no_data,

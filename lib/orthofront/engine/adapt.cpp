@@ -237,8 +237,8 @@ template <int N>
 void FrontAdapter<N>::start_likely_shots(const Front<N>& f, const Front<N>& old) {
   // On fronts of any size: the worker is idle through a step's serial stretches (sampling, α,
   // rips, merges), and a leg there costs the advance that waits for it less than its own
-  // integration costs adapt (tornado across its core: adapt 15-17 -> 9-12 ms, advance 14-16 ->
-  // 16-19 ms, the engine 45-52 -> 42-48 ms; Lorenz makes no shots after its first steps).
+  // integration costs adapt, so the engine as a whole gains (figures:
+  // docs/benchmarks/measurements.md; Lorenz makes no shots after its first steps).
   if (!opt_.shots_ahead || opt_.insertion != Insertion::streamline || !legs_.can_run_ahead())
     return;
   const std::size_t n = f.v.size();

@@ -35,10 +35,11 @@ void for_range(std::size_t n, std::size_t threshold, const Body& body, std::size
 
 /// for_range() for loops of cheap items (a field evaluation or two each): they split into TBB
 /// tasks only where the loop, timed where it last ran serially, takes long enough to pay for the
-/// split (oneTBB's guide: a loop of under a million cycles rarely pays). Lorenz's fronts of 600
-/// or so vertices take 6-15 µs per such loop; on this 2-core machine its α stage took 18.4-19.7
-/// ms split against 16.5-17.2 serially while the machine was slow, 12.0 against 12.8-13.6 while
-/// it was fast. The choice changes no result: the items are independent.
+/// split (oneTBB's guide: a loop of under a million cycles rarely pays). A front of a few
+/// hundred vertices runs such a loop in a few microseconds, where splitting it costs about as
+/// much as it saves, and which of the two wins changes with the load on the machine: hence the
+/// timing instead of a fixed size (figures: docs/benchmarks/measurements.md). The choice
+/// changes no result: the items are independent.
 class CheapLoop {
  public:
   /// A loop that takes less than this serially runs serially.

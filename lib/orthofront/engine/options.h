@@ -69,7 +69,8 @@ struct StreamSurfaceOptions {
   double skip_fraction = 0.5;  ///< see RowSkip
   /// RowSkip::run: a waiting vertex beside a moving one moves with it once it has gone this share
   /// of skip_fraction·ℓ (and so on along the waiting run). Lower: fewer triangles where waiting
-  /// and moving vertices meet, more short edges along the flow (README "Row skipping").
+  /// and moving vertices meet, more short edges along the flow (docs/benchmarks/engine-options.md,
+  /// row skipping).
   double join_fraction = 0.5;
 
   /// Lag bound (path surfaces): a vertex more than max_lag behind the front's lead along
@@ -123,8 +124,9 @@ struct StreamSurfaceOptions {
   double timeline_step = 0;  ///< time step of the timeline baseline; 0: ℓ / median seed speed
   double closed_log_product_limit = 0.5;  ///< |ln ∏(-p_i/q_i)| above this: no closed front
 
-  /// Fronts with fewer vertices run their per-vertex stages serially: `orthofront bench
-  /// --parallel-threshold` on 2 cores, 128 against 512: Lorenz 82.4-82.5 against 84.6-86.1 ms.
+  /// Fronts with fewer vertices run their per-vertex stages serially: below it, splitting a
+  /// stage into tasks costs more than it saves (chosen with `orthofront bench
+  /// --parallel-threshold`; figures: docs/benchmarks/measurements.md).
   std::size_t parallel_threshold = 128;
   bool measure_quality = true;
 };

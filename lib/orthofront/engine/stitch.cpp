@@ -32,9 +32,9 @@ void StripStitcher<N>::smooth_rows(const Front<N>& f, std::vector<char>& fresh) 
   // A waiting run of up to 16 vertices between moving ones, or between one and an open end,
   // moves too once each of its vertices has gone a twentieth of the skip distance: a waiting run
   // costs a triangle at each end beside a moving vertex in every step it waits, and a short run
-  // adds few short edges (tornado across its core: 92.8 -> 95.4 % quads, edge spread 0.280 ->
-  // 0.323; runs of 2 at 0.4 of the distance took it from 91.1 %). Longer runs stay: on Lorenz
-  // letting every run move halved its triangles but took the spread from 0.375 to 0.52.
+  // adds few short edges. Longer runs stay: letting every run move trades the triangles for a
+  // much wider edge spread (the figures behind both limits: docs/benchmarks/engine-options.md,
+  // row skipping).
   const double lone = 0.05 * full;
   constexpr std::size_t kLongestJoiningRun = 16;
   // A closed front's runs are taken in cyclic order from a vertex that moves (a run may go on

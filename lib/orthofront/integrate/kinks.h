@@ -9,9 +9,9 @@
 namespace orthofront {
 
 /// How far past a kink a step that would cross it ends, as a share of the controller's step
-/// size (tornado, seed across the core: 1e-2 → 1.62 M field evaluations, 1e-3 → 1.23 M,
-/// 1e-4 → 1.20 M, 1e-6 → 1.24 M, 1e-11 → 1.34 M, against 2.26 M stepping across faces; the
-/// smallest margins make steps that land just short of a face).
+/// size: the margin that cost the fewest field evaluations of those tried on real data (the
+/// evaluation counts: docs/benchmarks/measurements.md). Larger margins leave a larger error
+/// for the controller to reject; the smallest make steps that land just short of a face.
 inline constexpr double kKinkMargin = 1e-4;
 
 }  // namespace orthofront

@@ -19,8 +19,7 @@ constexpr std::int32_t kAmbiguous = -2;  ///< a pinch: more than one boundary ed
 /// walks it, so a chain walks the boundary with the surface on the same side throughout. The
 /// per-vertex figures are kept for boundary vertices only, at their slot (their place in
 /// `vertices`): arrays over every vertex of a large surface cost more in first touches of fresh
-/// memory than the whole search (the Lorenz row, 236 k vertices: 1,800 page faults; the stage
-/// took 13-21 ms with them, 2 ms without).
+/// memory (page faults) than the whole search.
 struct Boundary {
   std::vector<std::int32_t> vertices;  ///< every vertex on a boundary edge, in index order
   std::vector<std::int32_t> next, prev;  ///< boundary successor / predecessor (vertex ids)

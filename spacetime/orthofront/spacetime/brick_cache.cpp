@@ -98,7 +98,7 @@ BrickCache::BrickCache(const io::TimeSeries& series, CacheOptions options)
   if (options_.max_live_tokens == 0) {
     // A unit in flight for every other thread TBB may use here: the readers keep up with a
     // host that waits for data and leave it the other cores when it does not (two units a
-    // thread made a 192^3 streak surface, which never waits, 30 % slower); four at least (what
+    // thread slowed down a streak surface that never waits for data); four at least (what
     // a small budget always had), more only as far as a sixteenth of the budget holds them.
     const auto threads = static_cast<std::size_t>(std::max(
         1, std::min<int>(tbb::this_task_arena::max_concurrency(),
