@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "orthofront/error.h"
@@ -27,15 +28,17 @@ bool parse_number(const std::string& text, T& value) {
   return result.ec == std::errc() && result.ptr == end;
 }
 
-Vec3 parse_point(const std::string& text, const std::string& what) {
+// "x,y,z", or "x,y" where `z` is given (a 2D point).
+Vec3 parse_point(const std::string& text, const std::string& what, const double* z = nullptr) {
   const auto parts = split(text, ',');
   Vec3 p;
-  if (parts.size() != 3)
-    throw InvalidArgument(what + " '" + text + "' must be three numbers x,y,z");
-  for (int a = 0; a < 3; ++a)
-    if (!parse_number(parts[static_cast<std::size_t>(a)], p[a]) || !std::isfinite(p[a]))
-      throw InvalidArgument(what + " '" + text + "': '" + parts[static_cast<std::size_t>(a)] +
-                            "' is not a finite number");
+  if (parts.size() != 3 && !(z && parts.size() == 2))
+    throw InvalidArgument(what + " '" + text + "' must be three numbers x,y,z" +
+                          (z ? " or two x,y" : ""));
+  for (std::size_t a = 0; a < parts.size(); ++a)
+    if (!parse_number(parts[a], p[static_cast<int>(a)]) || !std::isfinite(p[static_cast<int>(a)]))
+      throw InvalidArgument(what + " '" + text + "': '" + parts[a] + "' is not a finite number");
+  if (parts.size() == 2) p.z() = *z;
   return p;
 }
 
@@ -53,16 +56,18 @@ std::array<std::int64_t, 3> parse_resolution(const std::string& text) {
   return n;
 }
 
-Box<3> parse_box(const std::string& text) {
+Box<3> parse_box(const std::string& text, const std::string& option, bool planar) {
   const auto corners = split(text, ':');
-  if (corners.size() != 2)
-    throw InvalidArgument("--box '" + text + "' must be xmin,ymin,zmin:xmax,ymax,zmax");
+  const std::string form =
+      std::string("xmin,ymin,zmin:xmax,ymax,zmax") + (planar ? " or xmin,ymin:xmax,ymax" : "");
+  if (corners.size() != 2) throw InvalidArgument(option + " '" + text + "' must be " + form);
+  const double low = -std::numeric_limits<double>::infinity(), high = -low;
   Box<3> box;
-  box.lo = parse_point(corners[0], "--box corner");
-  box.hi = parse_point(corners[1], "--box corner");
+  box.lo = parse_point(corners[0], option + " corner", planar ? &low : nullptr);
+  box.hi = parse_point(corners[1], option + " corner", planar ? &high : nullptr);
   for (int a = 0; a < 3; ++a)
     if (!(box.hi[a] >= box.lo[a]))
-      throw InvalidArgument("--box '" + text + "': max below min along " +
+      throw InvalidArgument(option + " '" + text + "': max below min along " +
                             std::string(1, static_cast<char>('x' + a)));
   return box;
 }

@@ -1,5 +1,5 @@
 #pragma once
-/// Command-line values of the grid commands (generate, bench-grid): resolutions, boxes, the
+/// Command-line values of the grid commands (generate, orthofront-bench grid): resolutions, boxes, the
 /// compression and the HDF5 storage.
 #include <array>
 #include <cstdint>
@@ -12,8 +12,9 @@ namespace orthofront::cli {
 
 /// "NX,NY,NZ" or "NX,NY" (NZ = 1: a 2D grid). Throws InvalidArgument naming the bad part.
 std::array<std::int64_t, 3> parse_resolution(const std::string& text);
-/// "xmin,ymin,zmin:xmax,ymax,zmax".
-Box<3> parse_box(const std::string& text);
+/// "xmin,ymin,zmin:xmax,ymax,zmax"; with `planar` also "xmin,ymin:xmax,ymax" (z unbounded).
+/// Messages name `option`.
+Box<3> parse_box(const std::string& text, const std::string& option = "--box", bool planar = false);
 /// A chunk codec and its level.
 struct Compression {
   io::Hdf5Codec codec = io::Hdf5Codec::none;

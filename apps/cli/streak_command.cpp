@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "cli/engine_options.h"
+#include "cli/grid_args.h"
 #include "cli/pictures.h"
 #include "cli/process_memory.h"
 #include "cli/progress_bar.h"
@@ -236,16 +237,18 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
       ->capture_default_str();
   command
       .add_option("--merge", args.merge,
-                  "Remove particles whose edges are both shorter than this many edge lengths")
+                  "--mesh rows: remove particles whose edges are both shorter than this many edge "
+                  "lengths")
       ->capture_default_str();
   command
       .add_option("--release-step", args.release_step,
-                  "Time between released rows (0: edge / median speed on the seed)")
+                  "Time between released rows (0: edge over the largest speed on the seed; --mesh "
+                  "rows: over the median speed)")
       ->capture_default_str();
   command
       .add_option("--releases-per-break", args.releases_per_break,
-                  "Rows released per refinement: the rows released between move from their "
-                  "release times to the next break in one call")
+                  "--mesh rows: rows released per refinement; the rows released between move from "
+                  "their release times to the next break in one call")
       ->capture_default_str();
   command
       .add_option("--seed-count", args.seed_count,
@@ -258,6 +261,19 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
                   "(cubic; every step is read once)")
       ->check(CLI::IsMember({"exact", "interpolate"}))
       ->capture_default_str();
+  command
+      .add_option("--coarsen-age", args.coarsen_age,
+                  "--mesh remeshed: dye older than this is meshed coarser, at edge * age / this "
+                  "(0: the same edge length at every age)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command.add_option("--vertex-budget", args.vertex_budget,
+                     "--mesh remeshed: when the particles exceed this, the oldest dye is coarsened "
+                     "(the age of --coarsen-age lowered) until they fit, rather than the run "
+                     "stopping (default: half of --max-vertices; 0: no budget)");
+  command.add_option("--region", args.region,
+                     "--mesh remeshed: region of interest xmin,ymin,zmin:xmax,ymax,zmax (2D: "
+                     "xmin,ymin:xmax,ymax); dye that leaves it is removed, as at the domain's edge");
   command.add_option("--max-vertices", args.max_vertices,
                      "Stop when the particles exceed this (default: from --memory)");
   add_memory_flag(command, args.limits);
@@ -295,6 +311,13 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
   o.insertion = args.insertion == "exact" ? spacetime::ParticleInsertion::exact
                                           : spacetime::ParticleInsertion::interpolate;
   o.max_vertices = caps.max_vertices;
+  o.coarsen_age = args.coarsen_age;
+  o.vertex_budget = command.count("--vertex-budget") > 0 ? args.vertex_budget : o.max_vertices / 2;
+  if (!args.region.empty()) o.region = parse_box(args.region, "--region", true);
+  if (o.mesh == spacetime::StreakMesh::rows)
+    for (const char* remeshed_only : {"--coarsen-age", "--vertex-budget", "--region"})
+      if (command.count(remeshed_only) > 0)
+        throw InvalidArgument(std::string(remeshed_only) + " applies to --mesh remeshed only");
   o.seed_name = args.seed;
   o.field_name = args.field;
   if (!args.device.empty()) o.device = advect::parse_device(args.device);
@@ -314,10 +337,11 @@ void add_streak_command(CLI::App& app) {
       "Build a streak surface (dye released continuously from a seed curve) as a "
       "ParaView animation");
   c->add_option("--field", args->field,
-                "Unsteady field NAME[:key=value,...] (see `orthofront fields`), an HDF5 time "
-                "series or an OpenVDB file of timed vector grids")
+                "Unsteady field NAME[:key=value,...] (see `orthofront fields`) or a time series: "
+                "HDF5, NetCDF, a .pvd collection, a glob of grid files or an OpenVDB file of "
+                "timed vector grids")
       ->required();
-  c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows use x, y)");
+  c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows take z = 0)");
   add_streak_flags(*c, *args);
   c->add_option("--out", args->out, "Output collection DIR/NAME.pvd (frames go to DIR/NAME/)")
       ->required();
@@ -416,6 +440,19 @@ void add_streak_command(CLI::App& app) {
                     result.faces_pruned, o.prune, f.area_pruned,
                     100 * f.area_pruned / std::max(f.area + f.area_pruned, 1e-300));
       }
+      if (std::isfinite(result.coarsen_age) && !result.frames.empty()) {
+        const std::string why =
+            result.budget_coarsenings > 0
+                ? " to keep the vertex budget of " + std::to_string(o.vertex_budget)
+                : std::string();
+        std::printf("Coarsened dye older than %g (edge * age / %g)%s: %zu collapses; the last "
+                    "frame's longest edge is %.2f of its target length.\n",
+                    result.coarsen_age, result.coarsen_age, why.c_str(), result.coarsened,
+                    result.frames.back().max_edge_ratio);
+      }
+      if (result.left_region > 0)
+        std::printf("%zu particles left the region of interest %s.\n", result.left_region,
+                    args->region.c_str());
       if (result.streamed)
         std::printf("Cache: %s read (%.3fx needed), at most %zu reads of a unit, waited %.3f s.\n",
                     spacetime::format_bytes(result.cache.bytes_read).c_str(),

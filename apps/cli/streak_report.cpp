@@ -69,13 +69,20 @@ std::vector<double> parse_streak_frames(const std::string& text) {
 
 namespace {
 
+// Infinity (no coarsening) as null: JSON has no infinity.
+nlohmann::json finite_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
 nlohmann::json frame_json(const spacetime::StreakFrameRecord& f) {
   const QualityReport& q = f.quality;
   return {{"index", f.index},       {"time", f.time},       {"vertices", f.vertices},
           {"faces", f.faces},       {"rows", f.rows},       {"stopped_particles", f.dead_particles},
           {"max_edge", f.max_edge}, {"seconds", f.seconds}, {"area", f.area},
           {"boundary_length", f.boundary_length}, {"vertex_estimate", f.vertex_estimate},
-          {"pieces", f.pieces}, {"area_pruned", f.area_pruned}, {"quality", io::to_json(q)}};
+          {"pieces", f.pieces}, {"area_pruned", f.area_pruned},
+          {"coarsen_age", finite_or_null(f.coarsen_age)}, {"max_edge_ratio", f.max_edge_ratio},
+          {"quality", io::to_json(q)}};
 }
 
 }  // namespace
@@ -122,9 +129,15 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& r) {
         {"faces_removed_at_stops", r.faces_removed_at_stops},
         {"strip_faces_skipped", r.strip_faces_skipped},
         {"faces_pruned", r.faces_pruned},
-        {"area_pruned", r.area_pruned}}},
+        {"area_pruned", r.area_pruned},
+        {"coarsened", r.coarsened},
+        {"budget_coarsenings", r.budget_coarsenings},
+        {"coarsen_age", finite_or_null(r.coarsen_age)}}},
       {"particles",
-       {{"max", r.max_particles}, {"left_domain", r.left_domain}, {"no_data", r.no_data}}},
+       {{"max", r.max_particles},
+        {"left_domain", r.left_domain},
+        {"left_region", r.left_region},
+        {"no_data", r.no_data}}},
       {"frames", frames},
       {"cache", r.streamed ? spacetime::to_json(r.cache) : nlohmann::json()},
       {"slow_evaluations", r.slow_evaluations},

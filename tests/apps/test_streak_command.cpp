@@ -55,6 +55,68 @@ TEST_CASE("streak command: an analytic field as a .pvd animation with its report
   CHECK(j["frames"][3]["vertices"] == last.vertex_count());
   CHECK(j["frames"][3]["quality"]["t_junctions"] == 0);
   CHECK(j["refinement"]["interpolated_insertions"] == 0);
+  CHECK(j["refinement"]["coarsen_age"].is_null());
+  CHECK(j["particles"]["left_region"] == 0);
+  REQUIRE(last.on_path.size() == last.vertex_count());
+  CHECK(std::count(last.on_path.begin(), last.on_path.end(), 1) ==
+        static_cast<std::ptrdiff_t>(last.vertex_count()));
+}
+
+TEST_CASE("streak command: a vertex budget and a region of interest, kept and counted",
+          "[apps][streak]") {
+  test_support::TempDir dir;
+  const fs::path pvd = dir.path() / "gyre.pvd", report = dir.path() / "gyre.json";
+  const std::string common =
+      "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:6 --frames "
+      "2:8:4 --edge 0.02 --out " + pvd.string() + " --report " + report.string();
+  {
+    // Unbounded, the frames have 99, 186, 263 and 243 vertices.
+    const auto r = cli_test::run(common + " --vertex-budget 200");
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+    CHECK(r.output.find("Coarsened dye older than") != std::string::npos);
+    CHECK(r.output.find("to keep the vertex budget of 200") != std::string::npos);
+    const auto j = nlohmann::json::parse(read_text(report));
+    CHECK(j["complete"] == true);
+    CHECK(j["refinement"]["budget_coarsenings"].get<int>() >= 1);
+    CHECK(j["refinement"]["coarsened"].get<int>() > 0);
+    CHECK(j["refinement"]["coarsen_age"].is_number());
+    CHECK(j["particles"]["max"].get<int>() <= 200);
+    REQUIRE(j["frames"].size() == 4);
+    for (int f = 0; f < 4; ++f) {
+      INFO("frame " << f);
+      CHECK(j["frames"][f]["vertices"].get<int>() <= 200);
+      CHECK(j["frames"][f]["quality"]["folds"] == 0);
+      CHECK(j["frames"][f]["max_edge_ratio"].get<double>() <= 1.5 + 1e-9);
+    }
+  }
+  {
+    const auto r = cli_test::run(common + " --region 0,0:0.6,1");
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+    CHECK(r.output.find("left the region of interest 0,0:0.6,1") != std::string::npos);
+    const auto j = nlohmann::json::parse(read_text(report));
+    CHECK(j["particles"]["left_region"].get<int>() > 0);
+    CHECK(j["particles"]["left_domain"] == 0);
+    CHECK(j["refinement"]["coarsen_age"].is_null());
+    for (int f = 0; f < 4; ++f) {
+      const Mesh m = orthofront::io::read_mesh(dir.path() / "gyre" /
+                                               ("gyre_000" + std::to_string(f) + ".vtp"));
+      for (const auto& p : m.positions) CHECK(p.x() <= 0.6);
+    }
+  }
+  for (const std::string& bad : {std::string("--region 0.6,0:0,1"),
+                                 std::string("--mesh rows --region 0,0:0.6,1"),
+                                 std::string("--mesh rows --vertex-budget 10")}) {
+    const auto b = cli_test::run(
+        "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release 0:1 --frames 1 " +
+        bad + " --out " + (dir.path() / "bad.pvd").string());
+    INFO(bad << "\n" << b.output);
+    CHECK(b.status == 2);
+    CHECK((b.output.find("max below min along x") != std::string::npos ||
+           b.output.find("applies to --mesh remeshed only") != std::string::npos));
+    CHECK(!fs::exists(dir.path() / "bad.pvd"));
+  }
 }
 
 TEST_CASE("streak command: bad input exits 2 naming the value and leaves no collection",

@@ -142,6 +142,9 @@ TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own pa
     INFO("t = " << f.time);
     // Every edge within split·ℓ once the frame is adapted (the first frame included).
     CHECK(r.frames[static_cast<std::size_t>(f.index)].max_edge <= o.split * o.edge * (1 + 1e-9));
+    // Every particle placed exactly, and said so.
+    REQUIRE(f.mesh.on_path.size() == f.mesh.vertex_count());
+    CHECK(std::count(f.mesh.on_path.begin(), f.mesh.on_path.end(), 0) == 0);
     double worst = 0;
     for (std::size_t i = 0; i < f.mesh.vertex_count(); i += 7) {
       const Vec3 start = seed.point(f.mesh.s[i]);
@@ -251,6 +254,161 @@ TEST_CASE("remeshed streaks: dye that leaves the domain takes its faces with it"
   // What is left lies between the seed and the outflow: area at most the strip's 0.6.
   CHECK(r.frames[0].area <= 0.6 + 1e-9);
   CHECK(r.frames[0].area > 0.4);
+}
+
+namespace {
+
+// The shear case of the growth controls: dye released for 8 time units, area 0.3 per unit.
+StreakOptions shear_growth_options() {
+  StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
+  o.release_begin = 0;
+  o.release_end = 8;
+  o.frames = {2, 4, 6, 8};
+  o.edge = 0.05;
+  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
+  o.vertex_budget = 0;
+  return o;
+}
+
+SeedCurve shear_seed() { return SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0)); }
+
+// Every vertex marked on_path where its label's path is at the frame's time: (y age, y) for y
+// on the seed. At least 90 % are on their paths (the rest were placed by interpolation).
+double worst_path_error(const StreakFrame& f, const SeedCurve& seed) {
+  double worst = 0;
+  REQUIRE(f.mesh.on_path.size() == f.mesh.vertex_count());
+  std::size_t on_path = 0;
+  for (std::size_t i = 0; i < f.mesh.vertex_count(); ++i) {
+    if (!f.mesh.on_path[i]) continue;
+    ++on_path;
+    const double y = seed.point(f.mesh.s[i]).y();
+    const Vec3 expected(y * (f.time - f.mesh.release_time[i]), y, 0);
+    worst = std::max(worst, (f.mesh.positions[i] - expected).norm());
+  }
+  CHECK(static_cast<double>(on_path) >= 0.9 * static_cast<double>(f.mesh.vertex_count()));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("a vertex budget keeps a growing streak surface within it by coarsening its oldest dye",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow;
+  const SeedCurve seed = shear_seed();
+  StreakOptions o = shear_growth_options();
+  StreakReport free_run;
+  const std::vector<StreakFrame> unbounded = collect(flow, seed, o, free_run);
+  REQUIRE(free_run.complete);
+  REQUIRE(unbounded.size() == 4);
+  CHECK(free_run.budget_coarsenings == 0);
+  CHECK(free_run.coarsened == 0);
+  CHECK(std::isinf(free_run.coarsen_age));
+  // Area grows linearly, and with a fixed edge length so does the vertex count.
+  const std::size_t last = unbounded.back().mesh.vertex_count();
+  CHECK(last > 3 * unbounded.front().mesh.vertex_count());
+
+  o.vertex_budget = last / 2;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 4);
+  CHECK(r.budget_coarsenings >= 1);
+  CHECK(r.coarsened > 0);
+  CHECK(std::isfinite(r.coarsen_age));
+  CHECK(r.max_particles <= o.vertex_budget);
+  INFO("exact " << r.exact_insertions << ", interpolated " << r.interpolated_insertions
+                << ", diverged " << r.diverged_insertions << ", inexact ends " << r.inexact_ends
+                << ", smoothed " << r.smoothed << ", coarsened " << r.coarsened << ", collapses "
+                << r.collapses);
+  for (const StreakFrame& f : frames) {
+    require_valid(f);
+    const StreakFrameRecord& rec = r.frames[static_cast<std::size_t>(f.index)];
+    INFO("t = " << f.time << ": " << rec.vertices << " vertices of a budget of " << o.vertex_budget
+                << ", coarsening age " << rec.coarsen_age << ", p05 min angle "
+                << rec.quality.triangle_min_angle_p05);
+    CHECK(rec.vertices <= o.vertex_budget);
+    // Coarsening removes particles: the rest are still on their paths, and the polygon whole
+    // but for slivers at its corner of 170° (boundary collapses need only 160°).
+    CHECK(worst_path_error(f, seed) < 1e-6);
+    CHECK(rec.area == Approx(0.3 * f.time).epsilon(1e-3));
+    CHECK(rec.pieces == 1);
+    CHECK(rec.max_edge_ratio <= o.split * (1 + 1e-9));
+    CHECK(rec.quality.triangle_min_angle_p05 >= 20);
+  }
+}
+
+TEST_CASE("remeshed streaks past the coarsening age are meshed at edge times age over it",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow;
+  const SeedCurve seed = shear_seed();
+  StreakOptions o = shear_growth_options();
+  o.frames = {8};
+  StreakReport fine;
+  const std::vector<StreakFrame> reference = collect(flow, seed, o, fine);
+  o.coarsen_age = 2;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 1);
+  const StreakFrame& f = frames[0];
+  require_valid(f);
+  CHECK(r.coarsen_age == 2);
+  CHECK(r.budget_coarsenings == 0);
+  CHECK(r.coarsened > 0);
+  CHECK(r.frames[0].max_edge_ratio <= o.split * (1 + 1e-9));
+  CHECK(r.frames[0].area == Approx(0.3 * 8).epsilon(1e-3));
+  CHECK(worst_path_error(f, seed) < 1e-6);
+  CHECK(f.mesh.vertex_count() < reference[0].mesh.vertex_count() / 2);
+  // Edges whose ends are both older than 6 have targets of at least 3 edge lengths.
+  double sum = 0;
+  std::size_t count = 0;
+  for (const auto& face : f.mesh.faces)
+    for (int e = 0; e < 3; ++e) {
+      const auto a = static_cast<std::size_t>(face.v[static_cast<std::size_t>(e)]);
+      const auto b = static_cast<std::size_t>(face.v[static_cast<std::size_t>((e + 1) % 3)]);
+      if (f.mesh.age[a] > 6 && f.mesh.age[b] > 6) {
+        sum += (f.mesh.positions[a] - f.mesh.positions[b]).norm();
+        ++count;
+      }
+    }
+  REQUIRE(count > 0);
+  CHECK(sum / static_cast<double>(count) > 2 * o.edge);
+}
+
+TEST_CASE("remeshed streaks: dye that leaves the region of interest takes its faces with it",
+          "[spacetime][streak][remeshed]") {
+  const ShearFlow flow;  // no outflow: the region alone crops
+  const SeedCurve seed = shear_seed();
+  StreakOptions o = shear_growth_options();
+  o.release_end = 6;
+  o.frames = {6};
+  Box<3> region;
+  region.lo = Vec3(-1, 0, -std::numeric_limits<double>::infinity());
+  region.hi = Vec3(1, 1, std::numeric_limits<double>::infinity());
+  o.region = region;
+  StreakReport r;
+  const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
+  REQUIRE(r.complete);
+  REQUIRE(frames.size() == 1);
+  require_valid(frames[0]);
+  CHECK(r.left_region > 0);
+  CHECK(r.left_domain == 0);
+  for (const Vec3& p : frames[0].mesh.positions) CHECK(p.x() <= 1.0);
+  // Between the seed and x = 1 the strip's area is 0.6; the cut loses less than a row.
+  CHECK(r.frames[0].area <= 0.6 + 1e-9);
+  CHECK(r.frames[0].area > 0.6 - 0.6 * o.split * o.edge);
+
+  SECTION("a region the seed misses is refused") {
+    region.lo.x() = 0.5;
+    o.region = region;
+    CHECK_THROWS_WITH(collect(flow, seed, o, r), Catch::Contains("region of interest"));
+  }
+  SECTION("an empty region is refused") {
+    region.hi.y() = region.lo.y();
+    o.region = region;
+    CHECK_THROWS_WITH(collect(flow, seed, o, r), Catch::Contains("region of interest is empty"));
+  }
 }
 
 TEST_CASE("remeshed streaks refuse a collapse factor that would make edges split",

@@ -28,10 +28,11 @@ inline constexpr std::array<RealAttribute, 7> kRealAttributes{{
     {"speed", &Mesh::speed},
 }};
 
-inline constexpr std::array<IntAttribute, 3> kIntAttributes{{
+inline constexpr std::array<IntAttribute, 4> kIntAttributes{{
     {"front_id", &Mesh::front_id},
     {"step", &Mesh::step},
     {"particle_id", &Mesh::particle_id},
+    {"on_path", &Mesh::on_path},
 }};
 
 /// An attribute is stored when it has one value per vertex; an empty array means "not recorded".

@@ -39,6 +39,9 @@ struct Mesh {
   Array<double> age;                      ///< observation time - release_time
   Array<double> speed;                    ///< |v| at the vertex at the observation time
   Array<std::int32_t> particle_id;        ///< stable id of the particle across frames
+  /// 1: the particle lies on the path of its label (release_time, s); 0: it was placed by
+  /// interpolation, so its label is approximate. Empty where not recorded.
+  Array<std::int32_t> on_path;
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t face_count() const { return faces.size(); }

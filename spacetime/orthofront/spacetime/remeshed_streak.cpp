@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <unordered_map>
@@ -74,6 +75,36 @@ class RemeshedStreakBuilder {
     return v;
   }
   bool alive(std::int32_t v) const { return status_[idx(v)] == ParticleStatus::moving; }
+  // The target edge length of a part whose youngest particle was released at tau: ℓ, or longer
+  // where the part is older than the coarsening age (exactly ℓ while there is none).
+  double edge_for(double tau) const { return o_.edge * std::max(1.0, (t_ - tau) / coarsen_age_); }
+  double edge_at(std::int32_t a, std::int32_t b) const {
+    return edge_for(std::max(tau_[idx(a)], tau_[idx(b)]));
+  }
+  double face_edge(std::int32_t f) const {
+    const auto& c = topo_.face(f);
+    return edge_for(std::max({tau_[idx(c[0])], tau_[idx(c[1])], tau_[idx(c[2])]}));
+  }
+  double width_at(std::int32_t f) const { return o_.prune * face_edge(f); }
+  bool in_region(const Vec3& x) const {
+    if (!o_.region) return true;
+    const Box<3>& b = *o_.region;
+    const bool xy = x.x() >= b.lo.x() && x.x() <= b.hi.x() && x.y() >= b.lo.y() && x.y() <= b.hi.y();
+    return xy && (two_d_ || (x.z() >= b.lo.z() && x.z() <= b.hi.z()));
+  }
+  // A moving particle outside the region of interest stops there (as at the domain's edge).
+  void crop(const Vec3& x, ParticleStatus& status, char& cropped) const {
+    cropped = status == ParticleStatus::moving && !in_region(x) ? 1 : 0;
+    if (cropped) status = ParticleStatus::left_domain;
+  }
+  std::size_t count_particles() const;
+  // Over the vertex budget: lowers the coarsening age so the surface needs about 70 % of it
+  // (estimated from its faces' areas and ages), and collapses until it fits.
+  void keep_budget(std::size_t particles);
+  double estimate_particles(double coarsen_age, const std::vector<double>& area,
+                            const std::vector<double>& face_tau,
+                            const std::vector<double>& boundary,
+                            const std::vector<double>& boundary_tau) const;
   // Signed double area of (a, b, c) along the surface's orientation (2D) or its normal (3D).
   Vec3 normal(std::int32_t a, std::int32_t b, std::int32_t c) const {
     return (x_[idx(b)] - x_[idx(a)]).cross(x_[idx(c)] - x_[idx(a)]);
@@ -131,11 +162,11 @@ class RemeshedStreakBuilder {
   // edge, every corner on the boundary and none on the newest row (the youngest strip is thin
   // where the flow is slow).
   double filament_width(std::int32_t f, std::vector<Topology::HalfEdge>& ring) const;
-  bool wants_flip(std::int32_t f, int e, double split2) const;
+  bool wants_flip(std::int32_t f, int e) const;
   void prune(std::int32_t f);
   void prune_pass();
   bool collapsible(std::int32_t u, std::int32_t w) const;
-  void stop_particle(std::int32_t v);
+  void stop_particle(std::int32_t v, bool cropped = false);
   void compact();
   void emit_frame(int index);
   void stop(const std::string& why) {
@@ -183,7 +214,7 @@ class RemeshedStreakBuilder {
   std::int32_t next_id_ = 0;
   double t_ = 0, previous_t_ = 0;
   double step_ = 0, step_now_ = 0;  // the release step; the next move's (shortened) step
-  double width_ = 0;                // prune·ℓ
+  double coarsen_age_ = std::numeric_limits<double>::infinity();  // past it ℓ grows with age
   double last_move_ = 0;            // the farthest a particle went in the last move
   StreakReport report_;
   Clock::time_point start_;
@@ -205,10 +236,13 @@ void RemeshedStreakBuilder::release(double tau) {
     const Vec3 x = seed_point(s);
     Vec3 v;
     const FieldStatus st = flow_.velocity(x, tau, v);
-    row.push_back(add_particle(x, s, tau,
-                               st == FieldStatus::inside    ? ParticleStatus::moving
-                               : st == FieldStatus::outside ? ParticleStatus::left_domain
-                                                            : ParticleStatus::no_data));
+    ParticleStatus status = st == FieldStatus::inside    ? ParticleStatus::moving
+                            : st == FieldStatus::outside ? ParticleStatus::left_domain
+                                                         : ParticleStatus::no_data;
+    char cropped = 0;
+    crop(x, status, cropped);
+    row.push_back(add_particle(x, s, tau, status));
+    report_.left_region += cropped ? 1 : 0;
   }
   ++report_.rows_released;
   if (!chain_.empty()) {
@@ -269,8 +303,11 @@ void RemeshedStreakBuilder::release(double tau) {
   for (const std::int32_t v : chain_) on_chain_[idx(v)] = 1;
 }
 
-void RemeshedStreakBuilder::stop_particle(std::int32_t v) {
-  if (status_[idx(v)] == ParticleStatus::left_domain) ++report_.left_domain;
+void RemeshedStreakBuilder::stop_particle(std::int32_t v, bool cropped) {
+  if (cropped)
+    ++report_.left_region;
+  else if (status_[idx(v)] == ParticleStatus::left_domain)
+    ++report_.left_domain;
   if (status_[idx(v)] == ParticleStatus::no_data) ++report_.no_data;
   report_.faces_removed_at_stops += topo_.remove_faces_of(v);
 }
@@ -289,6 +326,9 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
   if (access_.prepare && !no_error(access_.prepare(t_, t_to))) return Move::failed;
   report_.evaluations += map_.advect_all(x, from, t_to, status);
   if (access_.read_error && !no_error(access_.read_error())) return Move::failed;
+  std::vector<char> cropped(moving.size(), 0);
+  if (o_.region)
+    for (std::size_t k = 0; k < moving.size(); ++k) crop(x[k], status[k], cropped[k]);
   report_.particle_steps += moving.size();
   report_.particle_time += static_cast<double>(moving.size()) * (t_to - t_);
   // A face that turns over during the move (its particles crossed) would fold the surface: the
@@ -315,7 +355,7 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     const Vec3 before = normal(c[0], c[1], c[2]);
     const Vec3 after = (moved[idx(c[1])] - moved[idx(c[0])]).cross(moved[idx(c[2])] - moved[idx(c[0])]);
     if (after.dot(before) > 0) continue;
-    if (filament_width(fi, ring_) < width_)
+    if (filament_width(fi, ring_) < width_at(fi))
       turned_filament.push_back(fi);
     else
       ++turned;
@@ -335,7 +375,7 @@ RemeshedStreakBuilder::Move RemeshedStreakBuilder::advance(double t_to, bool may
     status_[v] = status[k];
   }
   for (std::size_t k = 0; k < moving.size(); ++k)
-    if (status[k] != ParticleStatus::moving) stop_particle(moving[k]);
+    if (status[k] != ParticleStatus::moving) stop_particle(moving[k], cropped[k] != 0);
   ++report_.intervals;
   previous_t_ = t_;
   t_ = t_to;
@@ -380,8 +420,9 @@ std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_where(con
       for (int e = 0; e < 3; ++e) {
         const std::int32_t g = topo_.neighbor(fi, e);
         if (g != none && g < fi) continue;  // each edge once
-        const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
-        if (keep(length)) parts[part].push_back({fi, e, length});
+        const std::int32_t a = c[e], b = c[(e + 1) % 3];
+        const double length = (x_[idx(a)] - x_[idx(b)]).norm();
+        if (keep(length, a, b)) parts[part].push_back({fi, e, length});
       }
     }
   });
@@ -391,8 +432,9 @@ std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_where(con
 }
 
 bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
-  const double limit = o_.split * o_.edge;
-  std::vector<Split> long_edges = edges_where([&](double length) { return length > limit; });
+  std::vector<Split> long_edges = edges_where([&](double length, std::int32_t a, std::int32_t b) {
+    return length > o_.split * edge_at(a, b);
+  });
   if (long_edges.empty()) return true;
   std::sort(long_edges.begin(), long_edges.end(),
             [](const Split& a, const Split& b) { return a.length > b.length; });
@@ -539,6 +581,9 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   report_.diverged_insertions += folding_exact;
   report_.exact_insertions += exact_of.size() - far.size() - folding_exact;
   report_.interpolated_insertions += near_of.size() + far.size() + folding_exact;
+  std::vector<char> cropped(n, 0);
+  if (o_.region)
+    for (std::size_t k = 0; k < n; ++k) crop(x[k], status[k], cropped[k]);
   for (std::size_t k = 0; k < n; ++k) {
     const auto& c = topo_.face(chosen[k].face);
     const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
@@ -567,7 +612,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
         on_chain_[idx(m)] = 1;
       }
     }
-    if (status[k] != ParticleStatus::moving) stop_particle(m);
+    if (status[k] != ParticleStatus::moving) stop_particle(m, cropped[k] != 0);
   }
   splits += n;
   report_.splits += n;
@@ -702,7 +747,6 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
     const double straight = angle_at(xu, x_[idx(p)], x_[idx(q)]);
     if (straight < 160.0 * M_PI / 180.0) return false;
   }
-  const double limit2 = std::pow(o_.split * o_.edge, 2);
   for (const Topology::HalfEdge& h : ring) {
     const auto& c = topo_.face(h.face);
     if (c[0] == w || c[1] == w || c[2] == w) continue;
@@ -715,7 +759,9 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
     const std::int32_t other1 = c[(h.edge + 1) % 3], other2 = c[(h.edge + 2) % 3];
     const Vec3& p1 = x_[idx(other1)];
     const Vec3& p2 = x_[idx(other2)];
-    if ((p1 - xw).squaredNorm() > limit2 || (p2 - xw).squaredNorm() > limit2) return false;
+    if ((p1 - xw).squaredNorm() > std::pow(o_.split * edge_at(w, other1), 2) ||
+        (p2 - xw).squaredNorm() > std::pow(o_.split * edge_at(w, other2), 2))
+      return false;
     const double area = after.norm();
     const double longest = std::max({(p1 - xw).squaredNorm(), (p2 - xw).squaredNorm(),
                                      (p1 - p2).squaredNorm()});
@@ -726,11 +772,13 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
 
 void RemeshedStreakBuilder::collapse_pass() {
   const auto start = Clock::now();
-  const double limit = o_.collapse * o_.edge;
+  const double base = o_.collapse * o_.edge;
   ++collapse_passes_;
   if (collapse_passes_ % 64 == 0)
     std::erase_if(refused_, [&](const auto& r) { return r.second <= collapse_passes_; });
-  std::vector<Split> short_edges = edges_where([&](double length) { return length < limit; });
+  std::vector<Split> short_edges = edges_where([&](double length, std::int32_t a, std::int32_t b) {
+    return length < o_.collapse * edge_at(a, b);
+  });
   if (short_edges.empty()) {
     report_.coarsen_seconds += seconds_since(start);
     return;
@@ -756,7 +804,8 @@ void RemeshedStreakBuilder::collapse_pass() {
     const auto& c = topo_.face(sp.face);
     const std::int32_t a = c[sp.edge], b = c[(sp.edge + 1) % 3];
     if (touched[idx(a)] || touched[idx(b)]) continue;
-    if ((x_[idx(a)] - x_[idx(b)]).norm() >= limit) continue;
+    const double length = (x_[idx(a)] - x_[idx(b)]).norm();
+    if (length >= o_.collapse * edge_at(a, b)) continue;
     const bool inner = topo_.neighbor(sp.face, sp.edge) != none;
     if (inner && boundary[idx(a)] && boundary[idx(b)]) continue;
     // An inner edge refused lately is left alone for a few passes: most refusals (a neighbour
@@ -787,11 +836,12 @@ void RemeshedStreakBuilder::collapse_pass() {
     topo_.collapse(u, w);  // u has no face left: it is no longer moved, and compact() drops it
     reshaped_.push_back(w);
     ++report_.collapses;
+    if (length >= base) ++report_.coarsened;
   }
   report_.coarsen_seconds += seconds_since(start);
 }
 
-bool RemeshedStreakBuilder::wants_flip(std::int32_t fi, int e, double split2) const {
+bool RemeshedStreakBuilder::wants_flip(std::int32_t fi, int e) const {
   const std::int32_t g = topo_.neighbor(fi, e);
   const auto& c = topo_.face(fi);
   const std::int32_t a = c[e], b = c[(e + 1) % 3], p = c[(e + 2) % 3];
@@ -807,7 +857,7 @@ bool RemeshedStreakBuilder::wants_flip(std::int32_t fi, int e, double split2) co
   if (!(sine_sum < -1e-9 * std::sqrt(pa.squaredNorm() * pb.squaredNorm() *
                                      qa.squaredNorm() * qb.squaredNorm())))
     return false;
-  if ((xp - xq).squaredNorm() > split2) return false;
+  if ((xp - xq).squaredNorm() > std::pow(o_.split * edge_at(p, q), 2)) return false;
   // The new faces (a, q, p) and (q, b, p) keep the side of the old ones, which lie nearly
   // flat across the edge (a flip across a crease would change the surface).
   const Vec3 n1 = normal(a, q, p), n2 = normal(q, b, p);
@@ -833,14 +883,13 @@ void RemeshedStreakBuilder::flag_faces(const Flag& flag) {
 
 std::size_t RemeshedStreakBuilder::flip_pass() {
   const std::size_t before = report_.flips;
-  const double split2 = std::pow(o_.split * o_.edge, 2);
   // The test reads positions and the two faces alone: it runs for every edge at once, and the
   // sweep (in face order, as flips depend on earlier ones) repeats it where a flip changed a face.
   flag_faces([&](std::int32_t fi, std::vector<Topology::HalfEdge>&) {
     std::uint8_t bits = 0;
     for (int e = 0; e < 3; ++e) {
       const std::int32_t g = topo_.neighbor(fi, e);
-      if (g != none && g > fi && wants_flip(fi, e, split2)) bits |= std::uint8_t(1u << e);
+      if (g != none && g > fi && wants_flip(fi, e)) bits |= std::uint8_t(1u << e);
     }
     return bits;
   });
@@ -851,7 +900,7 @@ std::size_t RemeshedStreakBuilder::flip_pass() {
     for (int e = 0; e < 3; ++e) {
       const std::int32_t g = topo_.neighbor(fi, e);
       if (g == none || g < fi) continue;
-      const bool want = changed_faces_[f] || changed_faces_[idx(g)] ? wants_flip(fi, e, split2)
+      const bool want = changed_faces_[f] || changed_faces_[idx(g)] ? wants_flip(fi, e)
                                                          : (face_flags_[f] >> e & 1u) != 0;
       if (want && topo_.flip(fi, e)) {
         ++report_.flips;
@@ -888,7 +937,6 @@ void RemeshedStreakBuilder::smooth_pass() {
         candidates.push_back(v);
       }
   }
-  const double limit2 = std::pow(o_.split * o_.edge, 2);
   for (const std::int32_t v : candidates) {
     const bool boundary = topo_.fan(v, ring_);
     if (ring_.empty()) continue;
@@ -933,8 +981,9 @@ void RemeshedStreakBuilder::smooth_pass() {
       const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
       const Vec3 was = (x_[idx(q)] - xv).cross(x_[idx(r)] - xv);
       const Vec3 now = (x_[idx(q)] - p).cross(x_[idx(r)] - p);
-      if (!(now.dot(was) > 0.5 * now.norm() * was.norm()) || (x_[idx(q)] - p).squaredNorm() > limit2 ||
-          (x_[idx(r)] - p).squaredNorm() > limit2) {
+      if (!(now.dot(was) > 0.5 * now.norm() * was.norm()) ||
+          (x_[idx(q)] - p).squaredNorm() > std::pow(o_.split * edge_at(v, q), 2) ||
+          (x_[idx(r)] - p).squaredNorm() > std::pow(o_.split * edge_at(v, r), 2)) {
         ok = false;
         break;
       }
@@ -967,7 +1016,6 @@ void RemeshedStreakBuilder::smooth_pass() {
 }
 
 void RemeshedStreakBuilder::flip_around_reshaped() {
-  const double split2 = std::pow(o_.split * o_.edge, 2);
   std::vector<std::int32_t> work;
   for (const std::int32_t v : reshaped_) {
     topo_.fan(v, ring_);  // none for a particle that stopped
@@ -982,7 +1030,7 @@ void RemeshedStreakBuilder::flip_around_reshaped() {
     if (!topo_.face_alive(f)) continue;
     for (int e = 0; e < 3; ++e) {
       const std::int32_t g = topo_.neighbor(f, e);
-      if (g == none || !wants_flip(f, e, split2) || !topo_.flip(f, e)) continue;
+      if (g == none || !wants_flip(f, e) || !topo_.flip(f, e)) continue;
       ++report_.flips;
       work.push_back(f);
       work.push_back(g);
@@ -1061,9 +1109,9 @@ void RemeshedStreakBuilder::prune_pass() {
   };
   constexpr std::uint8_t loose = 1, thin = 2;  // narrower than the width; than half of it
   flag_faces([&](std::int32_t f, std::vector<Topology::HalfEdge>& ring) {
-    const double w = filament_width(f, ring);
-    return static_cast<std::uint8_t>((w < width_ && boundary_edges(f) >= 2 ? loose : 0) |
-                                     (w < 0.5 * width_ ? thin : 0));
+    const double w = filament_width(f, ring), width = width_at(f);
+    return static_cast<std::uint8_t>((w < width && boundary_edges(f) >= 2 ? loose : 0) |
+                                     (w < 0.5 * width ? thin : 0));
   });
   changed_vertices_.assign(x_.size(), 0);
   const auto touched = [&](std::int32_t f) {
@@ -1073,7 +1121,7 @@ void RemeshedStreakBuilder::prune_pass() {
   const auto loose_end = [&](std::int32_t f) {
     if (!topo_.face_alive(f)) return false;
     if (!touched(f)) return (face_flags_[idx(f)] & loose) != 0;
-    return filament_width(f, ring_) < width_ && boundary_edges(f) >= 2;
+    return filament_width(f, ring_) < width_at(f) && boundary_edges(f) >= 2;
   };
   std::vector<std::int32_t> work;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
@@ -1090,8 +1138,76 @@ void RemeshedStreakBuilder::prune_pass() {
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
     if (!topo_.face_alive(fi)) continue;
-    if (touched(fi) ? filament_width(fi, ring_) < 0.5 * width_ : (face_flags_[f] & thin) != 0)
+    if (touched(fi) ? filament_width(fi, ring_) < 0.5 * width_at(fi) : (face_flags_[f] & thin) != 0)
       prune(fi);
+  }
+}
+
+std::size_t RemeshedStreakBuilder::count_particles() const {
+  std::size_t particles = 0;
+  for (std::size_t v = 0; v < x_.size(); ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    particles += alive(i) && (topo_.has_faces(i) || on_chain_[v]) ? 1 : 0;
+  }
+  return particles;
+}
+
+double RemeshedStreakBuilder::estimate_particles(double coarsen_age, const std::vector<double>& area,
+                                                 const std::vector<double>& face_tau,
+                                                 const std::vector<double>& boundary,
+                                                 const std::vector<double>& boundary_tau) const {
+  // As the frames' vertex estimate, with each part's own edge length.
+  const auto edge = [&](double tau) { return o_.edge * std::max(1.0, (t_ - tau) / coarsen_age); };
+  double n = 0;
+  for (std::size_t f = 0; f < area.size(); ++f) n += 1.155 * area[f] / std::pow(edge(face_tau[f]), 2);
+  for (std::size_t e = 0; e < boundary.size(); ++e) n += boundary[e] / edge(boundary_tau[e]);
+  return n;
+}
+
+void RemeshedStreakBuilder::keep_budget(std::size_t particles) {
+  const auto start = Clock::now();
+  const double budget = static_cast<double>(o_.vertex_budget);
+  std::vector<double> area, face_tau, boundary, boundary_tau;
+  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    const auto fi = static_cast<std::int32_t>(f);
+    if (!topo_.face_alive(fi)) continue;
+    const auto& c = topo_.face(fi);
+    area.push_back(0.5 * normal(c[0], c[1], c[2]).norm());
+    face_tau.push_back(std::max({tau_[idx(c[0])], tau_[idx(c[1])], tau_[idx(c[2])]}));
+    for (int e = 0; e < 3; ++e)
+      if (topo_.neighbor(fi, e) == none) {
+        boundary.push_back((x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm());
+        boundary_tau.push_back(std::max(tau_[idx(c[e])], tau_[idx(c[(e + 1) % 3])]));
+      }
+  }
+  // Lowered only when the surface would not fit even once meshed at today's lengths (the
+  // collapses lag behind a lowered age by a few steps); never raised, so old parts do not refine
+  // again. Bisection in the logarithm of the age.
+  const double oldest = t_ - o_.release_begin;
+  if (oldest > 0 &&
+      estimate_particles(coarsen_age_, area, face_tau, boundary, boundary_tau) > 0.8 * budget) {
+    double hi = std::min(coarsen_age_, oldest), lo = 1e-6 * oldest;
+    if (estimate_particles(hi, area, face_tau, boundary, boundary_tau) > 0.7 * budget) {
+      for (int i = 0; i < 40; ++i) {
+        const double mid = std::sqrt(lo * hi);
+        (estimate_particles(mid, area, face_tau, boundary, boundary_tau) > 0.7 * budget ? hi : lo) = mid;
+      }
+      coarsen_age_ = lo;
+    } else {
+      coarsen_age_ = hi;
+    }
+    ++report_.budget_coarsenings;
+  }
+  report_.coarsen_seconds += seconds_since(start);
+  // Collapses at the new lengths, a few passes (each collapses at most one edge around a vertex).
+  for (int pass = 0; pass < 8 && particles > o_.vertex_budget; ++pass) {
+    const std::size_t before = report_.collapses;
+    reshaped_.clear();
+    collapse_pass();
+    flip_around_reshaped();
+    reshaped_.clear();
+    if (report_.collapses == before) break;
+    particles -= std::min(particles, report_.collapses - before);
   }
 }
 
@@ -1161,13 +1277,14 @@ void RemeshedStreakBuilder::emit_frame(int index) {
     mesh.release_time.push_back(tau_[v]);
     mesh.age.push_back(t_ - tau_[v]);
     mesh.particle_id.push_back(id_[v]);
+    mesh.on_path.push_back(label_exact_[v]);
   }
   mesh.speed.resize(nv);
   tbb::parallel_for(std::size_t{0}, nv, [&](std::size_t v) {
     Vec3 u;
     mesh.speed[v] = flow_.velocity(x_[v], t_, u) == FieldStatus::inside ? u.norm() : 0.0;
   });
-  double area = 0, boundary = 0;
+  double area = 0, boundary = 0, edge_ratio = 0;
   // Pieces: faces joined across shared edges (union-find).
   std::vector<std::int32_t> parent(topo_.face_slots());
   std::iota(parent.begin(), parent.end(), 0);
@@ -1182,8 +1299,10 @@ void RemeshedStreakBuilder::emit_frame(int index) {
     area += 0.5 * normal(c[0], c[1], c[2]).norm();
     for (int e = 0; e < 3; ++e) {
       const std::int32_t g = topo_.neighbor(fi, e);
+      const double length = (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+      edge_ratio = std::max(edge_ratio, length / edge_at(c[e], c[(e + 1) % 3]));
       if (g == none)
-        boundary += (x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm();
+        boundary += length;
       else
         parent[idx(root(fi))] = root(g);
     }
@@ -1209,6 +1328,8 @@ void RemeshedStreakBuilder::emit_frame(int index) {
   record.boundary_length = boundary;
   record.vertex_estimate = 1.155 * area / (o_.edge * o_.edge) + boundary / o_.edge;
   record.pieces = pieces;
+  record.coarsen_age = coarsen_age_;
+  record.max_edge_ratio = edge_ratio;
   record.area_pruned = report_.area_pruned;
   if (sink_) sink_(frame);
   record.finish_seconds = seconds_since(finish);
@@ -1226,6 +1347,17 @@ StreakReport RemeshedStreakBuilder::run() {
   if (!(o_.prune >= 0 && o_.prune <= 0.5 * o_.split))
     throw InvalidArgument("prune width must lie in [0, split/2] edge lengths (wider would erode "
                           "well-shaped faces at the boundary), got " + number(o_.prune));
+  if (!(o_.coarsen_age >= 0 && std::isfinite(o_.coarsen_age)))
+    throw InvalidArgument("coarsening age must be a finite time >= 0 (0: none), got " +
+                          number(o_.coarsen_age));
+  if (o_.region) {
+    const Box<3>& b = *o_.region;
+    const int axes = two_d_ ? 2 : 3;
+    for (int i = 0; i < axes; ++i)
+      if (!(b.lo[i] < b.hi[i]))
+        throw InvalidArgument("region of interest is empty along axis " + std::to_string(i) +
+                              ": " + number(b.lo[i]) + " to " + number(b.hi[i]));
+  }
   report_.dimension = flow_.dimension();
   report_.insertion = o_.insertion;
   report_.mesh = to_string(StreakMesh::remeshed);
@@ -1237,13 +1369,15 @@ StreakReport RemeshedStreakBuilder::run() {
   for (const double s : seed_.sample(std::min(probe, 10001))) {
     Vec3 v;
     if (flow_.velocity(seed_point(s), o_.release_begin, v) != FieldStatus::inside) continue;
+    if (!in_region(seed_point(s))) continue;
     ++inside;
     if (two_d_) v.z() = 0;
     speeds.push_back(v.norm());
   }
   if (inside == 0)
     throw InvalidArgument("seed " + o_.seed_name + " has no point inside the domain of " +
-                          field_name() + " with flow at t = " + number(o_.release_begin));
+                          field_name() + " with flow at t = " + number(o_.release_begin) +
+                          (o_.region ? " within the region of interest" : ""));
   // Release step: ℓ over the largest speed on the seed, so no particle leaves it further than
   // about ℓ before the next row (slower parts make narrow strips, which collapses thin out).
   const double top_speed = *std::max_element(speeds.begin(), speeds.end());
@@ -1255,7 +1389,7 @@ StreakReport RemeshedStreakBuilder::run() {
     step = o_.edge / top_speed;
   }
   report_.release_step = step;
-  width_ = o_.prune * o_.edge;
+  if (o_.coarsen_age > 0) coarsen_age_ = o_.coarsen_age;
   step_ = step_now_ = step;
 
   // Breaks: every release (and the release end) and every frame, in order.
@@ -1297,10 +1431,10 @@ StreakReport RemeshedStreakBuilder::run() {
       if (report_.seed_count == 0) report_.seed_count = chain_.size();
     }
     if (!adapt()) break;  // the new strip too: a frame sees an adapted mesh
-    std::size_t particles = 0;
-    for (std::size_t v = 0; v < x_.size(); ++v) {
-      const auto i = static_cast<std::int32_t>(v);
-      particles += alive(i) && (topo_.has_faces(i) || on_chain_[v]) ? 1 : 0;
+    std::size_t particles = count_particles();
+    if (o_.vertex_budget > 0 && particles > o_.vertex_budget) {
+      keep_budget(particles);
+      particles = count_particles();
     }
     report_.max_particles = std::max(report_.max_particles, particles);
     if (particles > o_.max_vertices) {
@@ -1335,6 +1469,7 @@ StreakReport RemeshedStreakBuilder::run() {
     }
   }
   report_.time_reached = t_;
+  report_.coarsen_age = coarsen_age_;
   report_.total_seconds = seconds_since(start_);
   return report_;
 }

@@ -68,7 +68,7 @@ struct StreakOptions {
   int releases_per_break = 1;
   int seed_count = 0;               ///< particles per row at release; 0: seed length / ℓ + 1
   ParticleInsertion insertion = ParticleInsertion::exact;
-  /// rows here (the baselines of bench-streak and bench-gpu-streak, and batch jobs); the
+  /// rows here (the baselines of orthofront-bench streak and orthofront-bench gpu-streak, and batch jobs); the
   /// `streak` command and Python choose remeshed unless told otherwise.
   StreakMesh mesh = StreakMesh::rows;
   /// Remeshed: edges shorter than collapse·ℓ are collapsed (and, as for rows, edges longer
@@ -87,6 +87,19 @@ struct StreakOptions {
   /// the surface, or along a straight boundary; their labels interpolated there) where that
   /// widens the smallest angle. Exactly placed particles never move: they stay on their paths.
   bool smooth = true;
+  /// Remeshed: growth controls. Dye in an unsteady flow stretches without end, so a surface with
+  /// edges ℓ everywhere grows without bound. Parts older than coarsen_age are meshed at a target
+  /// edge of ℓ · age / coarsen_age (an edge takes the younger end's age); their splits,
+  /// collapses, flips, smoothing and pruning all use that length. 0: ℓ at every age.
+  double coarsen_age = 0;
+  /// Remeshed: when the particles exceed this, the builder lowers the age at which coarsening
+  /// starts (never raising it again) so the surface, meshed at the new lengths, needs about 70 %
+  /// of it, and collapses until it fits: the oldest parts coarsen rather than the run stopping.
+  /// 0: no budget (max_vertices still stops the run).
+  std::size_t vertex_budget = 25'000'000;
+  /// Remeshed: a region of interest. Particles that leave it stop, as at the domain's edge, and
+  /// take their faces with them (counted as left_region). In 2D only x and y count.
+  std::optional<Box<3>> region;
   Tolerance tolerance{1e-10, 1e-10};
   /// Gridded series only: move particles by bulk advection (advect::BatchAdvector, DOPRI5 at
   /// `tolerance`, slab by slab through whole steps) on this device. Unset: the integrated flow
@@ -95,13 +108,13 @@ struct StreakOptions {
   std::size_t device_bytes = 0;     ///< steps the CUDA backend keeps on the device (0: half its free memory)
   /// With `device`: the particles stay with the backend (device memory for CUDA) from interval to
   /// interval; only particles placed anew go up, and positions and statuses come down. false:
-  /// every particle's state goes up and down each interval (the baseline of bench-gpu-streak
+  /// every particle's state goes up and down each interval (the baseline of orthofront-bench gpu-streak
   /// --particles-per-call). The same frames either way.
   bool resident_particles = true;
   /// With resident particles: the particles move on to the next break on the backend (from a
   /// thread of its own) while the rows of this break are refined and its frame is built; the
   /// particles inserted meanwhile catch up in one call, beside coarsening and the frame. false:
-  /// in turn, each waiting for the other (the baseline of bench-gpu-streak --in-turn). The same
+  /// in turn, each waiting for the other (the baseline of orthofront-bench gpu-streak --in-turn). The same
   /// frames either way.
   bool overlap_advection = true;
   std::size_t max_vertices = 50'000'000;  ///< particles (all rows) before the run stops early
@@ -109,14 +122,14 @@ struct StreakOptions {
   /// false: fixed resolution (no particle inserted or removed), the baseline of bench-streak.
   bool adaptive = true;
   /// Finish each frame (quality, the sink) on a thread of its own while the particles move on;
-  /// false: in line, before they move on (the baseline of bench-gpu-streak --frames-in-line).
+  /// false: in line, before they move on (the baseline of orthofront-bench gpu-streak --frames-in-line).
   bool finish_frames_aside = true;
   std::function<bool(const StreakProgress&)> progress;  ///< false stops (frames are kept)
   std::string seed_name, field_name;  ///< how messages name the seed and field (may be empty)
 };
 
 /// One observation: the mesh (positions, faces; attributes release_time, s, age, speed,
-/// particle_id; z = 0 for 2D flows) and its quality.
+/// particle_id, and for the remeshed mesh on_path; z = 0 for 2D flows) and its quality.
 struct StreakFrame {
   int index = 0;
   double time = 0;
@@ -135,6 +148,9 @@ struct StreakFrameRecord {
   /// edges ℓ needs for them: 1.155 · area / ℓ² + boundary / ℓ vertices.
   double area = 0, boundary_length = 0, vertex_estimate = 0;
   std::size_t pieces = 0;           ///< connected pieces of the frame's mesh
+  /// Remeshed: the age past which the frame is coarsened (infinity: none), and its longest edge
+  /// over that edge's target length (ℓ, or longer where coarsened).
+  double coarsen_age = 0, max_edge_ratio = 0;
   double area_pruned = 0;           ///< remeshed: area removed as thin filaments up to this frame
   double seconds = 0;               ///< building and handing over the frame (both parts)
   double build_seconds = 0;         ///< its vertices and faces alone (the particles wait for these)
@@ -178,6 +194,11 @@ struct StreakReport {
   /// by interpolation (not on its label's path); they are interpolated without trying the path.
   std::size_t inexact_ends = 0;
   std::size_t smoothed = 0;  ///< Remeshed: particles moved by smoothing (counted per move)
+  /// Remeshed, growth controls: collapses of edges no shorter than collapse·ℓ (allowed only by
+  /// a coarsened length), times the vertex budget lowered the coarsening age, and that age at
+  /// the end (infinity: never coarsened).
+  std::size_t coarsened = 0, budget_coarsenings = 0;
+  double coarsen_age = 0;
   std::size_t faces_removed_at_stops = 0, strip_faces_skipped = 0;
   /// Remeshed: faces removed as filaments thinner than prune·ℓ (with the fans they would have
   /// pinched), and their area.
@@ -188,6 +209,7 @@ struct StreakReport {
   std::size_t steps_shortened = 0, faces_turned = 0;
   std::string mesh;                 ///< "remeshed" or "rows"
   std::size_t left_domain = 0, no_data = 0;  ///< particles that stopped
+  std::size_t left_region = 0;      ///< remeshed: particles that left the region of interest
   std::size_t max_particles = 0;
   std::vector<StreakFrameRecord> frames;
   CacheStatistics cache;            ///< streamed only
