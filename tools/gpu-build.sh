@@ -22,7 +22,7 @@ generator=(); command -v ninja >/dev/null && generator=(-G Ninja)
 boost=(); [[ -d /usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0 ]] && boost=(-DBoost_DIR=/usr/lib/x86_64-linux-gnu/cmake/Boost-1.74.0)
 cmake -S . -B "$build" "${generator[@]}" "${boost[@]}" "${catch2[@]}" -DCMAKE_BUILD_TYPE=Release -DORTHOFRONT_CUDA=ON -DORTHOFRONT_MPI=OFF -DORTHOFRONT_NETCDF=OFF \
   -DCMAKE_CUDA_ARCHITECTURES="${CUDA_ARCHITECTURES:-90}"
-cmake --build "$build" -j"$(nproc)" --target orthofront lib_test_cuda_advector lib_test_batch_advector \
+cmake --build "$build" -j"$(nproc)" --target orthofront orthofront-bench lib_test_cuda_advector lib_test_batch_advector \
   spacetime_test_cuda_path_surface spacetime_test_bulk_front_advance lib_test_cuda_stream_surface \
   lib_test_merging_advector
 "$build"/tests/lib_test_batch_advector

@@ -756,7 +756,7 @@ void add_batch_command(CLI::App& app) {
   auto args = std::make_shared<BatchArgs>();
   CLI::App* c = app.add_subcommand(
       "batch",
-      "Build the surfaces of a job file (TOML or JSON; see examples/batch/): one pass over the "
+      "Build the surfaces of a job file (TOML or JSON; see docs/examples/batch/): one pass over the "
       "data for all surfaces that share it, checkpoints, --resume after a kill");
   c->add_option("job", args->job, "Job file (.toml or .json)")->required();
   c->add_option("--out", args->out, "Output folder (default: the job file's job.out)");
@@ -783,7 +783,8 @@ void add_batch_command(CLI::App& app) {
   c->add_flag("--no-merge-fronts", args->no_merge_fronts,
               "With --device: the fronts of a pass take turns on the backend, one call each, "
               "instead of going together in merged calls (the same meshes; a baseline to measure "
-              "against)");
+              "against)")
+      ->group("");  // left out of the user's help
   c->add_option("--device-calls", args->device_calls,
                  "With --device: backend calls running at once (0: as many as the backend allows, "
                  "16 on CUDA, each on a stream of its own; 1: one at a time, the fronts that come "

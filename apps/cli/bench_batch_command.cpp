@@ -1,4 +1,4 @@
-// `orthofront bench-batch`: 64 path surfaces (a seed rake) over one streamed series many times
+// `orthofront-bench batch`: 64 path surfaces (a seed rake) over one streamed series many times
 // the cache budget, built one process at a time, in one shared pass (`batch`), and in one shared
 // pass that checkpoints; total time, bytes read, peak RSS, checkpoint overhead, side by side.
 #include <fcntl.h>
@@ -15,6 +15,7 @@
 #include <thread>
 #include <tuple>
 
+#include "cli/app_main.h"
 #include "cli/commands.h"
 #include "cli/process_memory.h"
 #include "cli/work_sharing.h"
@@ -71,7 +72,7 @@ Child run_program(const std::string& program, const std::vector<std::string>& ar
   pid_t pid = 0;
   const auto t0 = Clock::now();
   if (posix_spawnp(&pid, program.c_str(), &actions, nullptr, cargv.data(), environ) != 0)
-    throw Error("bench-batch: cannot start " + program);
+    throw Error("orthofront-bench batch: cannot start " + program);
   posix_spawn_file_actions_destroy(&actions);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -82,14 +83,14 @@ Child run_program(const std::string& program, const std::vector<std::string>& ar
   return c;
 }
 
-// Runs this binary with `args`.
-Child run_self(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  return run_program("/proc/self/exe", args, log);
+// Runs `orthofront` with `args`.
+Child run_orthofront(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  return run_program(program_beside("orthofront"), args, log);
 }
 
 void require_ok(const Child& c, const std::string& what) {
   if (c.exit_code != 0)
-    throw Error("bench-batch: " + what + " failed (exit " + std::to_string(c.exit_code) +
+    throw Error("orthofront-bench batch: " + what + " failed (exit " + std::to_string(c.exit_code) +
                 "): " + c.log);
 }
 
@@ -137,7 +138,7 @@ void read_batch_summary(Row& r, const std::filesystem::path& out,
 }
 
 
-/// `bench-batch --device D`: the rake's shared pass with the front advance per vertex, on D with
+/// `orthofront-bench batch --device D`: the rake's shared pass with the front advance per vertex, on D with
 /// the fronts taking turns (one backend call each), on D with the fronts that come during a call
 /// merged into the next (one call at a time), and merged with calls running at once (the
 /// default); the merged meshes against the turns' (they must be equal), backend calls and time.
@@ -162,7 +163,7 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
     std::vector<std::string> args{"batch", (work / "job.toml").string(), "--out", out.string(),
                                   "--checkpoint-every", "0", "--quiet"};
     args.insert(args.end(), w.options.begin(), w.options.end());
-    const Child ch = run_self(args, out.string() + ".log");
+    const Child ch = run_orthofront(args, out.string() + ".log");
     require_ok(ch, w.name);
     w.seconds = ch.seconds;
     const json s = json::parse(read_file(out / "summary.json"));
@@ -220,7 +221,7 @@ void device_table(const BenchBatchArgs& a, const std::filesystem::path& work) {
 void add_bench_batch_command(CLI::App& app) {
   auto a = std::make_shared<BenchBatchArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-batch",
+      "batch",
       "Benchmark batch jobs: a rake of path surfaces over one streamed series, one process per "
       "surface vs one shared pass (with and without checkpoints)");
   c->add_option("--surfaces", a->surfaces, "Path surfaces in the rake")
@@ -258,10 +259,10 @@ void add_bench_batch_command(CLI::App& app) {
             : fs::path(a->work);
     fs::create_directories(work);
     const fs::path series = work / "gyre3d.h5";
-    std::printf("bench-batch: double-gyre-3d %s x %d steps into %s\n", a->resolution.c_str(),
+    std::printf("orthofront-bench batch: double-gyre-3d %s x %d steps into %s\n", a->resolution.c_str(),
                 a->steps, series.string().c_str());
     std::fflush(stdout);
-    require_ok(run_self({"generate", "--field", "double-gyre-3d", "--resolution", a->resolution,
+    require_ok(run_orthofront({"generate", "--field", "double-gyre-3d", "--resolution", a->resolution,
                          "--steps", std::to_string(a->steps), "--t1", std::to_string(a->t1),
                          "--brick", "16", "--out", series.string(), "--quiet"},
                         work / "generate.log"),
@@ -321,7 +322,7 @@ void add_bench_batch_command(CLI::App& app) {
     fs::create_directories(alone_dir);
     for (int k = 0; k < a->surfaces; ++k) {
       const std::string name = "r-" + std::to_string(k);
-      const Child ch = run_self({"path",
+      const Child ch = run_orthofront({"path",
                                  "--field",
                                  series.string(),
                                  "--seed",
@@ -369,7 +370,7 @@ void add_bench_batch_command(CLI::App& app) {
       for (std::size_t w = 0; w < ways.size(); ++w) {
         const fs::path out = work / ("shared-" + ways[w].second);
         fs::remove_all(out);
-        const Child ch = run_self({"batch", (work / "job.toml").string(), "--out", out.string(),
+        const Child ch = run_orthofront({"batch", (work / "job.toml").string(), "--out", out.string(),
                                    "--checkpoint-every", ways[w].second, "--quiet"},
                                   work / ("shared-" + ways[w].second + ".log"));
         require_ok(ch, ways[w].first);
@@ -391,7 +392,7 @@ void add_bench_batch_command(CLI::App& app) {
     // and, to see how ranks scale where the work is CPU-bound, 1 and 2 ranks of one thread each.
     double mpi_one_thread[2] = {0, 0};
     if (have_mpi()) {
-      const std::string self = fs::read_symlink("/proc/self/exe").string();
+      const std::string self = program_beside("orthofront");
       // mpirun as root needs these two; oversubscribe: any rank count on any core count.
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 0);
       ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 0);

@@ -1,4 +1,4 @@
-// `orthofront bench`: the paper's Table 1 rows on analytic fields (per-stage times, vertices per
+// `orthofront-bench stream`: the paper's Table 1 rows on analytic fields (per-stage times, vertices per
 // second, time outside field integration) with the timeline baseline side by side, and the α
 // solver's time per vertex for growing fronts, and what measuring a mesh's quality costs against
 // building it (the rows' meshes, and a grid as large as a streak surface's frame). Prints tables;
@@ -153,7 +153,7 @@ double solver_ns_per_vertex(std::size_t n, std::mt19937& rng) {
 void add_bench_command(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench", "Table 1 of the paper on analytic fields (orthogonal vs timeline), α solver cost");
+      "stream", "Table 1 of the paper on analytic fields (orthogonal vs timeline), α solver cost");
   c->add_option("--repeats", args->repeats, "Runs per row (the fastest is reported)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

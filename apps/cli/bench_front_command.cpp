@@ -1,4 +1,4 @@
-// `orthofront bench-front`: one front advance of a path surface, n vertices moved by one front
+// `orthofront-bench front`: one front advance of a path surface, n vertices moved by one front
 // step (τ = ℓ / c) through a series sampled on a grid: per vertex through the streamed field (the
 // engine's default, TBB threads) beside one call of the bulk front advance on the CPU backend and
 // on CUDA, for n from 64 up. The smallest n from which CUDA stays faster than per vertex is the
@@ -58,7 +58,7 @@ struct Row {
 void add_bench_front_command(CLI::App& app) {
   auto a = std::make_shared<BenchFrontArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-front",
+      "front",
       "Benchmark one front advance of a path surface: per vertex beside bulk advection (CPU, "
       "CUDA), by front size: the break-even size of --device auto");
   c->add_option("--field", a->field, "Unsteady 3D analytic field, sampled on a grid")->capture_default_str();
@@ -73,16 +73,16 @@ void add_bench_front_command(CLI::App& app) {
   c->add_option("--device", a->device, "cuda, cpu (no CUDA column) or auto")->capture_default_str();
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
-    if (flow->dimension() != 3) throw InvalidArgument("bench-front: --field must be a 3D flow");
+    if (flow->dimension() != 3) throw InvalidArgument("orthofront-bench front: --field must be a 3D flow");
     if (a->resolution < 8 || a->resolution > 1024 || a->steps < 4 || a->repeats < 1 ||
         !(a->edge > 0) || !(a->band >= 0 && a->band < 3) || !(a->tolerance > 0))
-      throw InvalidArgument("bench-front: need --resolution in [8, 1024], --steps >= 4, "
+      throw InvalidArgument("orthofront-bench front: need --resolution in [8, 1024], --steps >= 4, "
                             "--repeats >= 1, --edge > 0, --band in [0, 3), --tolerance > 0");
     const std::vector<std::size_t> sizes = parse_count_list(a->sizes, "--sizes", 2, 1e8);
     const advect::Device device = advect::parse_device(a->device);
     std::string why;
     const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);
-    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("bench-front --device cuda: " + why);
+    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("orthofront-bench front --device cuda: " + why);
     const int threads = a->threads > 0 ? a->threads : tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                               static_cast<std::size_t>(threads));
@@ -175,7 +175,7 @@ void add_bench_front_command(CLI::App& app) {
                         {"cuda", cuda ? gpu_name : "unavailable: " + why},
                         {"break_even_vertices", break_even},
                         {"rows", nlohmann::json::array()}};
-    std::printf("bench-front: %s on %d^3, %d time steps over [0, 4]; front vertices spread over "
+    std::printf("orthofront-bench front: %s on %d^3, %d time steps over [0, 4]; front vertices spread over "
                 "t in [%g, %g], each moved by one front step (l = %g, c = %g); DOPRI5 %g; %d CPU "
                 "threads; fastest of %d\nCUDA: %s\n\n",
                 a->field.c_str(), a->resolution, a->steps + 1, t_lo, t_hi, a->edge, c_scale,

@@ -1,4 +1,4 @@
-// `orthofront bench-gpu`: bulk particle advection through a slab of a 256³ grid (unsteady ABC
+// `orthofront-bench gpu`: bulk particle advection through a slab of a 256³ grid (unsteady ABC
 // sampled at two times), particle-steps per second for 10^4 … 10^8 particles, the CUDA backend
 // (RK4 and DOPRI5) beside the same binary's CPU backend, in one run. Prints a table and JSON.
 // Without a CUDA device the CPU rows run alone and the table says why.
@@ -89,7 +89,7 @@ struct Row {
 void add_bench_gpu_command(CLI::App& app) {
   auto a = std::make_shared<BenchGpuArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-gpu", "Benchmark bulk particle advection: CUDA backend beside the CPU backend");
+      "gpu", "Benchmark bulk particle advection: CUDA backend beside the CPU backend");
   c->add_option("--field", a->field, "Unsteady 3D analytic field sampled at t = 0 and 1")->capture_default_str();
   c->add_option("--resolution", a->resolution, "Grid points per axis")->capture_default_str();
   c->add_option("--particles", a->particles, "Particle counts, comma-separated")->capture_default_str();
@@ -101,16 +101,16 @@ void add_bench_gpu_command(CLI::App& app) {
   c->add_flag("--json", a->json_only, "Print only the JSON");
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
-    if (flow->dimension() != 3) throw InvalidArgument("bench-gpu: --field must be a 3D flow");
+    if (flow->dimension() != 3) throw InvalidArgument("orthofront-bench gpu: --field must be a 3D flow");
     if (a->resolution < 8 || a->resolution > 2048)
-      throw InvalidArgument("bench-gpu: --resolution must lie in [8, 2048]");
+      throw InvalidArgument("orthofront-bench gpu: --resolution must lie in [8, 2048]");
     if (!(a->rk4_steps >= 1) || !(a->tolerance > 0) || a->threads < 0)
-      throw InvalidArgument("bench-gpu: --rk4-steps >= 1, --tolerance > 0, --threads >= 0");
+      throw InvalidArgument("orthofront-bench gpu: --rk4-steps >= 1, --tolerance > 0, --threads >= 0");
     const std::vector<std::size_t> counts = parse_count_list(a->particles, "--particles", 1, 1e9);
     const advect::Device device = advect::parse_device(a->device);
     std::string why;
     const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);
-    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("bench-gpu --device cuda: " + why);
+    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("orthofront-bench gpu --device cuda: " + why);
     const int threads = a->threads > 0 ? a->threads : tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                               static_cast<std::size_t>(threads));
@@ -188,7 +188,7 @@ void add_bench_gpu_command(CLI::App& app) {
       out["rows"].push_back(j);
     }
     if (!a->json_only) {
-      std::printf("bench-gpu: %s sampled on %d^3 (%.0f MiB a step, 2 steps), particles uniform at "
+      std::printf("orthofront-bench gpu: %s sampled on %d^3 (%.0f MiB a step, 2 steps), particles uniform at "
                   "random, t 0 -> 1; RK4 %g steps a particle, DOPRI5 tolerance %g\n",
                   a->field.c_str(), a->resolution,
                   static_cast<double>(series.geometry().point_count() * 3 * sizeof(float)) / 1048576.0,

@@ -1,4 +1,4 @@
-// `orthofront bench-gpu-streak`: a streak surface of millions of particles moved on the GPU
+// `orthofront-bench gpu-streak`: a streak surface of millions of particles moved on the GPU
 // through a series streamed from disk, the series several times larger than the steps the device
 // may keep, against its floors measured in the same run: the I/O floor (every step read and
 // decoded once through the cache, nothing computed), the GPU compute (the kernels' time) and the
@@ -58,7 +58,7 @@ struct BenchGpuStreakArgs {
 void add_bench_gpu_streak_command(CLI::App& app) {
   auto a = std::make_shared<BenchGpuStreakArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-gpu-streak",
+      "gpu-streak",
       "Benchmark a streak surface of millions of particles on the GPU through a streamed series "
       "larger than the device's step budget, against the I/O floor, the GPU compute and PCIe");
   c->add_option("--field", a->field, "Unsteady 3D analytic field sampled into the series")->capture_default_str();
@@ -88,19 +88,19 @@ void add_bench_gpu_streak_command(CLI::App& app) {
               "baseline of overlapped advection");
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
-    if (flow->dimension() != 3) throw InvalidArgument("bench-gpu-streak: --field must be a 3D flow");
+    if (flow->dimension() != 3) throw InvalidArgument("orthofront-bench gpu-streak: --field must be a 3D flow");
     if (a->resolution < 8 || a->resolution > 1024 || a->steps < 8 || a->frames < 1 ||
         !(a->edge > 0) || !(a->release_end > 0 && a->release_end < 3) || !(a->data_over_device >= 1))
-      throw InvalidArgument("bench-gpu-streak: need --resolution in [8, 1024], --steps >= 8, "
+      throw InvalidArgument("orthofront-bench gpu-streak: need --resolution in [8, 1024], --steps >= 8, "
                             "--frames >= 1, --edge > 0, --release-end in (0, 3), "
                             "--data-over-device >= 1");
     double sx0, sy0, sz0, sx1, sy1, sz1;
     if (std::sscanf(a->seed.c_str(), "%lf,%lf,%lf:%lf,%lf,%lf", &sx0, &sy0, &sz0, &sx1, &sy1, &sz1) != 6)
-      throw InvalidArgument("bench-gpu-streak: --seed '" + a->seed + "' is not x0,y0,z0:x1,y1,z1");
+      throw InvalidArgument("orthofront-bench gpu-streak: --seed '" + a->seed + "' is not x0,y0,z0:x1,y1,z1");
     advect::Device device = advect::parse_device(a->device);
     std::string why;
     const bool cuda = device != advect::Device::cpu && advect::cuda_available(&why);
-    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("bench-gpu-streak --device cuda: " + why);
+    if (device == advect::Device::cuda && !cuda) throw InvalidArgument("orthofront-bench gpu-streak --device cuda: " + why);
     if (device == advect::Device::auto_select) device = cuda ? advect::Device::cuda : advect::Device::cpu;
 
     // The series on disk (bricked, lz4), as `generate` writes it.
@@ -285,7 +285,7 @@ void add_bench_gpu_streak_command(CLI::App& app) {
                             {"refine", sp.refine},
                             {"frames", sp.frames}});
     }
-    std::printf("bench-gpu-streak: %s on %d^3, %zu steps over [0, 4] (%.2f GiB, %.0f MiB a step; "
+    std::printf("orthofront-bench gpu-streak: %s on %d^3, %zu steps over [0, 4] (%.2f GiB, %.0f MiB a step; "
                 "%zu read up to the last frame); host cache %s; the device keeps at most %.2f GiB "
                 "of steps (series / %.3g)\nbackend: %s; %d CPU threads\n",
                 a->field.c_str(), a->resolution, sampled.step_count(),

@@ -1,4 +1,4 @@
-// `orthofront bench-grid`: (1) surface throughput on sampled grids against the analytic fields
+// `orthofront-bench grid`: (1) surface throughput on sampled grids against the analytic fields
 // they come from, (2) read throughput of one time step for each HDF5 storage and compression,
 // against the raw disk bandwidth that `dd` measures on the same files. Prints tables and JSON.
 #include <fcntl.h>
@@ -178,7 +178,7 @@ ReadRow run_read_case(const ReadCase& c, const GridGeometry& geometry, int compo
   row.decode_parallel = mb(step_bytes * n) / since(t0);
   for (std::size_t s = 0; s < steps.size(); ++s)
     if (std::memcmp(decoded[s].data(), steps[s].data(), decoded[s].size() * sizeof(float)) != 0)
-      throw Error("bench-grid: step " + std::to_string(s) + " of " + file.string() +
+      throw Error("orthofront-bench grid: step " + std::to_string(s) + " of " + file.string() +
                   " did not read back exactly");
   raws.clear();
   decoded.clear();
@@ -377,7 +377,7 @@ void run_bench(const BenchGridArgs& a) {
 void add_bench_grid_command(CLI::App& app) {
   auto a = std::make_shared<BenchGridArgs>();
   CLI::App* c =
-      app.add_subcommand("bench-grid",
+      app.add_subcommand("grid",
                          "Benchmark grid fields (surface vertices/s, sampled vs analytic) and HDF5 "
                          "step reads per storage and compression against dd");
   c->add_option("--resolution", a->resolution, "Samples per axis of the surface grids")
@@ -394,7 +394,7 @@ void add_bench_grid_command(CLI::App& app) {
   c->add_flag("--keep", a->keep, "Keep the test files");
   c->callback([a]() {
     if (a->resolution < 2 || a->read_resolution < 2 || a->steps < 1)
-      throw InvalidArgument("bench-grid: resolutions must be >= 2 and --steps >= 1");
+      throw InvalidArgument("orthofront-bench grid: resolutions must be >= 2 and --steps >= 1");
     run_bench(*a);
   });
 }

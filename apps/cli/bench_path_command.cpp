@@ -1,4 +1,4 @@
-// `orthofront bench-path`: a path surface through a series far larger than the cache budget,
+// `orthofront-bench path`: a path surface through a series far larger than the cache budget,
 // streamed through the space-time brick cache (with and without prefetch), against the old
 // whole-step cache, the I/O floor (read + decode of exactly the bricks the surface needs) and the
 // compute time with every needed brick in memory. Each run is a child `orthofront path` process,
@@ -18,6 +18,7 @@
 #include <iostream>
 #include <random>
 
+#include "cli/app_main.h"
 #include "cli/commands.h"
 #include "orthofront/error.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -89,7 +90,8 @@ Run run_child(const std::string& name, const std::vector<std::string>& args,
   const std::filesystem::path report = work / (name + ".json");
   const std::filesystem::path mesh = work / (name + ".vtp");
   const std::filesystem::path log = work / (name + ".log");
-  std::vector<std::string> argv{"/proc/self/exe", "path"};
+  const std::string program = program_beside("orthofront");
+  std::vector<std::string> argv{program, "path"};
   argv.insert(argv.end(), args.begin(), args.end());
   for (const char* extra : {"--quiet", "--out"}) argv.emplace_back(extra);
   argv.push_back(mesh.string());
@@ -103,8 +105,8 @@ Run run_child(const std::string& name, const std::vector<std::string>& args,
   posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   pid_t pid = 0;
   const auto t0 = Clock::now();
-  if (posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, cargv.data(), environ) != 0)
-    throw Error("bench-path: cannot start a child process for run '" + name + "'");
+  if (posix_spawn(&pid, program.c_str(), &actions, nullptr, cargv.data(), environ) != 0)
+    throw Error("orthofront-bench path: cannot start a child process for run '" + name + "'");
   posix_spawn_file_actions_destroy(&actions);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -200,7 +202,7 @@ void layout_sweep(const BenchArgs& a) {
                                     {"lz4", 32},  {"lz4", 16},  {"lz4", 64}};
   nlohmann::json out = nlohmann::json::array();
   nlohmann::json out_sampling;
-  std::printf("series: %zu steps of 256x128x128 (%s of floats); path surface as bench-path's, "
+  std::printf("series: %zu steps of 256x128x128 (%s of floats); path surface as orthofront-bench path's, "
               "budget %s\n\n", steps,
               spacetime::format_bytes(source.step_bytes() * steps).c_str(), a.budget.c_str());
   std::printf("%-6s %6s %10s %7s %8s %12s %14s %9s %8s %9s\n", "codec", "brick", "on disk", "ratio",
@@ -295,7 +297,7 @@ void layout_sweep(const BenchArgs& a) {
 void add_bench_path_command(CLI::App& app) {
   auto a = std::make_shared<BenchArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-path", "Benchmark path surfaces streamed through the brick cache: writes a "
+      "path", "Benchmark path surfaces streamed through the brick cache: writes a "
                     "double-gyre-3d series (18 GiB of floats by default), runs brick cache with "
                     "and without prefetch, the whole-step cache and in-memory compute, then "
                     "deletes the series");
@@ -357,7 +359,7 @@ void add_bench_path_command(CLI::App& app) {
         const io::Hdf5Codec codec = parse_codec(a->codec);
         // Compressed size is unknown before writing: ask for the raw size (the worst case).
         if (space.available < data_bytes + (std::size_t{1} << 30))
-          throw InvalidArgument("bench-path: " + dir.string() + " has " +
+          throw InvalidArgument("orthofront-bench path: " + dir.string() + " has " +
                                 spacetime::format_bytes(space.available) + " free; the series needs up to " +
                                 spacetime::format_bytes(data_bytes) +
                                 " (choose --dir, or a smaller --grid/--steps)");

@@ -1,4 +1,4 @@
-// `orthofront bench-streak`: streak surfaces of a streamed time series much larger than the
+// `orthofront-bench streak`: streak surfaces of a streamed time series much larger than the
 // cache budget, adaptive (exact and interpolated insertion) against a fixed-resolution baseline
 // with the same final vertex count, in one run. Prints a table and JSON.
 #include <algorithm>
@@ -90,7 +90,7 @@ nlohmann::json row_json(const Row& r, std::size_t data_bytes) {
 void add_bench_streak_command(CLI::App& app) {
   auto a = std::make_shared<BenchStreakArgs>();
   CLI::App* c = app.add_subcommand(
-      "bench-streak",
+      "streak",
       "Benchmark streak surfaces on a streamed series (adaptive vs fixed resolution)");
   c->add_option("--field", a->field, "Unsteady 2D analytic field sampled into the series")
       ->capture_default_str();
@@ -127,12 +127,12 @@ void add_bench_streak_command(CLI::App& app) {
       ->capture_default_str();
   c->callback([a]() {
     const auto flow = make_unsteady_field(a->field);
-    if (flow->dimension() != 2) throw InvalidArgument("bench-streak: --field must be a 2D flow");
+    if (flow->dimension() != 2) throw InvalidArgument("orthofront-bench streak: --field must be a 2D flow");
     double x0, y0, x1, y1;
     if (std::sscanf(a->seed.c_str(), "%lf,%lf:%lf,%lf", &x0, &y0, &x1, &y1) != 4)
       throw InvalidArgument("--seed '" + a->seed + "': expected x0,y0:x1,y1");
     if (a->resolution < 8 || a->steps < 4 || a->frames < 1)
-      throw InvalidArgument("bench-streak: --resolution >= 8, --steps >= 4 and --frames >= 1");
+      throw InvalidArgument("orthofront-bench streak: --resolution >= 8, --steps >= 4 and --frames >= 1");
     const GridGeometry grid = spacetime::uniform_grid(flow->domain(), 2, a->resolution);
     GridGeometry g = grid;
     g.size[1] = a->resolution / 2 + 1;
@@ -192,7 +192,7 @@ void add_bench_streak_command(CLI::App& app) {
     rows.push_back({"fixed resolution (baseline)", run(fixed), o.edge});
     for (const Row& r : rows)
       if (!r.report.complete)
-        throw Error("bench-streak: '" + r.name + "' stopped: " + r.report.message);
+        throw Error("orthofront-bench streak: '" + r.name + "' stopped: " + r.report.message);
 
     // The two routes on one point seed of the analytic field: the direct release (a seed segment
     // of length 1e-9, refined across rows) and the space-time stream surface through the
@@ -317,7 +317,7 @@ void add_bench_streak_command(CLI::App& app) {
     for (const Row& r : rows) out["rows"].push_back(row_json(r, data_bytes));
     if (!a->json_only) {
       std::printf(
-          "bench-streak: %s on %lld x %lld, %d steps, %.1f MiB of data through a %.1f MiB "
+          "orthofront-bench streak: %s on %lld x %lld, %d steps, %.1f MiB of data through a %.1f MiB "
           "cache (1/%g), edge %g, release [0, %g], %d frames to t = %g\n",
           a->field.c_str(), static_cast<long long>(g.size[0]), static_cast<long long>(g.size[1]),
           a->steps, data_bytes / 1048576.0, budget / 1048576.0, a->budget_share, a->edge,

@@ -67,7 +67,7 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
       std::printf("\nReal data: skipped, %s not found (give --real FILE).\n", a.field.c_str());
     return {{"skipped", a.field + " not found"}};
   }
-  const std::unique_ptr<io::TimeSeries> series = io::open_time_series(a.field, "bench-streak");
+  const std::unique_ptr<io::TimeSeries> series = io::open_time_series(a.field, "orthofront-bench streak");
   const SeedCurve seed = parse_seed(a.seed);
   spacetime::StreakOptions o;
   std::tie(o.release_begin, o.release_end) = parse_streak_release(a.release);

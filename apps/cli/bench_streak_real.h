@@ -1,5 +1,5 @@
 #pragma once
-// bench-streak's real-data rows: streak surfaces of a real unsteady series (by default the
+// orthofront-bench streak's real-data rows: streak surfaces of a real unsteady series (by default the
 // shared backward-facing step), remeshed against the row mesh, side by side.
 #include <nlohmann/json.hpp>
 #include <string>

@@ -1,6 +1,7 @@
 #pragma once
-/// The subcommands of the `orthofront` binary. Each registers itself on the app; its callback
-/// throws orthofront::Error on bad input (main turns that into a message and exit code 2).
+/// The subcommands of the `orthofront` program and (add_bench_*) of `orthofront-bench`. Each
+/// registers itself on the app; its callback throws orthofront::Error on bad input (run_app turns
+/// that into a message and exit code 2).
 #include <CLI/CLI.hpp>
 
 namespace orthofront::cli {

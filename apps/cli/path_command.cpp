@@ -99,7 +99,7 @@ void add_path_flags(CLI::App& command, PathArgs& args) {
   command
       .add_option("--cache-unit", args.cache_unit,
                   "What the cache holds: brick (the file's bricks, a space-time band around the "
-                  "front) or step (whole time steps, the old cache)")
+                  "front) or step (whole time steps: the baseline of orthofront-bench path)")
       ->check(CLI::IsMember({"brick", "step"}))
       ->capture_default_str();
   command.add_flag("--no-prefetch", args.no_prefetch, "Load on demand only (no read-ahead)");
@@ -184,10 +184,10 @@ void add_path_command(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "path", "Build a path surface of an unsteady flow (analytic, or an HDF5 time series)");
   c->add_option("--field", args->field,
-                "Unsteady field NAME[:key=value,...] (see `orthofront fields`) or an HDF5 time "
-                "series file")
+                "Unsteady field NAME[:key=value,...] (see `orthofront fields`) or a time series: "
+                "HDF5, NetCDF, a .pvd collection or a glob of grid files")
       ->required();
-  c->add_option("--seed", args->seed, "Seed curve at t0 (as for `stream`; 2D flows use x, y)")
+  c->add_option("--seed", args->seed, "Seed curve at t0 (as for `stream`; 2D flows take z = 0)")
       ->required();
   add_path_flags(*c, *args);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();

@@ -2,7 +2,7 @@
 
 Fields come from numpy arrays (``Field``, ``Series``), from files (``Field.open``,
 ``Series.open``, or a file name where a field is expected) or by analytic name ("abc",
-"double_gyre:A=0.1"). Seeds are seed strings ("line:0,0,0:1,0,0") or arrays of points.
+"double-gyre:A=0.1"). Seeds are seed strings ("line:0,0,0:1,0,0") or arrays of points.
 Options are the command line's, with '_' for '-': ``stream_surface(f, s, edge=0.05,
 mu_mode="paper")`` is ``orthofront stream --edge 0.05 --mu-mode paper``, same defaults and checks.
 The interpreter lock is released while a surface is built; Ctrl-C stops the build.

@@ -39,6 +39,11 @@ inline Run run(const std::string& arguments) {
   return run_shell(std::string("'") + ORTHOFRONT_BINARY + "' " + arguments);
 }
 
+/// Runs the benchmark program with `arguments` (a shell fragment).
+inline Run run_bench(const std::string& arguments) {
+  return run_shell(std::string("'") + ORTHOFRONT_BENCH_BINARY + "' " + arguments);
+}
+
 /// Starts the binary with `args` in the background, its stdout and stderr in `log` and no stdin;
 /// returns its pid (for tests that signal it).
 inline pid_t start(const std::vector<std::string>& args, const std::string& log) {

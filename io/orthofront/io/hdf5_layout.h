@@ -48,7 +48,7 @@ struct Hdf5WriteOptions {
   std::string group = "/";  ///< group that holds the field (created with its parents)
   Hdf5Storage storage = Hdf5Storage::bricked;  ///< series only (steady files are `steady`)
   /// Bricked storage: points per brick along each axis (one chunk per brick and step; 32 was the
-  /// fastest in `orthofront bench-path --brick-sweep`, see docs/hdf5-layout.md).
+  /// fastest in `orthofront-bench path --brick-sweep`, see docs/hdf5-layout.md).
   std::int64_t brick_size = 32;
   /// Compression; `none` with gzip_level > 0 means gzip at that level.
   Hdf5Codec codec = Hdf5Codec::none;
@@ -58,7 +58,7 @@ struct Hdf5WriteOptions {
   /// Upper bound on one chunk: a step (or steady field) larger than this is split into chunks of
   /// whole z-slices (2D: y-rows); a chunk never spans two steps. 16 MiB lets one step be
   /// compressed and decoded on several cores, where one chunk a step is decoded by one
-  /// (`orthofront bench-grid`; docs/hdf5-layout.md); set it >= the step size for one chunk per
+  /// (`orthofront-bench grid`; docs/hdf5-layout.md); set it >= the step size for one chunk per
   /// step.
   /// HDF5 caps chunks at 4 GiB.
   std::size_t max_chunk_bytes = std::size_t{16} << 20;

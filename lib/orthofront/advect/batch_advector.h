@@ -176,7 +176,7 @@ class BatchAdvector {
 enum class Device : unsigned char { cpu, cuda, auto_select };
 
 /// Front size from which `--device auto` advances a surface's front on a CUDA device: below it,
-/// a call's latency costs more than the device saves (measured with `orthofront bench-front`:
+/// a call's latency costs more than the device saves (measured with `orthofront-bench front`:
 /// docs/benchmarks/README.md, "A path surface's front on the GPU").
 inline constexpr std::size_t kCudaFrontBreakEven = 4096;
 /// The same for a stream surface of a steady grid: a vertex-step there is several times cheaper

@@ -181,7 +181,7 @@ class PinnedBuffer {
 /// users' peak, as they grow by doubling), unless making a new one fails: then they are freed
 /// and the making tried once more.
 /// (Making the next size ahead on a thread of its own was measured and not kept: with it the
-/// catch-ups of bench-gpu-streak took longer, not shorter.)
+/// catch-ups of orthofront-bench gpu-streak took longer, not shorter.)
 class PinnedPool {
  public:
   /// A buffer of at least `bytes`: the smallest kept one that fits, or else a new one (its making

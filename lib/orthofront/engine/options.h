@@ -125,7 +125,7 @@ struct StreamSurfaceOptions {
   double closed_log_product_limit = 0.5;  ///< |ln ∏(-p_i/q_i)| above this: no closed front
 
   /// Fronts with fewer vertices run their per-vertex stages serially: below it, splitting a
-  /// stage into tasks costs more than it saves (chosen with `orthofront bench
+  /// stage into tasks costs more than it saves (chosen with `orthofront-bench stream
   /// --parallel-threshold`; figures: docs/benchmarks/measurements.md).
   std::size_t parallel_threshold = 128;
   bool measure_quality = true;
