@@ -182,7 +182,7 @@ void add_path_command(CLI::App& app) {
   auto args = std::make_shared<PathArgs>();
   auto preview = std::make_shared<PreviewFlags>();
   CLI::App* c = app.add_subcommand(
-      "path", "Build a path surface of an unsteady flow (analytic, or an HDF5 time series)");
+      "path", "Build a path surface of an unsteady flow (analytic, or a time series from files)");
   c->add_option("--field", args->field,
                 "Unsteady field NAME[:key=value,...] (see `orthofront fields`) or a time series: "
                 "HDF5, NetCDF, a .pvd collection or a glob of grid files")

@@ -1,8 +1,10 @@
 // The benchmarks live in their own program: `orthofront --help` shows only what users choose.
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "apps/cli_run.h"
+#include "temp_dir.h"
 
 TEST_CASE("orthofront lists the user's commands and no benchmark", "[apps][bench]") {
   const auto r = cli_test::run("--help");
@@ -35,4 +37,21 @@ TEST_CASE("a benchmark asked of orthofront says where the benchmarks are", "[app
   INFO(r.output);
   CHECK(r.status == 2);
   CHECK(r.output.find("orthofront-bench --help") != std::string::npos);
+}
+
+TEST_CASE("orthofront-bench batch runs the orthofront beside it and every way builds the same meshes",
+          "[apps][bench]") {
+  test_support::TempDir dir;
+  const std::string json = (dir.path() / "bench.json").string();
+  const auto r = cli_test::run_bench(
+      "batch --surfaces 2 --resolution 16,8,4 --steps 11 --t1 2 --edge 0.2 --cache-budget 1MiB "
+      "--work " + (dir.path() / "work").string() + " --json " + json);
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const auto j = nlohmann::json::parse(test_support::read_text(json));
+  REQUIRE(j["rows"].size() >= 3);
+  for (const auto& row : j["rows"]) {
+    INFO(row.dump());
+    CHECK(row["identical_meshes"] == 2);
+  }
 }
