@@ -121,6 +121,22 @@ StreakOptions double_gyre_options() {
   return o;
 }
 
+// Steady shear, across the flow from y = 0.2 to 0.8: flux 0.3 per time unit. Dye released for
+// 8 time units, observed every 2.
+StreakOptions shear_growth_options() {
+  StreakOptions o;
+  o.mesh = StreakMesh::remeshed;
+  o.release_begin = 0;
+  o.release_end = 8;
+  o.frames = {2, 4, 6, 8};
+  o.edge = 0.05;
+  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
+  o.vertex_budget = 0;
+  return o;
+}
+
+SeedCurve shear_seed() { return SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0)); }
+
 }  // namespace
 
 TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own path line",
@@ -160,16 +176,11 @@ TEST_CASE("remeshed streak frames of the double gyre: every vertex on its own pa
 TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, good shapes",
           "[spacetime][streak][remeshed]") {
   const ShearFlow flow;
-  // Across the flow from y = 0.2 to 0.8: flux 0.3 per time unit; the rows route's mesh grows
-  // with the shear, the area does not.
-  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0));
-  StreakOptions o;
-  o.mesh = StreakMesh::remeshed;
-  o.release_begin = 0;
+  // The rows route's mesh grows with the shear, the area does not.
+  const SeedCurve seed = shear_seed();
+  StreakOptions o = shear_growth_options();
   o.release_end = 4;
   o.frames = {1, 2, 4, 8};
-  o.edge = 0.05;
-  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
   StreakReport r;
   const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
   REQUIRE(r.complete);
@@ -257,21 +268,6 @@ TEST_CASE("remeshed streaks: dye that leaves the domain takes its faces with it"
 }
 
 namespace {
-
-// The shear case of the growth controls: dye released for 8 time units, area 0.3 per unit.
-StreakOptions shear_growth_options() {
-  StreakOptions o;
-  o.mesh = StreakMesh::remeshed;
-  o.release_begin = 0;
-  o.release_end = 8;
-  o.frames = {2, 4, 6, 8};
-  o.edge = 0.05;
-  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
-  o.vertex_budget = 0;
-  return o;
-}
-
-SeedCurve shear_seed() { return SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0)); }
 
 // Every vertex marked on_path where its label's path is at the frame's time: (y age, y) for y
 // on the seed. At least 90 % are on their paths (the rest were placed by interpolation).
