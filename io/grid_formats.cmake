@@ -26,6 +26,8 @@ add_library(orthofront_vdb SHARED
 )
 target_link_libraries(orthofront_vdb PUBLIC orthofront_io OpenVDB::openvdb
   PRIVATE orthofront_warnings)
+# Installed beside liborthofront_io.so, where it is looked for first.
+install(TARGETS orthofront_vdb LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 target_sources(orthofront_io PRIVATE orthofront/io/vdb_module.cpp)
 target_link_libraries(orthofront_io PRIVATE ${CMAKE_DL_LIBS})
 

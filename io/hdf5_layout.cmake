@@ -9,5 +9,7 @@ target_sources(orthofront_io PRIVATE
   orthofront/io/hdf5_write.cpp
   orthofront/io/hdf5_read.cpp
 )
-# HDF5 is public: callers and tests may use the C API on the files (io depends on HDF5 by design).
-target_link_libraries(orthofront_io PUBLIC hdf5::hdf5 PRIVATE ZLIB::ZLIB PkgConfig::BLOSC)
+# HDF5 is public in the build tree (the tests use the C API on the files); an installed
+# orthofront_io keeps it to itself (no public header of the package needs it).
+target_link_libraries(orthofront_io PUBLIC $<BUILD_INTERFACE:hdf5::hdf5>
+  PRIVATE ZLIB::ZLIB PkgConfig::BLOSC)

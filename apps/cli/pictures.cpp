@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,15 @@ std::string python_interpreter() {
 #endif
 }
 
+/// The installed package, where this program is installed (PREFIX/bin); else the build tree's.
 std::string python_package_dir() {
 #ifdef ORTHOFRONT_PYTHON_DIR
+  std::error_code error;
+  const std::filesystem::path program = std::filesystem::read_symlink("/proc/self/exe", error);
+  const std::filesystem::path installed =
+      program.parent_path().parent_path() / ORTHOFRONT_PYTHON_INSTALL_DIR;
+  if (!error && std::filesystem::exists(installed / "orthofront" / "preview.py", error))
+    return installed.string();
   return ORTHOFRONT_PYTHON_DIR;
 #else
   return {};
