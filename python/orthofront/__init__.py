@@ -23,9 +23,10 @@ __all__ = ["Error", "Field", "Series", "Surface", "StreakSurface", "stream_surfa
 class Surface:
     """A surface mesh as numpy arrays.
 
-    vertices: (n, 3) float64. faces: (m, 4) int32, -1 in the last column for a triangle.
-    attributes: per-vertex arrays by name (time, alpha, s, error, front_id, step, and for streak
-    surfaces release_time, age, speed, particle_id). report: the JSON report as a dict.
+    vertices: (n, 3) float64. faces: (m, 4) int32, -1 in the last column for a triangle
+    (vtk_faces() gives VTK's padded cell array, to_vtk() a vtkPolyData). attributes: per-vertex
+    arrays by name (time, alpha, s, error, front_id, step, and for streak surfaces release_time,
+    age, speed, particle_id, on_path). report: the JSON report as a dict.
     """
 
     def __init__(self, data, report=None):
@@ -45,6 +46,46 @@ class Surface:
         quads = self.faces[self.faces[:, 3] >= 0]
         tris = self.faces[self.faces[:, 3] < 0][:, :3]
         return np.concatenate([tris, quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+
+    def vtk_faces(self):
+        """The faces as VTK's padded cell array: for each face its corner count, then its corners
+        (``[4, a, b, c, d, 3, e, f, g, ...]``), int64, as ``vtkCellArray`` and pyvista take it."""
+        sizes = np.where(self.faces[:, 3] >= 0, 4, 3).astype(np.int64)
+        cells = np.empty(len(self.faces) * 5, dtype=np.int64)
+        cells[0::5] = sizes
+        for corner in range(4):
+            cells[corner + 1::5] = self.faces[:, corner]
+        keep = np.ones(len(cells), dtype=bool)
+        keep[4::5] = sizes == 4  # a triangle has no fourth corner
+        return cells[keep]
+
+    def to_vtk(self):
+        """The surface as a ``vtkPolyData`` (needs the ``vtk`` module): positions as points,
+        faces as polygons, every attribute as point data of its name."""
+        try:
+            from vtkmodules.util import numpy_support
+            from vtkmodules.vtkCommonCore import vtkPoints
+            from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+        except ImportError as error:
+            raise ImportError("Surface.to_vtk needs the vtk module (Debian: python3-vtk9 or "
+                              "python3-paraview)") from error
+        points = vtkPoints()
+        points.SetData(numpy_support.numpy_to_vtk(np.ascontiguousarray(self.vertices, np.float64),
+                                                  deep=True))
+        polys = vtkCellArray()
+        polys.SetCells(len(self.faces), numpy_support.numpy_to_vtkIdTypeArray(
+            np.ascontiguousarray(self.vtk_faces()), deep=True))
+        mesh = vtkPolyData()
+        mesh.SetPoints(points)
+        mesh.SetPolys(polys)
+        for name, values in self.attributes.items():
+            values = np.ascontiguousarray(values)
+            if values.shape[:1] != (len(self.vertices),):
+                continue
+            array = numpy_support.numpy_to_vtk(values, deep=True)
+            array.SetName(name)
+            mesh.GetPointData().AddArray(array)
+        return mesh
 
     def save(self, path):
         """Writes the mesh with its attributes (.vtp, .ply or .obj, chosen by the extension)."""

@@ -260,3 +260,30 @@ def test_ctrl_c_stops_a_build():
                                   steps=1000000, max_vertices=100000000)
     timer.cancel()
     assert time.monotonic() - started < 10
+
+
+def test_to_vtk_round_trips_points_faces_and_attributes():
+    pytest.importorskip("vtkmodules.vtkCommonDataModel")
+    from vtkmodules.util import numpy_support
+    surface = orthofront.stream_surface("sinus", "line:-1,0,0:1,0,0", steps=30, edge=0.1)
+    streak = orthofront.streak_surface("double-gyre", "line:0.3,0.3,0:0.3,0.45,0", release="0:2",
+                                       frames="2", edge=0.03)[0]
+    for s in (surface, streak):
+        mesh = s.to_vtk()
+        assert mesh.GetNumberOfPoints() == len(s.vertices)
+        np.testing.assert_array_equal(numpy_support.vtk_to_numpy(mesh.GetPoints().GetData()),
+                                      s.vertices)
+        assert mesh.GetNumberOfCells() == len(s.faces)
+        for i in range(0, len(s.faces), 7):
+            ids = mesh.GetCell(i).GetPointIds()
+            corners = [ids.GetId(k) for k in range(ids.GetNumberOfIds())]
+            assert corners == [v for v in s.faces[i] if v >= 0]
+        for name, values in s.attributes.items():
+            np.testing.assert_array_equal(
+                numpy_support.vtk_to_numpy(mesh.GetPointData().GetArray(name)), values)
+        # The padded cell array: a count, then that many corners, face after face.
+        cells = s.vtk_faces()
+        assert cells.dtype == np.int64
+        assert len(cells) == len(s.faces) + int(np.count_nonzero(s.faces >= 0))
+    assert surface.quad_count > 0 and streak.quad_count == 0
+    assert list(streak.vtk_faces()[:4]) == [3] + list(streak.faces[0, :3])
