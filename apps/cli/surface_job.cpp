@@ -1,5 +1,6 @@
 #include "cli/surface_job.h"
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -65,6 +66,28 @@ std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& jo
 
 }  // namespace
 
+std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,
+                               const StreamSurfaceOptions& options) {
+  // Each step adds about a row of seed_length / ℓ vertices (more where the flow spreads): a run
+  // whose rows alone would pass the cap ends there, after a fraction of its steps.
+  const double per_row = seed_length / options.edge + 1;
+  const double rows = per_row * options.max_steps;
+  if (!(rows > static_cast<double>(options.max_vertices))) return {};
+  // Analytic fields may have no bounds worth the name: then the seed's length sets the scale.
+  const double diagonal = domain_extent.norm();
+  const bool bounded = std::isfinite(diagonal) && diagonal < 1e3 * seed_length;
+  char text[640];
+  std::snprintf(text, sizeof text,
+                "orthofront: warning: the seed is %.4g long: at --edge %g each front has about "
+                "%.0f vertices, and %d steps would make about %.3g, past the vertex cap of %zu; "
+                "the run will stop at the cap (an edge of about %.3g, %s, suits most data; see "
+                "docs/user-guide.md, Choosing the edge length)\n",
+                seed_length, options.edge, per_row, options.max_steps, rows,
+                options.max_vertices, bounded ? diagonal / 300 : seed_length / 100,
+                bounded ? "the domain's diagonal over 300" : "the seed's length over 100");
+  return text;
+}
+
 SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* used) {
   const auto field = io::open_field(job.field);
   const SeedCurve curve = parse_seed(job.seed);
@@ -76,6 +99,8 @@ SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* 
                           " (--max-vertices, or half of --memory at ~300 B a vertex)");
   const Seed<3> seed = make_seed(curve, job.seed_count);
   check_stream_seed(*field, seed, job);
+  std::fputs(vertex_cap_warning(curve.length(), field->domain().extent(), job.options).c_str(),
+             stderr);
   // SIGINT/SIGTERM also stop a step's long integrations, not only the next step.
   const StopRequest stop = [] { return interrupted(); };
   const std::unique_ptr<advect::SteadyFrontIntegrator> bulk = bulk_advance(job, *field);

@@ -31,6 +31,12 @@ struct DeviceUse {
 /// flow stands still at every vertex (InvalidArgument naming job.seed and job.field).
 void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job);
 
+/// A warning (empty when none) for a run whose rows alone, about seed_length / ℓ vertices a
+/// step, would pass options.max_vertices before options.max_steps: it names the seed's length,
+/// the edge, the estimate and the cap, and suggests an edge from the domain's extent.
+std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,
+                               const StreamSurfaceOptions& options);
+
 /// Opens the field, builds the seed and runs the engine (with a progress bar when asked).
 /// Throws InvalidArgument for a bad field, seed, or a seed outside the domain.
 /// With job.device: gridded fields only (InvalidArgument otherwise); `used` gets what it did.

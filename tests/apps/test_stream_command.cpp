@@ -298,3 +298,24 @@ TEST_CASE("stream --device: the front of a gridded field advances by bulk advect
     CHECK(!fs::exists(dir / "cuda.ply"));
   }
 }
+
+TEST_CASE("a run whose rows alone would pass the vertex cap is warned of before it starts",
+          "[cli][stream]") {
+  const fs::path dir = fresh_dir("stream-cap-warning");
+  const std::string out = (dir / "s.vtp").string();
+  // 2 long at edge 0.01: about 201 vertices a row, 200 rows, 40,200 against a cap of 5,000.
+  const Outcome r = run("stream --field sinus --seed line:-1,0,0:1,0,0 --edge 0.01 "
+                        "--steps 200 --max-vertices 5000 --quiet --out " + out);
+  INFO(r.output);
+  CHECK(r.status == 0);
+  CHECK(r.output.find("warning: the seed is 2 long: at --edge 0.01 each front has about 201 "
+                      "vertices, and 200 steps would make about 4.02e+04, past the vertex cap of "
+                      "5000") != std::string::npos);
+  CHECK(r.output.find("the domain's diagonal over 300") != std::string::npos);
+  // Within the cap: no such warning.
+  const Outcome fine = run("stream --field sinus --seed line:-1,0,0:1,0,0 --edge 0.05 "
+                           "--steps 50 --quiet --out " + out);
+  INFO(fine.output);
+  CHECK(fine.status == 0);
+  CHECK(fine.output.find("past the vertex cap") == std::string::npos);
+}
