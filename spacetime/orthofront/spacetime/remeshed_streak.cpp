@@ -77,7 +77,10 @@ class RemeshedStreakBuilder {
   bool alive(std::int32_t v) const { return status_[idx(v)] == ParticleStatus::moving; }
   // The target edge length of a part whose youngest particle was released at tau: ℓ, or longer
   // where the part is older than the coarsening age (exactly ℓ while there is none).
-  double edge_for(double tau) const { return o_.edge * std::max(1.0, (t_ - tau) / coarsen_age_); }
+  double edge_for(double tau, double coarsen_age) const {
+    return o_.edge * std::max(1.0, (t_ - tau) / coarsen_age);
+  }
+  double edge_for(double tau) const { return edge_for(tau, coarsen_age_); }
   double edge_at(std::int32_t a, std::int32_t b) const {
     return edge_for(std::max(tau_[idx(a)], tau_[idx(b)]));
   }
@@ -101,10 +104,13 @@ class RemeshedStreakBuilder {
   // Over the vertex budget: lowers the coarsening age so the surface needs about 70 % of it
   // (estimated from its faces' areas and ages), and collapses until it fits.
   void keep_budget(std::size_t particles);
-  double estimate_particles(double coarsen_age, const std::vector<double>& area,
-                            const std::vector<double>& face_tau,
-                            const std::vector<double>& boundary,
-                            const std::vector<double>& boundary_tau) const;
+  // An area (of a face) or a length (of a boundary edge), and the release time of its youngest
+  // particle.
+  struct AgedSize {
+    double size, tau;
+  };
+  double estimate_particles(double coarsen_age, const std::vector<AgedSize>& faces,
+                            const std::vector<AgedSize>& boundary) const;
   // Signed double area of (a, b, c) along the surface's orientation (2D) or its normal (3D).
   Vec3 normal(std::int32_t a, std::int32_t b, std::int32_t c) const {
     return (x_[idx(b)] - x_[idx(a)]).cross(x_[idx(c)] - x_[idx(a)]);
@@ -1152,45 +1158,43 @@ std::size_t RemeshedStreakBuilder::count_particles() const {
   return particles;
 }
 
-double RemeshedStreakBuilder::estimate_particles(double coarsen_age, const std::vector<double>& area,
-                                                 const std::vector<double>& face_tau,
-                                                 const std::vector<double>& boundary,
-                                                 const std::vector<double>& boundary_tau) const {
+double RemeshedStreakBuilder::estimate_particles(double coarsen_age,
+                                                 const std::vector<AgedSize>& faces,
+                                                 const std::vector<AgedSize>& boundary) const {
   // As the frames' vertex estimate, with each part's own edge length.
-  const auto edge = [&](double tau) { return o_.edge * std::max(1.0, (t_ - tau) / coarsen_age); };
   double n = 0;
-  for (std::size_t f = 0; f < area.size(); ++f) n += 1.155 * area[f] / std::pow(edge(face_tau[f]), 2);
-  for (std::size_t e = 0; e < boundary.size(); ++e) n += boundary[e] / edge(boundary_tau[e]);
+  for (const AgedSize& f : faces) n += 1.155 * f.size / std::pow(edge_for(f.tau, coarsen_age), 2);
+  for (const AgedSize& e : boundary) n += e.size / edge_for(e.tau, coarsen_age);
   return n;
 }
 
 void RemeshedStreakBuilder::keep_budget(std::size_t particles) {
   const auto start = Clock::now();
   const double budget = static_cast<double>(o_.vertex_budget);
-  std::vector<double> area, face_tau, boundary, boundary_tau;
+  std::vector<AgedSize> faces, boundary;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
     if (!topo_.face_alive(fi)) continue;
     const auto& c = topo_.face(fi);
-    area.push_back(0.5 * normal(c[0], c[1], c[2]).norm());
-    face_tau.push_back(std::max({tau_[idx(c[0])], tau_[idx(c[1])], tau_[idx(c[2])]}));
-    for (int e = 0; e < 3; ++e)
-      if (topo_.neighbor(fi, e) == none) {
-        boundary.push_back((x_[idx(c[e])] - x_[idx(c[(e + 1) % 3])]).norm());
-        boundary_tau.push_back(std::max(tau_[idx(c[e])], tau_[idx(c[(e + 1) % 3])]));
-      }
+    faces.push_back({0.5 * normal(c[0], c[1], c[2]).norm(),
+                     std::max({tau_[idx(c[0])], tau_[idx(c[1])], tau_[idx(c[2])]})});
+    for (int e = 0; e < 3; ++e) {
+      const std::int32_t a = c[e], b = c[(e + 1) % 3];
+      if (topo_.neighbor(fi, e) == none)
+        boundary.push_back({(x_[idx(a)] - x_[idx(b)]).norm(), std::max(tau_[idx(a)], tau_[idx(b)])});
+    }
   }
+  const auto needs = [&](double age) { return estimate_particles(age, faces, boundary); };
   // Lowered only when the surface would not fit even once meshed at today's lengths (the
   // collapses lag behind a lowered age by a few steps); never raised, so old parts do not refine
   // again. Bisection in the logarithm of the age.
   const double oldest = t_ - o_.release_begin;
-  if (oldest > 0 &&
-      estimate_particles(coarsen_age_, area, face_tau, boundary, boundary_tau) > 0.8 * budget) {
+  if (oldest > 0 && needs(coarsen_age_) > 0.8 * budget) {
     double hi = std::min(coarsen_age_, oldest), lo = 1e-6 * oldest;
-    if (estimate_particles(hi, area, face_tau, boundary, boundary_tau) > 0.7 * budget) {
+    if (needs(hi) > 0.7 * budget) {
       for (int i = 0; i < 40; ++i) {
         const double mid = std::sqrt(lo * hi);
-        (estimate_particles(mid, area, face_tau, boundary, boundary_tau) > 0.7 * budget ? hi : lo) = mid;
+        (needs(mid) > 0.7 * budget ? hi : lo) = mid;
       }
       coarsen_age_ = lo;
     } else {
