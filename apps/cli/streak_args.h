@@ -16,7 +16,7 @@ struct StreakArgs {
   std::string route = "direct", point, device, device_memory, mesh = "remeshed";
   int seed_count = 0, releases_per_break = 1;
   double edge = 0.05, split = 1.5, merge = 0.5, collapse = 0.75, prune = 0.75,
-         release_step = 0, coarsen_age = 0;
+         release_step = 0, coarsen_age = 0, flat_split = 0.01;
   std::size_t max_vertices = 0, vertex_budget = 0;
   std::string region;
   bool quiet = false;

@@ -262,6 +262,14 @@ void add_streak_flags(CLI::App& command, StreakArgs& args) {
       ->check(CLI::IsMember({"exact", "interpolate"}))
       ->capture_default_str();
   command
+      .add_option("--flat-split", args.flat_split,
+                  "--mesh remeshed: an edge where the surface departs from its chord by less "
+                  "than this many edge lengths is split at its midpoint, with no integration (in "
+                  "2D, every edge inside the dye; the new label is interpolated); 0: every new "
+                  "particle is placed as --insert says")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
       .add_option("--coarsen-age", args.coarsen_age,
                   "--mesh remeshed: dye older than this is meshed coarser, at edge * age / this "
                   "(0: the same edge length at every age)")
@@ -312,10 +320,11 @@ spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
                                           : spacetime::ParticleInsertion::interpolate;
   o.max_vertices = caps.max_vertices;
   o.coarsen_age = args.coarsen_age;
+  o.flat_split = args.flat_split;
   o.vertex_budget = command.count("--vertex-budget") > 0 ? args.vertex_budget : o.max_vertices / 2;
   if (!args.region.empty()) o.region = parse_box(args.region, "--region", true);
   if (o.mesh == spacetime::StreakMesh::rows)
-    for (const char* remeshed_only : {"--coarsen-age", "--vertex-budget", "--region"})
+    for (const char* remeshed_only : {"--coarsen-age", "--vertex-budget", "--region", "--flat-split"})
       if (command.count(remeshed_only) > 0)
         throw InvalidArgument(std::string(remeshed_only) + " applies to --mesh remeshed only");
   o.seed_name = args.seed;

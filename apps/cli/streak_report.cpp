@@ -123,6 +123,7 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& r) {
         {"steered_insertions", r.steered_insertions},
         {"diverged_insertions", r.diverged_insertions},
         {"inexact_ends", r.inexact_ends},
+        {"flat_insertions", r.flat_insertions},
         {"smoothed", r.smoothed},
         {"steps_shortened", r.steps_shortened},
         {"faces_turned", r.faces_turned},

@@ -36,7 +36,7 @@ TEST_CASE("streak command: an analytic field as a .pvd animation with its report
   const fs::path pvd = dir.path() / "gyre.pvd", report = dir.path() / "gyre.json";
   const auto r = cli_test::run(
       "streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 "
-      "--release 0:3 --frames 1:4:4 --edge 0.03 --out " +
+      "--release 0:3 --frames 1:4:4 --edge 0.03 --flat-split 0 --out " +
       pvd.string() + " --report " + report.string());
   INFO(r.output);
   REQUIRE(r.status == 0);
@@ -55,6 +55,7 @@ TEST_CASE("streak command: an analytic field as a .pvd animation with its report
   CHECK(j["frames"][3]["vertices"] == last.vertex_count());
   CHECK(j["frames"][3]["quality"]["t_junctions"] == 0);
   CHECK(j["refinement"]["interpolated_insertions"] == 0);
+  CHECK(j["refinement"]["flat_insertions"] == 0);
   CHECK(j["refinement"]["coarsen_age"].is_null());
   CHECK(j["particles"]["left_region"] == 0);
   REQUIRE(last.on_path.size() == last.vertex_count());

@@ -147,6 +147,12 @@ class RemeshedStreakBuilder {
   // mixing flow join particles whose labels lie far apart, and the path of their label
   // midpoint goes elsewhere. Such an edge's particle is placed by interpolation at once.
   bool labels_tangled(const Split& edge) const;
+  // How far the surface is estimated to depart from the chord of edge e of f at its midpoint:
+  // k·L² / 8 with k the surface's largest curvature around the edge, and on the dye's boundary
+  // also L·turn / 8 from the boundary curve's turn over the edge (a circle of radius R gives
+  // L² / 8R either way). Infinity where an end's fan does not hold the edge (a vertex where two
+  // sheets touch).
+  double chord_departure(std::int32_t f, int e, std::vector<Topology::HalfEdge>& ring) const;
   // Exact particles of a split land where the path of their label midpoint goes, which in a
   // sheared parametrization can lie well off the edge (and fold the faces beside it). One
   // chord step of Gauss-Newton on the label, with the derivative of the faces beside the edge,
@@ -460,7 +466,8 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   const std::size_t n = chosen.size();
   std::vector<Vec3> exact_x, near_x;
   std::vector<double> exact_from, exact_s, exact_tau;
-  std::vector<std::size_t> exact_of, near_of;
+  std::vector<std::size_t> exact_of, near_of, flat_of;
+  std::vector<Topology::HalfEdge> ring;
   std::vector<Vec3> x(n);
   std::vector<double> ms(n), mtau(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -472,10 +479,20 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     if (seed_.closed() && ms[k] >= 1) ms[k] -= 1;
     mtau[k] = 0.5 * (tau_[idx(a)] + tau_[idx(b)]);
     const bool young = t_ - mtau[k] <= 4 * (t_ - previous_t_);
+    // Where the surface is flat across the edge its midpoint lies on it: no path is needed
+    // (young particles are released anyway, their paths are short).
+    if (o_.flat_split > 0 && !young &&
+        chord_departure(chosen[k].face, chosen[k].edge, ring) <= o_.flat_split * edge_at(a, b)) {
+      flat_of.push_back(k);
+      continue;
+    }
     // An end placed by interpolation does not lie on its label's path, so the path of the label
     // midpoint has no reason to pass near the edge: it mostly lands off it, and would be
-    // integrated from its release only to be replaced by interpolation below.
-    const bool ends_exact = label_exact_[idx(a)] && label_exact_[idx(b)];
+    // integrated from its release only to be replaced by interpolation below. Ends split flat
+    // are the exception: their labels are interpolated where the surface is flat, close to
+    // true, and across a bend the chord's midpoint (interpolation) would leave the surface.
+    const bool ends_exact =
+        o_.flat_split > 0 || (label_exact_[idx(a)] && label_exact_[idx(b)]);
     if (o_.insertion == ParticleInsertion::exact && !ends_exact && !young) ++report_.inexact_ends;
     const bool exact =
         o_.insertion == ParticleInsertion::exact && ends_exact && !labels_tangled(chosen[k]);
@@ -512,6 +529,11 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   for (std::size_t k = 0; k < near_of.size(); ++k) {
     x[near_of[k]] = near_x[k];
     status[near_of[k]] = near_status[k];
+  }
+  for (const std::size_t k : flat_of) {
+    const auto& c = topo_.face(chosen[k].face);
+    x[k] = 0.5 * (x_[idx(c[chosen[k].edge])] + x_[idx(c[(chosen[k].edge + 1) % 3])]);
+    status[k] = ParticleStatus::moving;
   }
   for (int round = 0; round < 2; ++round)
     if (!steer_to_midpoints(chosen, exact_of, x, status, ms, mtau)) return false;
@@ -586,10 +608,12 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   }
   report_.diverged_insertions += folding_exact;
   report_.exact_insertions += exact_of.size() - far.size() - folding_exact;
-  report_.interpolated_insertions += near_of.size() + far.size() + folding_exact;
+  report_.interpolated_insertions += near_of.size() + far.size() + folding_exact + flat_of.size();
+  report_.flat_insertions += flat_of.size();
   std::vector<char> cropped(n, 0);
   if (o_.region)
     for (std::size_t k = 0; k < n; ++k) crop(x[k], status[k], cropped[k]);
+  std::vector<std::pair<std::int32_t, bool>> stopped;
   for (std::size_t k = 0; k < n; ++k) {
     const auto& c = topo_.face(chosen[k].face);
     const std::int32_t a = c[chosen[k].edge], b = c[(chosen[k].edge + 1) % 3];
@@ -618,11 +642,69 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
         on_chain_[idx(m)] = 1;
       }
     }
-    if (status[k] != ParticleStatus::moving) stop_particle(m, cropped[k] != 0);
+    if (status[k] != ParticleStatus::moving) stopped.emplace_back(m, cropped[k] != 0);
   }
+  // Stopped only now: removing a stopped particle's faces can take faces beyond its own split
+  // (a fan that would meet another at a point), which a later split of this pass may hold.
+  for (const auto& [m, cropped_out] : stopped) stop_particle(m, cropped_out);
   splits += n;
   report_.splits += n;
   return true;
+}
+
+double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
+                                              std::vector<Topology::HalfEdge>& ring) const {
+  const auto& c = topo_.face(f);
+  const std::int32_t ends[2] = {c[e], c[(e + 1) % 3]};
+  const std::int32_t g = topo_.neighbor(f, e);
+  constexpr double unknown = std::numeric_limits<double>::infinity();
+  const Vec3 mid = 0.5 * (x_[idx(ends[0])] + x_[idx(ends[1])]);
+  Vec3 n = normal(c[0], c[1], c[2]);
+  if (g != none) n += normal(topo_.face(g)[0], topo_.face(g)[1], topo_.face(g)[2]);
+  if (!(n.norm() > 0)) return unknown;
+  n.normalize();
+  // The surface's largest curvature near the edge, from the heights over the plane at the
+  // midpoint of the corners around both ends: a curve of curvature k rises k·r²/2 over a
+  // distance r. An error in the plane's tilt reads as curvature too, which only errs toward
+  // integrating.
+  double curvature = 0;
+  std::int32_t beyond[2] = {none, none};  // along the boundary, the next vertex past each end
+  for (int i = 0; i < 2; ++i) {
+    const std::int32_t v = ends[i], other = ends[1 - i];
+    const bool fan_on_boundary = topo_.fan(v, ring);
+    bool holds = false;
+    for (const Topology::HalfEdge& h : ring) {
+      const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
+      holds = holds || q == other || r == other;
+      for (const std::int32_t corner : {q, r}) {
+        const Vec3 d = x_[idx(corner)] - mid;
+        const double height = d.dot(n), across = d.squaredNorm() - height * height;
+        if (across > 0) curvature = std::max(curvature, 2 * std::abs(height) / across);
+      }
+    }
+    if (!holds) return unknown;
+    if (g != none) continue;
+    if (!fan_on_boundary) return unknown;
+    // The fan runs from the boundary edge leaving v to the one entering it.
+    const std::int32_t next = topo_.to(ring.front());
+    const std::int32_t previous = topo_.opposite(ring.back().face, ring.back().edge);
+    if (next == other)
+      beyond[i] = previous;
+    else if (previous == other)
+      beyond[i] = next;
+    else
+      return unknown;
+  }
+  const Vec3 d = x_[idx(ends[1])] - x_[idx(ends[0])];
+  double departure = curvature * d.squaredNorm() / 8;
+  if (g == none) {
+    // The boundary's own turn over the edge (central differences give its tangents at the ends).
+    const Vec3 ta = x_[idx(ends[1])] - x_[idx(beyond[0])];
+    const Vec3 tb = x_[idx(beyond[1])] - x_[idx(ends[0])];
+    if (!(ta.norm() > 0 && tb.norm() > 0)) return unknown;
+    departure = std::max(departure, d.norm() * std::atan2(ta.cross(tb).norm(), ta.dot(tb)) / 8);
+  }
+  return departure;
 }
 
 double RemeshedStreakBuilder::label_area(std::int32_t f) const {
@@ -814,21 +896,20 @@ void RemeshedStreakBuilder::collapse_pass() {
     if (length >= o_.collapse * edge_at(a, b)) continue;
     const bool inner = topo_.neighbor(sp.face, sp.edge) != none;
     if (inner && boundary[idx(a)] && boundary[idx(b)]) continue;
-    // An inner edge refused lately is left alone for a few passes: most refusals (a neighbour
-    // would turn or thin, a new edge would split) outlast one step, and short edges that stay
-    // short would be tried again at every step. Boundary edges are always tried (they shape
-    // the boundary, and the loose ends of filaments).
+    // An edge refused lately is left alone for a few passes: most refusals (a neighbour would
+    // turn or thin, a new edge would split) outlast one step, and short edges that stay short
+    // would be tried again at every step. Boundary edges are tried again sooner (they shape the
+    // boundary, and the loose ends of filaments).
     const std::uint64_t key = edge_key(a, b);
-    if (inner) {
-      const auto refused = refused_.find(key);
-      if (refused != refused_.end() && refused->second > collapse_passes_) continue;
-    }
+    if (const auto refused = refused_.find(key);
+        refused != refused_.end() && refused->second > collapse_passes_)
+      continue;
     // The younger particle goes first: the older one has travelled further on its label.
     std::int32_t u = tau_[idx(a)] >= tau_[idx(b)] ? a : b, w = u == a ? b : a;
     if (!collapsible(u, w)) {
       std::swap(u, w);
       if (!collapsible(u, w)) {
-        if (inner) refused_[key] = collapse_passes_ + 8;
+        refused_[key] = collapse_passes_ + (inner ? 8 : 2);
         continue;
       }
     }
@@ -1351,6 +1432,9 @@ StreakReport RemeshedStreakBuilder::run() {
   if (!(o_.prune >= 0 && o_.prune <= 0.5 * o_.split))
     throw InvalidArgument("prune width must lie in [0, split/2] edge lengths (wider would erode "
                           "well-shaped faces at the boundary), got " + number(o_.prune));
+  if (!(o_.flat_split >= 0 && std::isfinite(o_.flat_split)))
+    throw InvalidArgument("flat split tolerance must be a finite number of edge lengths >= 0 "
+                          "(0: none), got " + number(o_.flat_split));
   if (!(o_.coarsen_age >= 0 && std::isfinite(o_.coarsen_age)))
     throw InvalidArgument("coarsening age must be a finite time >= 0 (0: none), got " +
                           number(o_.coarsen_age));
