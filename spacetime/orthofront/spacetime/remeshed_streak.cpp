@@ -199,7 +199,6 @@ class RemeshedStreakBuilder {
   IntegratedFlowMap integrated_;
   const FlowMap& map_;
   const bool two_d_;
-  double orientation_ = 0;  // 2D: +1 or -1 once the first strip says which way its quads turn
   double label_sign_ = 0;   // the sign of every label triangle's area while labels are untangled
 
   Topology topo_;
@@ -259,17 +258,12 @@ void RemeshedStreakBuilder::release(double tau) {
   ++report_.rows_released;
   if (!chain_.empty()) {
     const std::size_t n = chain_.size() - (seed_.closed() ? 0 : 1);
-    // Which way the faces turn in 2D: the first strip's quads decide, once.
-    if (two_d_ && orientation_ == 0) {
-      double sum = 0;
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t j = (i + 1) % chain_.size();
-        sum += normal(chain_[i], chain_[j], row[j]).z() + normal(chain_[i], row[j], row[i]).z();
-      }
-      orientation_ = sum < 0 ? -1 : 1;
-    }
-    const bool reverse = orientation_ < 0;
     using Corners = std::array<std::int32_t, 3>;
+    // In 2D each quad turns the way its own flow crosses the seed: where the flow crosses it
+    // both ways, the dye on either side is a sheet of its own, both face up (one orientation
+    // for all would lay one of them face down, folded against the other along the streak line
+    // from the point where the flow runs along the seed). The two meet only at that line.
+    bool reverse = false;
     const auto oriented_face = [&](Corners f) {
       if (reverse) std::swap(f[1], f[2]);
       return f;
@@ -282,6 +276,16 @@ void RemeshedStreakBuilder::release(double tau) {
     // that joins the mesh along an edge (a face that met the mesh at a corner only would make
     // two fans meet there).
     const auto add_quad = [&](Corners first, Corners second) {
+      if (two_d_) {
+        const double turn_first = normal(first[0], first[1], first[2]).z();
+        const double turn_second = normal(second[0], second[1], second[2]).z();
+        // A quad twisted across the seed (its flow turns within it): no face turns both ways.
+        if (!(turn_first * turn_second > 0)) {
+          report_.strip_faces_skipped += 2;
+          return;
+        }
+        reverse = turn_first < 0;
+      }
       first = oriented_face(first);
       second = oriented_face(second);
       if (addable(first)) {
