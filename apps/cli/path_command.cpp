@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/edge_default.h"
 #include "cli/engine_options.h"
 #include "cli/path_args.h"
 #include "cli/pictures.h"
@@ -218,6 +219,7 @@ void add_path_command(CLI::App& app) {
       o.t0 = args->t0;
       o.t1 = args->t1;
     };
+    EdgeChoice edge = choose_edge(o.engine.edge, c->count("--edge") > 0, nullptr);
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
@@ -229,6 +231,8 @@ void add_path_command(CLI::App& app) {
       const std::unique_ptr<io::TimeSeries> series =
           io::open_time_series(args->field, "path surfaces");
       resolve_times(series.get());
+      edge = choose_edge(o.engine.edge, c->count("--edge") > 0, &series->geometry());
+      o.engine.edge = edge.edge;
       const spacetime::CacheOptions co = path_cache_options(*args);
       cache_budget = co.budget_bytes;
       zero_is_no_data = series->zero_is_no_data();
@@ -274,6 +278,8 @@ void add_path_command(CLI::App& app) {
       report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
       report["seed_count"] = args->seed_count;
+      report["edge"] = edge.edge;
+      report["edge_source"] = edge.source;
       report["output"] = args->out;
       report["complete"] = result.report.complete;
       report["path"] = spacetime::to_json(result.path);
@@ -287,6 +293,7 @@ void add_path_command(CLI::App& app) {
     outputs.commit();
     const spacetime::PathReport& pr = result.path;
     if (!args->quiet) {
+      std::fputs(edge_note(edge).c_str(), stdout);
       std::printf(
           "Path surface of %s from %s: %zu vertices, %zu faces, positions (%s), t from %g to %g "
           "(reached %g), c = %g (%s), %d steps, stopped: %s%s. Quality (2D flows in (x, y, c t), "

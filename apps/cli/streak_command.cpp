@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/edge_default.h"
 #include "cli/engine_options.h"
 #include "cli/grid_args.h"
 #include "cli/pictures.h"
@@ -383,6 +384,7 @@ void add_streak_command(CLI::App& app) {
     spacetime::StreakReport result;
     std::size_t cache_budget = 0;
     bool zero_is_no_data = false;  // the rule the data was read by (analytic flows: zeros flow)
+    EdgeChoice edge = choose_edge(o.edge, c->count("--edge") > 0, nullptr);
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
@@ -392,6 +394,8 @@ void add_streak_command(CLI::App& app) {
     } else {
       const std::unique_ptr<io::TimeSeries> series =
           io::open_time_series(args->field, "streak surfaces");
+      edge = choose_edge(o.edge, c->count("--edge") > 0, &series->geometry());
+      o.edge = edge.edge;
       spacetime::CacheOptions co;
       co.budget_bytes = streak_cache_budget(*args);
       cache_budget = co.budget_bytes;
@@ -405,6 +409,8 @@ void add_streak_command(CLI::App& app) {
       report["field"] = args->field;
       report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
+      report["edge"] = edge.edge;
+      report["edge_source"] = edge.source;
       report["output"] = args->out;
       report["frames_written"] = writer.frames();
       report["limits"] = args->limits.to_json();
@@ -415,6 +421,7 @@ void add_streak_command(CLI::App& app) {
                            [&](std::ofstream& out) { out << report.dump(2) << '\n'; });
     }
     if (!args->quiet) {
+      std::fputs(edge_note(edge).c_str(), stdout);
       std::printf(
           "Streak surface of %s from %s, released over [%g, %g] in %zu rows of %zu "
           "particles: %zu of %zu frames, t reached %g, %zu particle-steps, %zu exact and "
@@ -439,7 +446,7 @@ void add_streak_command(CLI::App& app) {
             "max edge %.3g (%.2f edge lengths), %zu folds, %zu T-junctions, %zu degenerate "
             "faces, %zu non-manifold edges.\n",
             f.time, f.vertices, f.pieces, f.faces, shape, f.quality.edge_spread_median, f.max_edge,
-            f.max_edge / args->edge, f.quality.folds, f.quality.t_junctions,
+            f.max_edge / o.edge, f.quality.folds, f.quality.t_junctions,
             f.quality.degenerate_faces, f.quality.non_manifold_edges);
       }
       if (result.faces_pruned > 0 && !result.frames.empty()) {
@@ -474,6 +481,12 @@ void add_streak_command(CLI::App& app) {
     std::fflush(stdout);
     if (!last_frame.empty())
       draw_run_pictures(args->preview, last_frame, args->report, args->quiet);
+    if (!result.frames.empty() && result.frames.back().faces == 0)
+      std::fprintf(stderr,
+                   "orthofront: warning: the last frame has no faces: at an edge of %g the dye "
+                   "from a seed %.4g long is too narrow to mesh (or it left the domain); give a "
+                   "smaller --edge\n",
+                   o.edge, seed.length());
     if (!result.complete) {
       if (interrupted())
         throw Error("interrupted: the " + std::to_string(writer.frames()) +

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/edge_default.h"
 #include "cli/engine_options.h"
 #include "cli/pictures.h"
 #include "cli/process_memory.h"
@@ -80,6 +81,7 @@ void add_stream_command(CLI::App& app) {
       io::check_writable(args->exr);
     }
     DeviceUse device;
+    args->job.edge_given = c->count("--edge") > 0;
     SurfaceResult result = run_surface(args->job, true, &device);
     // A surface cut off by the vertex cap did not take the steps asked for: the report says so
     // (the exit status stays 0 with a warning, as before: what was built is a valid surface).
@@ -104,6 +106,8 @@ void add_stream_command(CLI::App& app) {
       report["field"] = args->job.field;
       report["seed"] = args->job.seed;
       report["seed_count"] = args->job.seed_count;
+      report["edge"] = args->job.options.edge;
+      report["edge_source"] = args->job.edge_source;
       report["output"] = args->out;
       report["limits"] = args->limits.to_json();
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
@@ -120,7 +124,8 @@ void add_stream_command(CLI::App& app) {
     }
     outputs.commit();
     if (!args->quiet) {
-      std::cout << summarize(args->job, result.report) << "\nWrote " << args->out;
+      std::cout << edge_note({args->job.options.edge, args->job.edge_source})
+                << summarize(args->job, result.report) << "\nWrote " << args->out;
       if (!args->report.empty()) std::cout << " and " << args->report;
       if (!args->exr.empty()) std::cout << " and " << args->exr;
       std::cout << "\n" << std::flush;

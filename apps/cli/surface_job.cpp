@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "orthofront/io/open_field.h"
+#include "cli/edge_default.h"
 #include "cli/progress_bar.h"
 #include "cli/seed_spec.h"
 #include "orthofront/advect/steady_front_integrator.h"
@@ -88,8 +89,13 @@ std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,
   return text;
 }
 
-SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* used) {
+SurfaceResult run_surface(SurfaceJob& job, bool show_progress, DeviceUse* used) {
   const auto field = io::open_field(job.field);
+  const auto* grid = dynamic_cast<const GridField*>(field.get());
+  const EdgeChoice edge =
+      choose_edge(job.options.edge, job.edge_given, grid ? &grid->grid().geometry : nullptr);
+  job.options.edge = edge.edge;
+  job.edge_source = edge.source;
   const SeedCurve curve = parse_seed(job.seed);
   if (job.seed_count < 2)
     throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));

@@ -18,6 +18,10 @@ struct SurfaceJob {
   std::string device;         ///< --device: empty (per vertex), cpu, cuda or auto
   std::size_t device_min_vertices = 0;  ///< 0: every front (cpu, cuda), the break-even (auto)
   std::string device_memory;  ///< empty: half the device's free memory
+  /// false: ℓ (options.edge) is the grid's cell size where the field is a grid; run_surface
+  /// sets it and edge_source.
+  bool edge_given = true;
+  std::string edge_source = "--edge";
 };
 
 /// What the bulk front advance did (--device).
@@ -40,7 +44,8 @@ std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,
 /// Opens the field, builds the seed and runs the engine (with a progress bar when asked).
 /// Throws InvalidArgument for a bad field, seed, or a seed outside the domain.
 /// With job.device: gridded fields only (InvalidArgument otherwise); `used` gets what it did.
-SurfaceResult run_surface(const SurfaceJob& job, bool show_progress, DeviceUse* used = nullptr);
+/// Without job.edge_given, sets job.options.edge (and job.edge_source) from the field's grid.
+SurfaceResult run_surface(SurfaceJob& job, bool show_progress, DeviceUse* used = nullptr);
 
 /// One paragraph: counts, quality, time, stop reason.
 std::string summarize(const SurfaceJob& job, const SurfaceReport& report);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/edge_default.h"
 #include "cli/engine_options.h"
 #include "cli/path_args.h"
 #include "cli/time_arg.h"
@@ -126,6 +127,10 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   parse_keywords(command, options);
   cli::apply_memory_flag(command, limits, job.options);
   const PyField field = resolve_field(field_in);
+  const auto* grid = dynamic_cast<const GridField*>(field.field.get());
+  const cli::EdgeChoice edge = cli::choose_edge(job.options.edge, command.count("--edge") > 0,
+                                                grid ? &grid->grid().geometry : nullptr);
+  job.options.edge = edge.edge;
   const SeedCurve curve = resolve_seed(seed_in, closed, job.seed);
   job.field = field.name;
   cli::check_seed_count(job.seed_count, job.options.max_vertices);
@@ -143,6 +148,8 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   report["field"] = job.field;
   report["seed"] = job.seed;
   report["seed_count"] = job.seed_count;
+  report["edge"] = edge.edge;
+  report["edge_source"] = edge.source;
   report["complete"] = result.report.complete;
   report["limits"] = limits.to_json();
   return surface_dict(result.mesh, report);
@@ -182,6 +189,9 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   args.t0 = cli::resolve_time(args.t0_text, "t0", timed ? timed->time(0) : 0.0, timed);
   args.t1 = cli::resolve_time(args.t1_text, "t1", args.t0, timed);
   spacetime::PathSurfaceOptions o = cli::path_options(args);
+  const cli::EdgeChoice edge = cli::choose_edge(o.engine.edge, command.count("--edge") > 0,
+                                                timed ? &timed->geometry() : nullptr);
+  o.engine.edge = edge.edge;
   InterruptCheck interrupt;
   o.progress = [&](const spacetime::PathProgress&) { return interrupt.keep_going(); };
   spacetime::PathSurfaceResult result;
@@ -209,6 +219,8 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   report["field"] = args.field;
   report["seed"] = args.seed;
   report["seed_count"] = args.seed_count;
+  report["edge"] = edge.edge;
+  report["edge_source"] = edge.source;
   report["complete"] = result.report.complete;
   report["path"] = spacetime::to_json(result.path);
   report["path"]["positions"] = spacetime::path_positions(result, args.flat);
@@ -250,6 +262,9 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
                     series.name);
   spacetime::StreakOptions o = cli::streak_options(command, args);
+  const cli::EdgeChoice edge = cli::choose_edge(
+      o.edge, command.count("--edge") > 0, analytic ? nullptr : &series.series->geometry());
+  o.edge = edge.edge;
   if (analytic && o.device)
     throw py::value_error("device: bulk advection reads gridded series, not analytic fields");
   InterruptCheck interrupt;
@@ -274,6 +289,8 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   nlohmann::json report = cli::streak_report_json(result);
   report["field"] = args.field;
   report["seed"] = args.seed;
+  report["edge"] = edge.edge;
+  report["edge_source"] = edge.source;
   report["limits"] = args.limits.to_json();
   if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
   py::list frame_list;
