@@ -283,6 +283,7 @@ void run_convert(const ConvertArgs& args) {
   const std::filesystem::path out = args.out;
   const std::string out_ext = extension_of(args.out);
   const bool to_vdb = out_ext == ".vdb";
+  std::string sidecar;  // what "Wrote OUT" goes on with: its .xmf, or why there is none
   if (!to_vdb && out_ext != ".h5" && out_ext != ".hdf5")
     throw InvalidArgument("output '" + args.out + "' must end in .h5, .hdf5 or .vdb");
   if (!args.times.empty() && std::isfinite(args.dt))
@@ -381,6 +382,7 @@ void run_convert(const ConvertArgs& args) {
     io::Hdf5WriteOptions options;
     options.group = args.group;
     apply_compression(parse_compression(args.compress), options);
+    sidecar = sidecar_text(options, args.out);
     options.brick_size = args.brick;
     options.storage = parse_layout(args.layout);
     options.units = args.units;
@@ -408,7 +410,7 @@ void run_convert(const ConvertArgs& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     std::cout << "Wrote " << args.out;
-    if (!to_vdb) std::cout << " and " << io::xdmf_path(out).string();
+    std::cout << sidecar;
     std::cout << ": " << series.describe() << " -> " << geometry.size[0] << " x "
               << geometry.size[1];
     if (geometry.dimension == 3) std::cout << " x " << geometry.size[2];

@@ -155,7 +155,7 @@ void run_generate(const GenerateArgs& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.quiet) {
     const std::size_t step_bytes = geometry.point_count() * static_cast<std::size_t>(components) * 4;
-    std::cout << "Wrote " << args.out << " and " << io::xdmf_path(out).string() << ": "
+    std::cout << "Wrote " << args.out << sidecar_text(options, args.out) << ": "
               << args.field << " on " << geometry.size[0] << " x " << geometry.size[1];
     if (geometry.dimension == 3) std::cout << " x " << geometry.size[2];
     std::cout << " points, " << components << " components, " << steps_written
@@ -175,7 +175,10 @@ void add_generate_command(CLI::App& app) {
                 "Analytic field NAME[:key=value,...]; time-dependent ones need --steps "
                 "(see `orthofront fields`)")
       ->required();
-  c->add_option("--out", args->out, "Output file (.h5); FILE.xmf is written beside it")->required();
+  c->add_option("--out", args->out,
+                "Output file (.h5); FILE.xmf is written beside it for ParaView (--compress none "
+                "or gzip)")
+      ->required();
   c->add_option("--resolution", args->resolution,
                 "Samples per axis NX,NY,NZ (NZ = 1 or NX,NY: a 2D grid)")
       ->required();

@@ -97,6 +97,13 @@ void apply_compression(const Compression& c, io::Hdf5WriteOptions& options) {
   options.gzip_level = c.codec == io::Hdf5Codec::gzip ? c.level : 0;
 }
 
+std::string sidecar_text(const io::Hdf5WriteOptions& options, const std::string& file) {
+  if (io::xdmf_readable(options)) return " and " + io::xdmf_path(file).string();
+  return std::string(" (no .xmf: ParaView's HDF5 cannot decode Blosc ") +
+         io::to_string(options.codec) +
+         "; --compress gzip or none writes one for ParaView's XDMF reader)";
+}
+
 io::Hdf5Storage parse_layout(const std::string& text) {
   if (text == "bricked") return io::Hdf5Storage::bricked;
   if (text == "chunked") return io::Hdf5Storage::chunked;

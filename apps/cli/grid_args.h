@@ -23,6 +23,9 @@ struct Compression {
 /// "none", or "lz4", "zstd", "gzip" with an optional ":LEVEL" (1-9; defaults 5, 1, 4).
 Compression parse_compression(const std::string& text);
 void apply_compression(const Compression& compression, io::Hdf5WriteOptions& options);
+/// What `Wrote FILE` goes on with for an HDF5 file written with `options`: " and FILE.xmf", or
+/// why there is no sidecar (ParaView cannot decode Blosc) and how to get one.
+std::string sidecar_text(const io::Hdf5WriteOptions& options, const std::string& file);
 /// "bricked", "chunked" or "per-step".
 io::Hdf5Storage parse_layout(const std::string& text);
 

@@ -389,9 +389,9 @@ TEST_CASE("the XDMF sidecar is valid XML that points at the datasets", "[hdf5][x
     const std::string parsed = list_xdmf(dir / "s.xmf");
     CHECK(parsed ==
           "grids 2\n"
-          "time 0.5\ntopology 2DRectMesh 5 6\ngeometry VXVY 2\nvalues 5 6 2 HyperSlab\n"
+          "time 0.5\ntopology 3DRectMesh 1 5 6\ngeometry VXVYVZ 3\nvalues 1 5 6 2 HyperSlab\n"
           "ref s.h5:/g/x 6\nref s.h5:/g/y 5\nref s.h5:/g/velocity 2 5 6 2\n"
-          "time 1.5\ntopology 2DRectMesh 5 6\ngeometry VXVY 2\nvalues 5 6 2 HyperSlab\n"
+          "time 1.5\ntopology 3DRectMesh 1 5 6\ngeometry VXVYVZ 3\nvalues 1 5 6 2 HyperSlab\n"
           "ref s.h5:/g/x 6\nref s.h5:/g/y 5\nref s.h5:/g/velocity 2 5 6 2\n");
     // Every referenced dataset exists in the file.
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
@@ -399,6 +399,29 @@ TEST_CASE("the XDMF sidecar is valid XML that points at the datasets", "[hdf5][x
     for (const char* path : {"/g/x", "/g/y", "/g/velocity"})
       CHECK(H5Lexists(f, path, H5P_DEFAULT) > 0);
     H5Fclose(f);
+  }
+  SECTION("steady uniform 2D: one z layer, so ParaView places it in z = 0") {
+    VectorGrid grid;
+    grid.geometry = uniform(2, 7, 5, 1);
+    grid.components = 2;
+    grid.values = samples(grid.geometry, 2, 1);
+    write_hdf5_grid(grid, dir / "flat.h5");
+    const std::string parsed = list_xdmf(dir / "flat.xmf");
+    CHECK(parsed ==
+          "grids 1\ntime -\ntopology 3DCoRectMesh 1 5 7\ngeometry ORIGIN_DXDYDZ 2\n"
+          "values 1 5 7 2 Plain\nref flat.h5:/velocity 1 5 7 2\n");
+  }
+  SECTION("Blosc-compressed files get no sidecar, and a stale one goes") {
+    VectorGrid grid;
+    grid.geometry = uniform(3, 7, 5, 4);
+    grid.values = samples(grid.geometry, 3, 1);
+    write_hdf5_grid(grid, dir / "c.h5");
+    REQUIRE(fs::exists(dir / "c.xmf"));
+    Hdf5WriteOptions options;
+    options.codec = Hdf5Codec::lz4;
+    write_hdf5_grid(grid, dir / "c.h5", options);
+    CHECK_FALSE(fs::exists(dir / "c.xmf"));
+    CHECK(same_bits(read_hdf5_grid(dir / "c.h5").values, grid.values));
   }
   SECTION("per-step series") {
     Hdf5WriteOptions options;

@@ -330,31 +330,39 @@ std::string point_dims(const GridGeometry& g) {
   return dims + std::to_string(g.size[1]) + " " + std::to_string(g.size[0]);
 }
 
+// The grid's points as the sidecar declares them: always three axes, slowest first. ParaView's
+// XDMF reader puts a 2D mesh in the x = 0 plane (its two axes taken as y and z); declared as
+// one z layer it lies in z = 0, where the data's x and y are.
+std::string xdmf_point_dims(const GridGeometry& g) {
+  return (g.dimension == 3 ? "" : "1 ") + point_dims(g);
+}
+
 std::string topology_and_geometry(const Hdf5Description& d, const std::string& h5,
                                   const std::string& indent) {
   const GridGeometry& g = d.geometry;
   const bool three_d = g.dimension == 3;
   std::string out;
   if (!g.rectilinear()) {
-    out += indent + "<Topology TopologyType=\"" + (three_d ? "3D" : "2D") +
-           "CoRectMesh\" Dimensions=\"" + point_dims(g) + "\"/>\n";
-    out += indent + "<Geometry GeometryType=\"" + (three_d ? "ORIGIN_DXDYDZ" : "ORIGIN_DXDY") +
-           "\">\n";
-    const int n = three_d ? 3 : 2;
-    std::string origin, spacing;
-    for (int a = n - 1; a >= 0; --a) {  // slowest axis first, as the topology
+    out += indent + "<Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" +
+           xdmf_point_dims(g) + "\"/>\n";
+    out += indent + "<Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n";
+    // Slowest axis first, as the topology; a 2D grid's z layer at 0 (its spacing is unused).
+    std::string origin = three_d ? "" : "0 ", spacing = three_d ? "" : "1 ";
+    for (int a = (three_d ? 2 : 1); a >= 0; --a) {
       origin += number(g.origin[a]) + (a > 0 ? " " : "");
       spacing += number(g.spacing[a]) + (a > 0 ? " " : "");
     }
-    out += indent + "  <DataItem Name=\"Origin\" Dimensions=\"" + std::to_string(n) +
-           "\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">" + origin + "</DataItem>\n";
-    out += indent + "  <DataItem Name=\"Spacing\" Dimensions=\"" + std::to_string(n) +
-           "\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">" + spacing + "</DataItem>\n";
+    out += indent +
+           "  <DataItem Name=\"Origin\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" "
+           "Format=\"XML\">" + origin + "</DataItem>\n";
+    out += indent +
+           "  <DataItem Name=\"Spacing\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" "
+           "Format=\"XML\">" + spacing + "</DataItem>\n";
     out += indent + "</Geometry>\n";
   } else {
-    out += indent + "<Topology TopologyType=\"" + (three_d ? "3D" : "2D") +
-           "RectMesh\" Dimensions=\"" + point_dims(g) + "\"/>\n";
-    out += indent + "<Geometry GeometryType=\"" + (three_d ? "VXVYVZ" : "VXVY") + "\">\n";
+    out += indent + "<Topology TopologyType=\"3DRectMesh\" Dimensions=\"" + xdmf_point_dims(g) +
+           "\"/>\n";
+    out += indent + "<Geometry GeometryType=\"VXVYVZ\">\n";
     for (int a = 0; a < (three_d ? 3 : 2); ++a) {
       const std::string name(1, static_cast<char>('x' + a));
       out += indent + "  <DataItem Dimensions=\"" +
@@ -362,6 +370,10 @@ std::string topology_and_geometry(const Hdf5Description& d, const std::string& h
              "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + h5 + ":" +
              escape_xml(child_path(d.group, name)) + "</DataItem>\n";
     }
+    if (!three_d)
+      out += indent +
+             "  <DataItem Dimensions=\"1\" NumberType=\"Float\" Precision=\"8\" "
+             "Format=\"XML\">0</DataItem>\n";
     out += indent + "</Geometry>\n";
   }
   return out;
@@ -370,6 +382,7 @@ std::string topology_and_geometry(const Hdf5Description& d, const std::string& h
 std::string step_attribute(const Hdf5Description& d, const std::string& h5, std::size_t step,
                            const std::string& indent) {
   const std::string dims = point_dims(d.geometry) + " " + std::to_string(d.components);
+  const std::string declared = xdmf_point_dims(d.geometry) + " " + std::to_string(d.components);
   const std::string type = "NumberType=\"Float\" Precision=\"4\" Format=\"HDF\"";
   std::string out =
       indent + "<Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">\n";
@@ -381,7 +394,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
       stride += " 1";
     }
     count += " " + dims;
-    out += indent + "  <DataItem ItemType=\"HyperSlab\" Dimensions=\"" + dims +
+    out += indent + "  <DataItem ItemType=\"HyperSlab\" Dimensions=\"" + declared +
            "\" Type=\"HyperSlab\">\n";
     out += indent + "    <DataItem Dimensions=\"3 " + std::to_string(rank) + "\" Format=\"XML\">" +
            start + " " + stride + " " + count + "</DataItem>\n";
@@ -393,7 +406,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
     std::snprintf(name, sizeof name, "%06zu", step);
     const std::string path =
         d.storage == Hdf5Storage::per_step ? child_path(d.dataset, name) : d.dataset;
-    out += indent + "  <DataItem Dimensions=\"" + dims + "\" " + type + ">" + h5 + ":" +
+    out += indent + "  <DataItem Dimensions=\"" + declared + "\" " + type + ">" + h5 + ":" +
            escape_xml(path) + "</DataItem>\n";
   }
   return out + indent + "</Attribute>\n";

@@ -71,8 +71,16 @@ struct Hdf5WriteOptions {
   /// Written as the attribute `zero_is_no_data` (readers' GridFieldOptions). Real data: true;
   /// sampled analytic fields: false (their zero vectors are critical points, not land).
   bool zero_is_no_data = true;
-  bool xdmf = true;  ///< write "<file>.xmf" beside the file
+  /// Write "<file>.xmf" beside the file where ParaView can read it (xdmf_readable); otherwise
+  /// a sidecar of that name left from an earlier file is removed.
+  bool xdmf = true;
 };
+
+/// ParaView's HDF5 decodes deflate but has no Blosc filter: files compressed with lz4 or zstd
+/// are not readable through a sidecar, so they get none.
+inline bool xdmf_readable(const Hdf5WriteOptions& options) {
+  return options.codec == Hdf5Codec::none || options.codec == Hdf5Codec::gzip;
+}
 
 /// What a field group holds, as read from its attributes and datasets.
 struct Hdf5Description {

@@ -481,7 +481,7 @@ struct FieldWriter {
       throw IoError("cannot rename " + temp.string() + " to " + file.string() + ": " +
                     error.message());
     committed = true;
-    if (options.xdmf) {
+    if (options.xdmf && xdmf_readable(options)) {
       try {
         const std::string text = detail::xdmf_text(description, file.filename().string());
         write_atomically(xdmf_path(file), [&](std::ofstream& out) { out << text; });
@@ -489,6 +489,8 @@ struct FieldWriter {
         std::filesystem::remove(file, error);
         throw;
       }
+    } else if (options.xdmf) {
+      std::filesystem::remove(xdmf_path(file), error);  // it described the file replaced
     }
   }
 };
