@@ -8,7 +8,9 @@ mu_mode="paper")`` is ``orthofront stream --edge 0.05 --mu-mode paper``, same de
 The interpreter lock is released while a surface is built; Ctrl-C stops the build.
 """
 
+import inspect
 import json
+import textwrap
 import warnings
 
 import numpy as np
@@ -169,3 +171,87 @@ def streak_surface(field, seed, closed=False, **options):
     surface = StreakSurface(_orthofront._streak_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the streak surface")
     return surface
+
+
+# The keyword arguments are the command line's options: their names, defaults and help come
+# from the same CLI11 definitions (``_orthofront._keywords``), so signatures and docstrings
+# cannot drift from what the functions take.
+_DATA_DEFAULTS = {"edge": "the grid's cell size for gridded data, else %s",
+                  "max_vertices": "from memory, half of it at ~300 B a vertex (now %s)"}
+
+
+def _keyword_default(entry):
+    """The keyword's default as a Python value: None where the command line has none (or where
+    it comes from the data), False for a flag, else the number or text it shows."""
+    if entry["flag"]:
+        return False
+    text = entry["default"]
+    if text == "" or entry["name"] in _DATA_DEFAULTS:
+        return None
+    kind = entry["type"].split(":")[0]
+    try:
+        if kind == "FLOAT":
+            return float(text)
+        if kind in ("INT", "UINT"):
+            return int(text)
+    except ValueError:
+        pass
+    return text
+
+
+def _keyword_doc(entry):
+    kind = "bool" if entry["flag"] else entry["type"].split(":")[0].lower().replace("text", "str")
+    if entry["name"] in _DATA_DEFAULTS:
+        default = _DATA_DEFAULTS[entry["name"]] % (entry["default"] or "none")
+    elif entry["flag"]:
+        default = "False"
+    else:
+        default = entry["default"] or "none"
+    help_text = entry["help"] or "(see orthofront %s --help)" % entry["option"]
+    body = textwrap.fill("%s (%s; default: %s)" % (help_text, entry["option"], default), 76,
+                         break_on_hyphens=False, break_long_words=False)
+    return "%s : %s, optional\n%s" % (entry["name"], kind, textwrap.indent(body, "    "))
+
+
+def _document(function, kind, summary_params):
+    """Gives ``function`` (field, seed, closed=False, **options) a signature that lists every
+    keyword with its default, and a numpydoc Parameters section."""
+    keywords = _orthofront._keywords(kind)
+    params = [inspect.Parameter("field", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+              inspect.Parameter("seed", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+              inspect.Parameter("closed", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=False)]
+    params += [inspect.Parameter(k["name"], inspect.Parameter.KEYWORD_ONLY,
+                                 default=_keyword_default(k)) for k in keywords]
+    function.__signature__ = inspect.Signature(params)
+    doc = inspect.cleandoc(function.__doc__ or "")
+    doc += "\n\nParameters\n----------\n" + summary_params.strip() + "\n"
+    doc += _SEED_PARAMS.strip() + "\n"
+    doc += "\n".join(_keyword_doc(k) for k in keywords)
+    doc += ("\n\nA keyword left out, or None, takes the command line's default; an unknown one "
+            "raises TypeError, a value the command line refuses ValueError.")
+    function.__doc__ = doc
+
+
+_SEED_PARAMS = """
+closed : bool, optional
+    Join the seed's last point to its first (default: False).
+"""
+
+_document(stream_surface, "stream", """
+field : Field or str
+    A Field, a data file name or an analytic field name.
+seed : str or array_like
+    A seed string ("line:0,0,0:1,0,0") or an (n, 2) or (n, 3) array of points.
+""")
+_document(path_surface, "path", """
+field : Series or str
+    A Series, a file or glob of a series, or an unsteady analytic field name.
+seed : str or array_like
+    A seed string or an (n, 2) or (n, 3) array of points, at t0.
+""")
+_document(streak_surface, "streak", """
+field : Series or str
+    A Series, a file or glob of a series, or an unsteady analytic field name.
+seed : str or array_like
+    The curve the dye leaves: a seed string or an (n, 2) or (n, 3) array of points.
+""")

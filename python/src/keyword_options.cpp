@@ -31,6 +31,25 @@ std::string joined(const py::sequence& items, const char* separator) {
 
 }  // namespace
 
+py::list option_schema(const CLI::App& command) {
+  py::list out;
+  for (const CLI::Option* option : command.get_options()) {
+    std::string flag = option->get_name();
+    if (flag == "--help" || flag.rfind("--", 0) != 0 || option->get_group().empty()) continue;
+    std::string keyword = flag.substr(2);
+    std::replace(keyword.begin(), keyword.end(), '-', '_');
+    py::dict entry;
+    entry["name"] = keyword;
+    entry["option"] = flag;
+    entry["type"] = option->get_type_name();
+    entry["default"] = option->get_default_str();
+    entry["flag"] = option->get_expected_max() == 0;
+    entry["help"] = option->get_description();
+    out.append(entry);
+  }
+  return out;
+}
+
 void parse_keywords(CLI::App& command, const py::kwargs& options) {
   std::vector<std::string> tokens;
   for (const auto& [key, value] : options) {

@@ -14,4 +14,9 @@ namespace orthofront::python {
 /// keyword.
 void parse_keywords(CLI::App& command, const pybind11::kwargs& options);
 
+/// The keywords `command` takes, in its order, each a dict: `name` (the keyword), `option` (the
+/// flag), `type` (CLI11's type name: FLOAT, INT, UINT, TEXT, ...), `default` (its text; empty:
+/// none), `flag` (takes no value) and `help`. Hidden options and --help are left out.
+pybind11::list option_schema(const CLI::App& command);
+
 }  // namespace orthofront::python

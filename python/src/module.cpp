@@ -116,14 +116,43 @@ py::dict surface_dict(const Mesh& mesh, const nlohmann::json& report) {
   return out;
 }
 
+void add_stream_keywords(CLI::App& command, cli::SurfaceJob& job, cli::MemoryLimits& limits) {
+  command.add_option("--seed-count", job.seed_count, "Vertices on the seed curve")
+      ->capture_default_str();
+  cli::add_engine_flags(command, job.options);
+  cli::add_memory_flag(command, limits);
+}
+
+/// The keywords of stream_surface, path_surface or streak_surface (`kind`: stream, path,
+/// streak), as option_schema lists them: the Python package builds their signatures and
+/// docstrings from it.
+py::list keyword_schema(const std::string& kind) {
+  CLI::App command(kind);
+  if (kind == "stream") {
+    cli::SurfaceJob job;
+    cli::MemoryLimits limits;
+    add_stream_keywords(command, job, limits);
+    return option_schema(command);
+  }
+  if (kind == "path") {
+    cli::PathArgs args;
+    cli::add_path_flags(command, args);
+    return option_schema(command);
+  }
+  if (kind == "streak") {
+    cli::StreakArgs args;
+    cli::add_streak_flags(command, args);
+    return option_schema(command);
+  }
+  throw py::value_error("kind must be stream, path or streak, got '" + kind + "'");
+}
+
 py::dict stream_surface(const py::object& field_in, const py::object& seed_in, bool closed,
                         const py::kwargs& options) {
   cli::SurfaceJob job;
   cli::MemoryLimits limits;
   CLI::App command("stream_surface");
-  command.add_option("--seed-count", job.seed_count)->capture_default_str();
-  cli::add_engine_flags(command, job.options);
-  cli::add_memory_flag(command, limits);
+  add_stream_keywords(command, job, limits);
   parse_keywords(command, options);
   cli::apply_memory_flag(command, limits, job.options);
   const PyField field = resolve_field(field_in);
@@ -391,6 +420,7 @@ PYBIND11_MODULE(_orthofront, m) {
       .def("__len__", [](const PySeries& s) { return s.series->step_count(); })
       .def("__repr__", [](const PySeries& s) { return "<orthofront.Series " + s.name + ">"; });
 
+  m.def("_keywords", &keyword_schema, py::arg("kind"));
   m.def("_stream_surface", &stream_surface, py::arg("field"), py::arg("seed"), py::kw_only(),
         py::arg("closed") = false);
   m.def("_path_surface", &path_surface, py::arg("field"), py::arg("seed"), py::kw_only(),

@@ -287,3 +287,42 @@ def test_to_vtk_round_trips_points_faces_and_attributes():
         assert len(cells) == len(s.faces) + int(np.count_nonzero(s.faces >= 0))
     assert surface.quad_count > 0 and streak.quad_count == 0
     assert list(streak.vtk_faces()[:4]) == [3] + list(streak.faces[0, :3])
+
+
+def test_signatures_and_docstrings_list_every_keyword_with_its_default():
+    import inspect
+    for function, kind in ((orthofront.stream_surface, "stream"),
+                           (orthofront.path_surface, "path"),
+                           (orthofront.streak_surface, "streak")):
+        parameters = inspect.signature(function).parameters
+        schema = orthofront._orthofront._keywords(kind)
+        assert list(parameters)[:3] == ["field", "seed", "closed"]
+        assert [p for p in parameters][3:] == [k["name"] for k in schema]
+        doc = function.__doc__
+        assert "Parameters\n----------\n" in doc
+        for k in schema:
+            assert "\n%s : " % k["name"] in doc, k["name"]
+            assert "(%s; default: " % k["option"] in " ".join(doc.split()), k["name"]
+    stream = inspect.signature(orthofront.stream_surface).parameters
+    assert stream["steps"].default == 100
+    assert stream["seed_count"].default == 20
+    assert stream["tolerance"].default == 1e-9
+    assert stream["no_rip"].default is False
+    # From the data: None, and the docstring says from what.
+    assert stream["edge"].default is None
+    assert "the grid's cell size for gridded data, else 0.1" in " ".join(
+        orthofront.stream_surface.__doc__.split())
+    streak = inspect.signature(orthofront.streak_surface).parameters
+    assert streak["flat_split"].default == 0.01
+    assert streak["insert"].default == "exact"
+    assert streak["mesh"].default == "remeshed"
+
+
+def test_keywords_given_at_their_defaults_change_nothing():
+    seed = "line:-2,1,0:-2,2,0"
+    plain = orthofront.stream_surface("saddle", seed, edge=0.1, steps=20)
+    spelled = orthofront.stream_surface("saddle", seed, edge=0.1, steps=20, seed_count=20,
+                                        damping=0.5, mu=1.0, tolerance=1e-9, no_rip=False,
+                                        skip_fraction=0.5)
+    assert np.array_equal(plain.vertices, spelled.vertices)
+    assert np.array_equal(plain.faces, spelled.faces)
