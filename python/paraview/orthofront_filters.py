@@ -108,6 +108,13 @@ def parse_options(text):
     return options
 
 
+# Edge: 0 (the default) takes the input grid's cell size, as the command line does without
+# --edge; the value is in the input's length unit.
+_EDGE_DOMAIN = ('<DoubleRangeDomain name="range" min="0"/><Documentation>Target edge length of '
+                'the mesh, in the input\'s length unit; 0: the input grid\'s cell size.'
+                '</Documentation>')
+
+
 class _SurfaceFilter(VTKPythonAlgorithmBase):
     """Two inputs (field, seed), one polydata output; properties kept in self._options."""
 
@@ -130,6 +137,11 @@ class _SurfaceFilter(VTKPythonAlgorithmBase):
     def options(self):
         merged = dict(self._options)
         merged.update(parse_options(self._extra))
+        edge = float(merged.get("edge", 0) or 0)
+        if edge < 0:
+            raise ValueError("Edge must be positive, or 0 for the input's cell size; got %g" % edge)
+        if edge == 0:
+            merged.pop("edge", None)  # the module takes the grid's cell size
         return merged
 
 
@@ -166,7 +178,7 @@ class StreamSurface(_SurfaceFilter):
 
     def __init__(self):
         _SurfaceFilter.__init__(self)
-        self._options = {"seed_count": 20, "edge": 0.1, "steps": 100, "method": "orthogonal"}
+        self._options = {"seed_count": 20, "edge": 0.0, "steps": 100, "method": "orthogonal"}
 
     @smproperty.stringvector(name="Vectors", default_values="")
     def SetVectors(self, value):
@@ -177,7 +189,8 @@ class StreamSurface(_SurfaceFilter):
     def SetSeedCount(self, value):
         self._set("seed_count", int(value))
 
-    @smproperty.doublevector(name="Edge", default_values=0.1)
+    @smproperty.doublevector(name="Edge", default_values=0)
+    @smdomain.xml(_EDGE_DOMAIN)
     def SetEdge(self, value):
         self._set("edge", float(value))
 
@@ -218,7 +231,7 @@ class PathSurface(_SurfaceFilter):
 
     def __init__(self):
         _SurfaceFilter.__init__(self)
-        self._options = {"seed_count": 20, "edge": 0.1, "t0": 0.0, "t1": 1.0}
+        self._options = {"seed_count": 20, "edge": 0.0, "t0": 0.0, "t1": 1.0}
         self._spacetime = False
 
     @smproperty.stringvector(name="Vectors", default_values="")
@@ -230,7 +243,8 @@ class PathSurface(_SurfaceFilter):
     def SetSeedCount(self, value):
         self._set("seed_count", int(value))
 
-    @smproperty.doublevector(name="Edge", default_values=0.1)
+    @smproperty.doublevector(name="Edge", default_values=0)
+    @smdomain.xml(_EDGE_DOMAIN)
     def SetEdge(self, value):
         self._set("edge", float(value))
 
@@ -292,7 +306,7 @@ class StreakSurface(_SurfaceFilter):
 
     def __init__(self):
         _SurfaceFilter.__init__(self)
-        self._options = {"release": (0.0, 1.0), "frames": "1", "edge": 0.05, "split": 1.5,
+        self._options = {"release": (0.0, 1.0), "frames": "1", "edge": 0.0, "split": 1.5,
                          "merge": 0.5, "insert": "exact"}
         self._result = None
         self._result_key = None
@@ -310,7 +324,8 @@ class StreakSurface(_SurfaceFilter):
     def SetFrames(self, value):
         self._set("frames", value)
 
-    @smproperty.doublevector(name="Edge", default_values=0.05)
+    @smproperty.doublevector(name="Edge", default_values=0)
+    @smdomain.xml(_EDGE_DOMAIN)
     def SetEdge(self, value):
         self._set("edge", float(value))
 

@@ -36,6 +36,11 @@ stream.SeedCount = 8
 stream.Edge = 0.15
 stream.Steps = 20
 result["stream"] = counts(stream)
+# Edge left at 0: the input's cell size, as the command line does without --edge.
+cell_sized = FlowOrthogonalStreamSurface(Input=helix, Seeds=seed3)
+cell_sized.SeedCount = 8
+cell_sized.Steps = 20
+result["stream_cell_edge"] = counts(cell_sized)
 
 frames = XMLImageDataReader(FileName=[work + "/frame%d.vti" % i for i in range(6)])
 seed2 = Line(Point1=[0.2, 0.2, 0.0], Point2=[0.2, 0.6, 0.0], Resolution=8)

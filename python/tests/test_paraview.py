@@ -54,6 +54,18 @@ def test_stream_surface_filter_matches_the_command_line(paraview_run, orthofront
     assert set(arrays) <= set(got["arrays"])
 
 
+def test_edge_left_at_zero_is_the_inputs_cell_size_as_on_the_command_line(paraview_run,
+                                                                          orthofront_binary):
+    work, result = paraview_run
+    out = work / "stream-cell.vtp"
+    run_cli(orthofront_binary, "stream", "--field", work / "helix.vti", "--seed",
+            "line:0.5,0,0.2:1.5,0,0.2", "--seed-count", 8, "--steps", 20, "--out", out, "--quiet")
+    points, cells, quads, _ = mesh_counts(out)
+    got = result["stream_cell_edge"]
+    assert (got["points"], got["cells"], got["quads"]) == (points, cells, quads)
+    assert (points, cells) != (result["stream"]["points"], result["stream"]["cells"])
+
+
 def test_path_surface_filter_reads_every_time_step(paraview_run, orthofront_binary):
     work, result = paraview_run
     out = work / "path-cli.vtp"
