@@ -87,6 +87,9 @@ nlohmann::json bench_streak_real(const BenchStreakRealArgs& a, bool quiet) {
   std::vector<RealRow> rows;
   o.mesh = spacetime::StreakMesh::remeshed;
   rows.push_back({"remeshed, exact (streak's default)", run(o)});
+  o.flat_split = 0;
+  rows.push_back({"remeshed, exact, --flat-split 0", run(o)});
+  o.flat_split = spacetime::StreakOptions{}.flat_split;
   o.insertion = spacetime::ParticleInsertion::interpolate;
   rows.push_back({"remeshed, interpolated", run(o)});
   o.insertion = spacetime::ParticleInsertion::exact;

@@ -8,7 +8,7 @@
 namespace orthofront::cli {
 
 double grid_cell_size(const GridGeometry& grid) {
-  double smallest = std::numeric_limits<double>::infinity();
+  std::vector<double> sides;
   for (int a = 0; a < grid.dimension; ++a) {
     const auto n = grid.size[static_cast<std::size_t>(a)];
     if (n < 2) continue;
@@ -21,9 +21,11 @@ double grid_cell_size(const GridGeometry& grid) {
                        widths.end());
       spacing = widths[widths.size() / 2];
     }
-    if (spacing > 0) smallest = std::min(smallest, spacing);
+    if (spacing > 0) sides.push_back(spacing);
   }
-  return smallest;
+  if (sides.empty()) return std::numeric_limits<double>::infinity();
+  std::sort(sides.begin(), sides.end());
+  return sides.size() == 3 ? sides[1] : sides[0];
 }
 
 EdgeChoice choose_edge(double edge, bool given, const GridGeometry* grid) {

@@ -9,8 +9,10 @@
 
 namespace orthofront::cli {
 
-/// Of each axis with more than one sample its median spacing; the smallest of those (the
-/// median, so a rectilinear grid's refined wall cells do not set it alone).
+/// Of each axis with more than one sample its median spacing (so a rectilinear grid's refined
+/// wall cells do not set it alone); of those the smaller in 2D, the middle one in 3D (so the
+/// thin vertical layers of ocean and atmosphere grids, metres against kilometres or degrees,
+/// do not set it either).
 double grid_cell_size(const GridGeometry& grid);
 
 /// ℓ and where it came from, for summaries and reports.

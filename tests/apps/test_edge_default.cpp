@@ -21,14 +21,21 @@ TEST_CASE("the default edge of gridded data is its cell size", "[apps][edge]") {
   uniform.spacing = Vec3(0.02, 0.01, 0);  // ParaView writes a 2D image with z spacing 0
   CHECK(cli::grid_cell_size(uniform) == 0.01);
 
-  // Rectilinear: each axis's median width, so a few refined wall cells do not set it.
+  // Rectilinear: each axis's median width, so a few refined wall cells do not set it; in 3D
+  // the middle of the three.
   GridGeometry rect;
   rect.dimension = 3;
   rect.size = {6, 2, 2};
   rect.axes[0] = {0, 0.001, 0.002, 1, 2, 3};  // widths 0.001 0.001 0.998 1 1: median 0.998
   rect.axes[1] = {0, 2};
   rect.axes[2] = {0, 1.5};
-  CHECK(cli::grid_cell_size(rect) == Approx(0.998));
+  CHECK(cli::grid_cell_size(rect) == Approx(1.5));
+  // An ocean grid in metres: 50 km x 30 km cells, 10 m layers. The layers do not set it.
+  GridGeometry ocean;
+  ocean.dimension = 3;
+  ocean.size = {100, 100, 40};
+  ocean.spacing = Vec3(50e3, 30e3, 10);
+  CHECK(cli::grid_cell_size(ocean) == 30e3);
 
   const cli::EdgeChoice from_grid = cli::choose_edge(0.05, false, &uniform);
   CHECK(from_grid.edge == 0.01);
