@@ -24,11 +24,13 @@ namespace {
 
 // Steady simple shear v = (y, 0) on [x_lo, x_hi] x [0, 1]: path lines are straight, so the dyed
 // region of a seed across the flow is a polygon whose area grows exactly by the flux.
-// With an offset y0 the flow is y - y0: it runs backward below y0.
+// With an offset y0 the flow is y - y0: it runs backward below y0. `dimension` 3: the same flow
+// in space (a seed at constant z makes a flat sheet there).
 class ShearFlow final : public UnsteadyField {
  public:
-  explicit ShearFlow(double x_hi = 1e9, double y0 = 0) : x_hi_(x_hi), y0_(y0) {}
-  int dimension() const override { return 2; }
+  explicit ShearFlow(double x_hi = 1e9, double y0 = 0, int dimension = 2)
+      : x_hi_(x_hi), y0_(y0), dimension_(dimension) {}
+  int dimension() const override { return dimension_; }
   FieldStatus velocity(const Vec3& x, double, Vec3& v) const override {
     if (!(x.x() >= -1 && x.x() <= x_hi_ && x.y() >= 0 && x.y() <= 1)) return FieldStatus::outside;
     v = Vec3(x.y() - y0_, 0, 0);
@@ -52,6 +54,7 @@ class ShearFlow final : public UnsteadyField {
 
  private:
   double x_hi_, y0_;
+  int dimension_;
 };
 
 // Steady strain v = (x, -y) on [0, 3] x [-1, 1]. Dye released across the flow at x = 0.25,
@@ -246,8 +249,10 @@ TEST_CASE("a 2D remeshed streak surface where the flow crosses the seed both way
           "[spacetime][streak][remeshed]") {
   // v = (y - 0.5, 0): below y = 0.5 the dye goes upstream. Through the seed, y in [0.2, 0.75],
   // the flux is 0.3² / 2 + 0.25² / 2 = 0.07625 per time unit, either way.
-  const ShearFlow flow(1e9, 0.5);
-  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.75, 0));
+  const int dimension = GENERATE(2, 3);
+  INFO(dimension << "D");
+  const ShearFlow flow(1e9, 0.5, dimension);
+  const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0.25), Vec3(0, 0.75, 0.25));
   StreakOptions o;
   o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;

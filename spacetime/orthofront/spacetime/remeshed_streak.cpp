@@ -285,6 +285,9 @@ void RemeshedStreakBuilder::release(double tau) {
           return;
         }
         reverse = turn_first < 0;
+      } else if (!(normal(first[0], first[1], first[2]).dot(normal(second[0], second[1], second[2])) > 0)) {
+        report_.strip_faces_skipped += 2;  // twisted, as in 2D
+        return;
       }
       first = oriented_face(first);
       second = oriented_face(second);
@@ -305,9 +308,22 @@ void RemeshedStreakBuilder::release(double tau) {
         report_.strip_faces_skipped += 2;
       }
     };
+    // In 3D there is no up to turn a quad by: where the flow crosses the seed the other way
+    // than beside it (the quad's normal turns over from its neighbour's), the quad is left
+    // out, so the dye on either side is a sheet of its own rather than one folded flat.
+    Vec3 beside = Vec3::Zero();
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t j = (i + 1) % chain_.size();
       const std::int32_t c0 = chain_[i], c1 = chain_[j], r0 = row[i], r1 = row[j];
+      if (!two_d_) {
+        const Vec3 across = normal(c0, c1, r1) + normal(c0, r1, r0);
+        const bool turned = across.dot(beside) < 0;
+        beside = across;
+        if (turned) {
+          report_.strip_faces_skipped += 2;
+          continue;
+        }
+      }
       if ((x_[idx(c0)] - x_[idx(r1)]).squaredNorm() <= (x_[idx(c1)] - x_[idx(r0)]).squaredNorm())
         add_quad({c0, r1, r0}, {c0, c1, r1});
       else
