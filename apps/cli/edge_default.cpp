@@ -37,6 +37,11 @@ EdgeChoice choose_edge(double edge, bool given, const GridGeometry* grid) {
   return {edge, "default"};
 }
 
+void add_edge_keys(nlohmann::json& report, const EdgeChoice& choice) {
+  report["edge"] = choice.edge;
+  report["edge_source"] = choice.source;
+}
+
 std::string edge_note(const EdgeChoice& choice) {
   if (choice.source == "--edge") return {};
   char text[160];

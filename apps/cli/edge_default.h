@@ -3,6 +3,7 @@
 /// size. The default in world units means nothing to data in metres or degrees (on a 0.3 m
 /// domain 0.05 makes a surface of a few faces, or none), and an edge finer than a cell
 /// resolves nothing the data holds.
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "orthofront/field/grid.h"
@@ -24,6 +25,9 @@ struct EdgeChoice {
 /// `edge` where --edge was given (`given`) or there is no grid (analytic fields), else the
 /// grid's cell size.
 EdgeChoice choose_edge(double edge, bool given, const GridGeometry* grid);
+
+/// The report's `edge` and `edge_source`.
+void add_edge_keys(nlohmann::json& report, const EdgeChoice& choice);
 
 /// One line for the summary where ℓ was not given: its value, where it came from and the flag
 /// that sets it; empty where it was given.

@@ -278,8 +278,7 @@ void add_path_command(CLI::App& app) {
       report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
       report["seed_count"] = args->seed_count;
-      report["edge"] = edge.edge;
-      report["edge_source"] = edge.source;
+      add_edge_keys(report, edge);
       report["output"] = args->out;
       report["complete"] = result.report.complete;
       report["path"] = spacetime::to_json(result.path);

@@ -409,8 +409,7 @@ void add_streak_command(CLI::App& app) {
       report["field"] = args->field;
       report["zero_vectors"] = zero_is_no_data ? "no data" : "flow";
       report["seed"] = args->seed;
-      report["edge"] = edge.edge;
-      report["edge_source"] = edge.source;
+      add_edge_keys(report, edge);
       report["output"] = args->out;
       report["frames_written"] = writer.frames();
       report["limits"] = args->limits.to_json();

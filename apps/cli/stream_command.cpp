@@ -106,8 +106,7 @@ void add_stream_command(CLI::App& app) {
       report["field"] = args->job.field;
       report["seed"] = args->job.seed;
       report["seed_count"] = args->job.seed_count;
-      report["edge"] = args->job.options.edge;
-      report["edge_source"] = args->job.edge_source;
+      add_edge_keys(report, {args->job.options.edge, args->job.edge_source});
       report["output"] = args->out;
       report["limits"] = args->limits.to_json();
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},

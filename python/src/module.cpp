@@ -177,8 +177,7 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   report["field"] = job.field;
   report["seed"] = job.seed;
   report["seed_count"] = job.seed_count;
-  report["edge"] = edge.edge;
-  report["edge_source"] = edge.source;
+  cli::add_edge_keys(report, edge);
   report["complete"] = result.report.complete;
   report["limits"] = limits.to_json();
   return surface_dict(result.mesh, report);
@@ -248,8 +247,7 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   report["field"] = args.field;
   report["seed"] = args.seed;
   report["seed_count"] = args.seed_count;
-  report["edge"] = edge.edge;
-  report["edge_source"] = edge.source;
+  cli::add_edge_keys(report, edge);
   report["complete"] = result.report.complete;
   report["path"] = spacetime::to_json(result.path);
   report["path"]["positions"] = spacetime::path_positions(result, args.flat);
@@ -318,8 +316,7 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   nlohmann::json report = cli::streak_report_json(result);
   report["field"] = args.field;
   report["seed"] = args.seed;
-  report["edge"] = edge.edge;
-  report["edge_source"] = edge.source;
+  cli::add_edge_keys(report, edge);
   report["limits"] = args.limits.to_json();
   if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
   py::list frame_list;

@@ -70,6 +70,15 @@ std::vector<float> samples(const GridGeometry& g, int components, unsigned seed)
   return v;
 }
 
+// A steady field of `samples` (seed 1) on a uniform 7 x 5 (x 4) grid.
+VectorGrid sampled_grid(int dimension, int components) {
+  VectorGrid grid;
+  grid.geometry = uniform(dimension, 7, 5, 4);
+  grid.components = components;
+  grid.values = samples(grid.geometry, components, 1);
+  return grid;
+}
+
 // Bitwise equality (NaN == NaN).
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
@@ -367,10 +376,7 @@ TEST_CASE("the XDMF sidecar is valid XML that points at the datasets", "[hdf5][x
   }
   TempDir dir;
   SECTION("steady uniform 3D") {
-    VectorGrid grid;
-    grid.geometry = uniform(3, 7, 5, 4);
-    grid.values = samples(grid.geometry, 3, 1);
-    write_hdf5_grid(grid, dir / "a&b.h5");
+    write_hdf5_grid(sampled_grid(3, 3), dir / "a&b.h5");
     const std::string parsed = list_xdmf(dir / "a&b.xmf");
     CHECK(parsed ==
           "grids 1\ntime -\ntopology 3DCoRectMesh 4 5 7\ngeometry ORIGIN_DXDYDZ 2\n"
@@ -401,20 +407,14 @@ TEST_CASE("the XDMF sidecar is valid XML that points at the datasets", "[hdf5][x
     H5Fclose(f);
   }
   SECTION("steady uniform 2D: one z layer, so ParaView places it in z = 0") {
-    VectorGrid grid;
-    grid.geometry = uniform(2, 7, 5, 1);
-    grid.components = 2;
-    grid.values = samples(grid.geometry, 2, 1);
-    write_hdf5_grid(grid, dir / "flat.h5");
+    write_hdf5_grid(sampled_grid(2, 2), dir / "flat.h5");
     const std::string parsed = list_xdmf(dir / "flat.xmf");
     CHECK(parsed ==
           "grids 1\ntime -\ntopology 3DCoRectMesh 1 5 7\ngeometry ORIGIN_DXDYDZ 2\n"
           "values 1 5 7 2 Plain\nref flat.h5:/velocity 1 5 7 2\n");
   }
   SECTION("Blosc-compressed files get no sidecar, and a stale one goes") {
-    VectorGrid grid;
-    grid.geometry = uniform(3, 7, 5, 4);
-    grid.values = samples(grid.geometry, 3, 1);
+    const VectorGrid grid = sampled_grid(3, 3);
     write_hdf5_grid(grid, dir / "c.h5");
     REQUIRE(fs::exists(dir / "c.xmf"));
     Hdf5WriteOptions options;

@@ -156,19 +156,24 @@ StreakOptions double_gyre_options() {
   return o;
 }
 
-// Steady shear, across the flow from y = 0.2 to 0.8: flux 0.3 per time unit. Dye released for
-// 8 time units, observed every 2.
-StreakOptions shear_growth_options() {
+// Remeshed, released from 0 to release_end and observed at `frames`, with every part of the
+// dye kept (no pruning, no vertex budget), for tests that measure exact areas or positions.
+StreakOptions whole_dye_options(double release_end, std::vector<double> frames, double edge) {
   StreakOptions o;
   o.mesh = StreakMesh::remeshed;
   o.release_begin = 0;
-  o.release_end = 8;
-  o.frames = {2, 4, 6, 8};
-  o.edge = 0.05;
-  o.prune = 0;  // the acute corners thin below any width: kept, so the area stays exact
+  o.release_end = release_end;
+  o.frames = std::move(frames);
+  o.edge = edge;
+  o.prune = 0;
   o.vertex_budget = 0;
   return o;
 }
+
+// Steady shear, across the flow from y = 0.2 to 0.8: flux 0.3 per time unit. Dye released for
+// 8 time units, observed every 2 (the acute corners thin below any width: kept, so the area
+// stays exact).
+StreakOptions shear_growth_options() { return whole_dye_options(8, {2, 4, 6, 8}, 0.05); }
 
 SeedCurve shear_seed() { return SeedCurve::line(Vec3(0, 0.2, 0), Vec3(0, 0.8, 0)); }
 
@@ -244,8 +249,8 @@ TEST_CASE("a remeshed streak surface in steady shear: exact area, bounded size, 
   CHECK(r.flat_insertions > r.splits / 2);
 }
 
-TEST_CASE("a 2D remeshed streak surface where the flow crosses the seed both ways: two sheets, "
-          "both face up, no fold",
+TEST_CASE("a remeshed streak surface where the flow crosses the seed both ways: two sheets, no "
+          "fold (2D and 3D)",
           "[spacetime][streak][remeshed]") {
   // v = (y - 0.5, 0): below y = 0.5 the dye goes upstream. Through the seed, y in [0.2, 0.75],
   // the flux is 0.3² / 2 + 0.25² / 2 = 0.07625 per time unit, either way.
@@ -253,14 +258,7 @@ TEST_CASE("a 2D remeshed streak surface where the flow crosses the seed both way
   INFO(dimension << "D");
   const ShearFlow flow(1e9, 0.5, dimension);
   const SeedCurve seed = SeedCurve::line(Vec3(0, 0.2, 0.25), Vec3(0, 0.75, 0.25));
-  StreakOptions o;
-  o.mesh = StreakMesh::remeshed;
-  o.release_begin = 0;
-  o.release_end = 2;
-  o.frames = {1, 2};
-  o.edge = 0.02;
-  o.prune = 0;
-  o.vertex_budget = 0;
+  const StreakOptions o = whole_dye_options(2, {1, 2}, 0.02);
   StreakReport r;
   const std::vector<StreakFrame> frames = collect(flow, seed, o, r);
   REQUIRE(r.complete);
@@ -285,14 +283,7 @@ TEST_CASE("remeshed streaks split flat edges at their midpoints and integrate ac
   const TwistFlow flow;
   const double radius = 0.3;
   const SeedCurve seed = SeedCurve::line(Vec3(radius, 0, 0.2), Vec3(radius, 0, 0.6));
-  StreakOptions o;
-  o.mesh = StreakMesh::remeshed;
-  o.release_begin = 0;
-  o.release_end = 3;
-  o.frames = {1.5, 3};
-  o.edge = 0.05;
-  o.prune = 0;
-  o.vertex_budget = 0;
+  StreakOptions o = whole_dye_options(3, {1.5, 3}, 0.05);
   const double tolerance = o.flat_split;
   const auto off_cylinder = [&](const StreakFrame& f) {
     double worst = 0;

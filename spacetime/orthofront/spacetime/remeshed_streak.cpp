@@ -276,19 +276,13 @@ void RemeshedStreakBuilder::release(double tau) {
     // that joins the mesh along an edge (a face that met the mesh at a corner only would make
     // two fans meet there).
     const auto add_quad = [&](Corners first, Corners second) {
-      if (two_d_) {
-        const double turn_first = normal(first[0], first[1], first[2]).z();
-        const double turn_second = normal(second[0], second[1], second[2]).z();
-        // A quad twisted across the seed (its flow turns within it): no face turns both ways.
-        if (!(turn_first * turn_second > 0)) {
-          report_.strip_faces_skipped += 2;
-          return;
-        }
-        reverse = turn_first < 0;
-      } else if (!(normal(first[0], first[1], first[2]).dot(normal(second[0], second[1], second[2])) > 0)) {
-        report_.strip_faces_skipped += 2;  // twisted, as in 2D
+      // A quad twisted across the seed (its flow turns within it): no face turns both ways.
+      const Vec3 turn_first = normal(first[0], first[1], first[2]);
+      if (!(turn_first.dot(normal(second[0], second[1], second[2])) > 0)) {
+        report_.strip_faces_skipped += 2;
         return;
       }
+      if (two_d_) reverse = turn_first.z() < 0;
       first = oriented_face(first);
       second = oriented_face(second);
       if (addable(first)) {
@@ -487,7 +481,6 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   std::vector<Vec3> exact_x, near_x;
   std::vector<double> exact_from, exact_s, exact_tau;
   std::vector<std::size_t> exact_of, near_of, flat_of;
-  std::vector<Topology::HalfEdge> ring;
   std::vector<Vec3> x(n);
   std::vector<double> ms(n), mtau(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -502,7 +495,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     // Where the surface is flat across the edge its midpoint lies on it: no path is needed
     // (young particles are released anyway, their paths are short).
     if (o_.flat_split > 0 && !young &&
-        chord_departure(chosen[k].face, chosen[k].edge, ring) <= o_.flat_split * edge_at(a, b)) {
+        chord_departure(chosen[k].face, chosen[k].edge, ring_) <= o_.flat_split * edge_at(a, b)) {
       flat_of.push_back(k);
       continue;
     }
@@ -511,11 +504,11 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     // integrated from its release only to be replaced by interpolation below. Ends split flat
     // are the exception: their labels are interpolated where the surface is flat, close to
     // true, and across a bend the chord's midpoint (interpolation) would leave the surface.
-    const bool ends_exact =
+    const bool ends_trusted =
         o_.flat_split > 0 || (label_exact_[idx(a)] && label_exact_[idx(b)]);
-    if (o_.insertion == ParticleInsertion::exact && !ends_exact && !young) ++report_.inexact_ends;
+    if (o_.insertion == ParticleInsertion::exact && !ends_trusted && !young) ++report_.inexact_ends;
     const bool exact =
-        o_.insertion == ParticleInsertion::exact && ends_exact && !labels_tangled(chosen[k]);
+        o_.insertion == ParticleInsertion::exact && ends_trusted && !labels_tangled(chosen[k]);
     if (exact || young || previous_t_ >= t_ || mtau[k] > previous_t_) {
       exact_of.push_back(k);
       exact_x.push_back(seed_point(ms[k]));

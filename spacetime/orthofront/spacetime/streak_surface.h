@@ -88,13 +88,14 @@ struct StreakOptions {
   /// widens the smallest angle. Exactly placed particles never move: they stay on their paths.
   bool smooth = true;
   /// Remeshed: a new particle goes to the split edge's midpoint, with no integration, where the
-  /// surface is estimated to depart from the edge's chord by less than flat_split · ℓ there (from
-  /// the normals at its ends, and along the dye's boundary from the boundary's turn). Where the
-  /// surface is flat the midpoint lies on it exactly, wherever its label's path goes: in a 2D flow
-  /// the dye is a region of the plane, so inside it every split is such. The particle's label is
-  /// interpolated (on_path 0), and smoothing may move it. A filament left one face wide ends
-  /// in a face whose inner edge is a diagonal, and is pruned later than with exact particles
-  /// (its end reads wider than it is). 0: every new particle is placed as `insertion` says.
+  /// surface is estimated to depart from the edge's chord by less than flat_split · ℓ there
+  /// (from the surface's largest curvature around the edge, and along the dye's boundary from
+  /// the boundary's turn). Where the surface is flat the midpoint lies on it exactly, wherever
+  /// its label's path goes: in a 2D flow the dye is a region of the plane, so inside it every
+  /// split is such. The particle's label is interpolated (on_path 0), and smoothing may move it.
+  /// A filament left one face wide ends in a face whose inner edge is a diagonal, and is pruned
+  /// later than with exact particles (its end reads wider than it is). 0: every new particle is
+  /// placed as `insertion` says.
   double flat_split = 0.01;
   /// Remeshed: growth controls. Dye in an unsteady flow stretches without end, so a surface with
   /// edges ℓ everywhere grows without bound. Parts older than coarsen_age are meshed at a target
