@@ -13,7 +13,7 @@
 
 #include "cli/batch_checkpoint.h"
 #include "cli/batch_job.h"
-#include "cli/seed_spec.h"
+#include "jobs/seed_spec.h"
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
 #include "orthofront/field/unsteady.h"
@@ -136,7 +136,7 @@ bool parse_seed(const std::string& text) {
   // "file:" specs read a file; the fuzzer must not wander the file system.
   if (text.find("file") != std::string::npos) return true;
   return expect_clean([&] {
-    const SeedCurve curve = cli::parse_seed(text);
+    const SeedCurve curve = jobs::parse_seed(text);
     for (const double s : curve.sample(16)) (void)curve.point(s);
     return true;
   });

@@ -22,10 +22,10 @@
 #include "cli/batch_job.h"
 #include "cli/commands.h"
 #include "orthofront/io/open_field.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
-#include "cli/seed_spec.h"
-#include "cli/streak_report.h"
+#include "jobs/seed_spec.h"
+#include "jobs/streak_report.h"
 #include "cli/surface_job.h"
 #include "cli/work_sharing.h"
 #include "orthofront/error.h"
@@ -41,6 +41,8 @@
 #include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

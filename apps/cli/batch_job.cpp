@@ -11,13 +11,15 @@
 #include <sstream>
 
 #include "orthofront/io/open_field.h"
-#include "cli/process_memory.h"
-#include "cli/streak_report.h"
+#include "jobs/process_memory.h"
+#include "jobs/streak_report.h"
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
 #include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 const char* to_string(SurfaceKind kind) {
   switch (kind) {

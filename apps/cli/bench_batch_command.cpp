@@ -17,7 +17,7 @@
 
 #include "cli/app_main.h"
 #include "cli/commands.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "cli/work_sharing.h"
 #include "orthofront/error.h"
 #include "orthofront/io/report_json.h"
@@ -26,6 +26,8 @@
 extern char** environ;
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

@@ -7,13 +7,15 @@
 #include <tuple>
 #include <vector>
 
-#include "cli/seed_spec.h"
-#include "cli/streak_report.h"
+#include "jobs/seed_spec.h"
+#include "jobs/streak_report.h"
 #include "orthofront/io/open_field.h"
 #include "orthofront/spacetime/brick_cache.h"
 #include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "cli/commands.h"
-#include "cli/grid_args.h"
-#include "cli/process_memory.h"
+#include "jobs/grid_args.h"
+#include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
 #include "orthofront/io/data_file.h"
@@ -27,6 +27,8 @@
 #include "orthofront/io/vdb_grid.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

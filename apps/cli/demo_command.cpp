@@ -7,7 +7,7 @@
 
 #include "cli/commands.h"
 #include "cli/pictures.h"
-#include "cli/streak_report.h"
+#include "jobs/streak_report.h"
 #include "cli/surface_job.h"
 #include "orthofront/error.h"
 #include "orthofront/field/unsteady.h"
@@ -21,6 +21,8 @@
 #include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

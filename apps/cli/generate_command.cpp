@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "cli/commands.h"
-#include "cli/grid_args.h"
-#include "cli/process_memory.h"
+#include "jobs/grid_args.h"
+#include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
 #include "orthofront/error.h"
 #include "orthofront/field/analytic.h"
@@ -20,6 +20,8 @@
 #include "orthofront/io/hdf5_layout.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 

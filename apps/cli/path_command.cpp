@@ -9,15 +9,16 @@
 #include <iostream>
 
 #include "cli/commands.h"
-#include "cli/edge_default.h"
-#include "cli/engine_options.h"
-#include "cli/path_args.h"
+#include "cli/option_flags.h"
+#include "jobs/edge_default.h"
+#include "jobs/engine_options.h"
+#include "jobs/path_job.h"
 #include "cli/pictures.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "cli/quality_warnings.h"
 #include "cli/progress_bar.h"
-#include "cli/seed_spec.h"
-#include "cli/time_arg.h"
+#include "jobs/seed_spec.h"
+#include "jobs/time_arg.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -30,6 +31,8 @@
 #include "orthofront/spacetime/path_surface.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 
@@ -74,113 +77,9 @@ class PathStatus {
 
 }  // namespace
 
-void add_path_flags(CLI::App& command, PathArgs& args) {
-  command.add_option("--seed-count", args.seed_count, "Vertices on the seed curve")
-      ->capture_default_str();
-  command
-      .add_option("--t0", args.t0_text,
-                  "Seed time: a number in the field's time unit; for NetCDF series also a date "
-                  "(2002-01-01, '2002-01-01 06:00') or a duration after the first step "
-                  "('10 days')")
-      ->capture_default_str();
-  command
-      .add_option("--t1", args.t1_text,
-                  "End time: the surface stops where its path lines reach it (as --t0; a "
-                  "duration counts from t0: '30 days')")
-      ->capture_default_str();
-  command
-      .add_option("--time-scale", args.time_scale,
-                  "c of the lifted time coordinate tau = c (t - t0) (length per time unit); 0: "
-                  "median seed speed at t0")
-      ->capture_default_str();
-  command.add_option("--cache-budget", args.budget,
-                     "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
-                     "(default: a quarter of --memory, now " +
-                         format_memory(cache_budget_for(available_memory_bytes())) + ")");
-  command
-      .add_option("--cache-unit", args.cache_unit,
-                  "What the cache holds: brick (the file's bricks, a space-time band around the "
-                  "front) or step (whole time steps: the baseline of orthofront-bench path)")
-      ->check(CLI::IsMember({"brick", "step"}))
-      ->capture_default_str();
-  command.add_flag("--no-prefetch", args.no_prefetch, "Load on demand only (no read-ahead)");
-  command.add_flag("--warm", args.warm,
-                   "Build the surface twice through one cache that keeps everything it read, and "
-                   "report the second build: compute with the data in memory (needs a budget that "
-                   "holds every brick the surface touches)");
-  command
-      .add_option("--max-band", args.max_band,
-                  "Bound the front's time band (time units; 0: none): vertices further behind keep "
-                  "pace, so long runs fit a small cache")
-      ->check(CLI::NonNegativeNumber);
-  command
-      .add_option("--band-ramp", args.band_ramp,
-                  "With --max-band: share of the bound over which lagging vertices' alpha ramps up "
-                  "smoothly (0: a hard switch at the bound)")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
-  command
-      .add_option("--device", args.device,
-                  "Gridded series: advance the front by bulk advection (whole time steps, slab by "
-                  "slab) on cpu or cuda; auto: cuda for fronts of at least " +
-                      std::to_string(spacetime::kCudaFrontBreakEven) +
-                      " vertices where a device is present. Default: per vertex through the "
-                      "streamed field")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
-  command.add_option("--device-min-vertices", args.device_min_vertices,
-                     "With --device: smaller fronts advance per vertex (0: every front for cpu "
-                     "and cuda, the break-even size for auto)");
-  command.add_option("--device-memory", args.device_memory,
-                     "With --device cuda/auto: time steps kept on the device (e.g. 8GiB; default: "
-                     "half its free memory)");
-  command.add_flag("--flat", args.flat,
-                   "2D flows: write positions (x, y, 0), the surface pressed into the plane (it "
-                   "overlaps itself where path lines cross); default (x, y, c t), c the time "
-                   "scale (--time-scale 1: (x, y, t))");
-  command.add_flag("--spacetime-out", args.spacetime_out,
-                   "2D flows: write positions in space-time (the default; kept for old scripts)")
-      ->excludes("--flat");
-  add_engine_flags(command, args.options);
-  add_memory_flag(command, args.limits);
-}
-
-void check_seed_count(int seed_count, std::size_t max_vertices) {
-  if (seed_count < 2)
-    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(seed_count));
-  if (static_cast<std::size_t>(seed_count) > max_vertices)
-    throw InvalidArgument("--seed-count " + std::to_string(seed_count) +
-                          " exceeds the vertex budget of " + std::to_string(max_vertices) +
-                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
-}
-
-spacetime::PathSurfaceOptions path_options(const PathArgs& args) {
-  spacetime::PathSurfaceOptions o;
-  o.engine = args.options;
-  o.t0 = args.t0;
-  o.t1 = args.t1;
-  o.time_scale = args.time_scale;
-  o.max_band = args.max_band;
-  o.engine.lag_ramp = args.band_ramp;
-  o.seed_name = args.seed;  // errors name the seed and field as given
-  o.field_name = args.field;
-  if (!args.device.empty()) o.device = advect::parse_device(args.device);
-  o.device_min_vertices = args.device_min_vertices;
-  if (!args.device_memory.empty()) o.device_bytes = spacetime::parse_bytes(args.device_memory);
-  return o;
-}
-
-spacetime::CacheOptions path_cache_options(const PathArgs& args) {
-  spacetime::CacheOptions co;
-  // An explicit --cache-budget wins over the share of --memory.
-  co.budget_bytes = args.budget.empty() ? cache_budget_for(args.limits.memory_bytes)
-                                        : spacetime::parse_bytes(args.budget);
-  co.prefetch = !args.no_prefetch;
-  co.whole_steps = args.cache_unit == "step";
-  return co;
-}
-
 void add_path_command(CLI::App& app) {
   auto args = std::make_shared<PathArgs>();
+  auto options = std::make_shared<OptionSet>();
   auto preview = std::make_shared<PreviewFlags>();
   CLI::App* c = app.add_subcommand(
       "path", "Build a path surface of an unsteady flow (analytic, or a time series from files)");
@@ -190,13 +89,14 @@ void add_path_command(CLI::App& app) {
       ->required();
   c->add_option("--seed", args->seed, "Seed curve at t0 (as for `stream`; 2D flows take z = 0)")
       ->required();
-  add_path_flags(*c, *args);
+  add_path_options(*options, *args);
+  add_option_flags(*c, options);
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
   add_preview_flags(*c, *preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args, preview, c]() {
-    apply_memory_flag(*c, args->limits, args->options);
+  c->callback([args, options, preview, c]() {
+    apply_memory_limits(*options, args->limits, args->options);
     check_preview(*preview);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))

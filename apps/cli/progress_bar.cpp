@@ -5,9 +5,11 @@
 #include <csignal>
 #include <cstdio>
 
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 volatile std::sig_atomic_t g_interrupted = 0;

@@ -7,15 +7,16 @@
 #include <filesystem>
 
 #include "cli/commands.h"
-#include "cli/edge_default.h"
-#include "cli/engine_options.h"
-#include "cli/grid_args.h"
+#include "cli/option_flags.h"
+#include "jobs/edge_default.h"
+#include "jobs/engine_options.h"
+#include "jobs/grid_args.h"
 #include "cli/pictures.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
-#include "cli/seed_spec.h"
-#include "cli/streak_args.h"
-#include "cli/streak_report.h"
+#include "jobs/seed_spec.h"
+#include "jobs/streak_job.h"
+#include "jobs/streak_report.h"
 #include "orthofront/error.h"
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/hdf5_layout.h"
@@ -30,6 +31,8 @@
 #include "orthofront/spacetime/streak_surface.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 
@@ -65,7 +68,7 @@ class StreakStatus {
 
 
 // The flow-orthogonal route: one space-time surface from a point, written as one mesh.
-void run_spacetime_route(const StreakArgs& args) {
+void run_spacetime_route(const StreakArgs& args, const PreviewFlags& preview) {
   const std::filesystem::path out = args.out;
   if (!io::is_mesh_extension(out))
     throw InvalidArgument("--route spacetime writes one mesh: --out '" + args.out +
@@ -113,12 +116,13 @@ void run_spacetime_route(const StreakArgs& args) {
         100 * r.report.quality.quad_angles_within_10, r.report.quality.edge_spread_median,
         r.report.quality.folds, r.report.times.total, args.out.c_str());
   std::fflush(stdout);
-  draw_run_pictures(args.preview, out, args.report, args.quiet);
+  draw_run_pictures(preview, out, args.report, args.quiet);
 }
 
 // The paper's route for a seed curve: at each observation time, the stream surface of the
 // streak-line field over (x, y, age), written as one frame of a .pvd animation.
-void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
+void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed,
+                           const PreviewFlags& preview) {
   if (!is_unsteady_field_name(args.field))
     throw InvalidArgument("--route streak-line takes an unsteady analytic 2D field, not '" +
                           args.field + "'");
@@ -189,7 +193,7 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
                 writer.frames(), writer.frame_folder().string().c_str(),
                 args.report.empty() ? "" : " and ", args.report.c_str());
   std::fflush(stdout);
-  if (!last_frame.empty()) draw_run_pictures(args.preview, last_frame, args.report, args.quiet);
+  if (!last_frame.empty()) draw_run_pictures(preview, last_frame, args.report, args.quiet);
   if (!complete)
     throw Error("interrupted: the " + std::to_string(writer.frames()) +
                 " frames written are listed in " + args.out);
@@ -197,151 +201,10 @@ void run_streak_line_route(const StreakArgs& args, const SeedCurve& seed) {
 
 }  // namespace
 
-void add_streak_flags(CLI::App& command, StreakArgs& args) {
-  command.add_option("--release", args.release, "Release interval T0:T1")->required();
-  command.add_option("--frames", args.frames,
-                     "Observation times: a list t1,t2,... or START:END:COUNT (after T0); with "
-                     "--route spacetime, the last one ends the surface");
-  command
-      .add_option(
-          "--route", args.route,
-          "direct: release rows of particles and write one frame per observation time "
-          "(.pvd); streak-line: 2D analytic flows, at each observation time the stream "
-          "surface of the streak-line field (Weinkauf & Theisel) over (x, y, age) built by "
-          "the flow-orthogonal engine (.pvd, positions (x, y, age)); spacetime: 2D analytic "
-          "flows, the streak lines of --point at all times as one surface in (x, y, t) "
-          "(.vtp, .ply, .obj)")
-      ->check(CLI::IsMember({"direct", "streak-line", "spacetime"}))
-      ->capture_default_str();
-  command.add_option("--point", args.point, "--route spacetime: the release point x,y");
-  command.add_option("--edge", args.edge, "Target edge length")->capture_default_str();
-  command
-      .add_option("--mesh", args.mesh,
-                  "remeshed: a triangle mesh whose vertices keep their release labels (s, tau), "
-                  "adapted by split, collapse and flip so its size follows the surface's area; "
-                  "rows: rows of particles over (s, tau), refined by whole rows and columns")
-      ->check(CLI::IsMember({"remeshed", "rows"}))
-      ->capture_default_str();
-  command
-      .add_option("--collapse", args.collapse,
-                  "--mesh remeshed: collapse edges shorter than this many edge lengths")
-      ->capture_default_str();
-  command
-      .add_option("--prune", args.prune,
-                  "--mesh remeshed: remove filaments of dye narrower than this many edge lengths "
-                  "(a mesh with edges of one edge length cannot resolve them, and its faces there "
-                  "are slivers; at most split/2, the default with a smaller --split; 0 keeps them "
-                  "all)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  command.add_option("--split", args.split, "Split edges longer than this many edge lengths")
-      ->capture_default_str();
-  command
-      .add_option("--merge", args.merge,
-                  "--mesh rows: remove particles whose edges are both shorter than this many edge "
-                  "lengths")
-      ->capture_default_str();
-  command
-      .add_option("--release-step", args.release_step,
-                  "Time between released rows (0: edge over the largest speed on the seed; --mesh "
-                  "rows: over the median speed)")
-      ->capture_default_str();
-  command
-      .add_option("--releases-per-break", args.releases_per_break,
-                  "--mesh rows: rows released per refinement; the rows released between move from "
-                  "their release times to the next break in one call")
-      ->capture_default_str();
-  command
-      .add_option("--seed-count", args.seed_count,
-                  "Particles per row at release (0: seed length / edge + 1)")
-      ->capture_default_str();
-  command
-      .add_option("--insert", args.insertion,
-                  "How inserted particles are placed: exact (released at their own (s, tau) and "
-                  "integrated; a streamed series then reads earlier steps again) or interpolate "
-                  "(cubic; every step is read once)")
-      ->check(CLI::IsMember({"exact", "interpolate"}))
-      ->capture_default_str();
-  command
-      .add_option("--flat-split", args.flat_split,
-                  "--mesh remeshed: an edge where the surface departs from its chord by less "
-                  "than this many edge lengths is split at its midpoint, with no integration (in "
-                  "2D, every edge inside the dye; the new label is interpolated); 0: every new "
-                  "particle is placed as --insert says")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  command
-      .add_option("--coarsen-age", args.coarsen_age,
-                  "--mesh remeshed: dye older than this is meshed coarser, at edge * age / this "
-                  "(0: the same edge length at every age)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  command.add_option("--vertex-budget", args.vertex_budget,
-                     "--mesh remeshed: when the particles exceed this, the oldest dye is coarsened "
-                     "(the age of --coarsen-age lowered) until they fit, rather than the run "
-                     "stopping (default: half of --max-vertices; 0: no budget)");
-  command.add_option("--region", args.region,
-                     "--mesh remeshed: region of interest xmin,ymin,zmin:xmax,ymax,zmax (2D: "
-                     "xmin,ymin:xmax,ymax); dye that leaves it is removed, as at the domain's edge");
-  command.add_option("--max-vertices", args.max_vertices,
-                     "Stop when the particles exceed this (default: from --memory)");
-  add_memory_flag(command, args.limits);
-  command.add_option("--cache-budget", args.budget,
-                     "Memory for resident and in-flight data of a streamed series (default: a "
-                     "quarter of --memory)");
-  command
-      .add_option("--device", args.device,
-                  "Gridded series: move particles by bulk advection (whole steps, slab by slab) on "
-                  "cpu, cuda or auto (cuda when built with it and a device is present); default: "
-                  "the streamed field's integrated flow map")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
-  command.add_option("--device-memory", args.device_memory,
-                     "With --device cuda/auto: time steps kept on the device (e.g. 8GiB; default: "
-                     "half its free memory)");
-}
-
-spacetime::StreakOptions streak_options(CLI::App& command, StreakArgs& args) {
-  StreamSurfaceOptions caps;
-  if (command.count("--max-vertices") > 0) caps.max_vertices = args.max_vertices;
-  apply_memory_flag(command, args.limits, caps);
-  spacetime::StreakOptions o;
-  std::tie(o.release_begin, o.release_end) = parse_streak_release(args.release);
-  o.frames = parse_streak_frames(args.frames);
-  o.edge = args.edge;
-  o.split = args.split;
-  o.merge = args.merge;
-  o.mesh = args.mesh == "rows" ? spacetime::StreakMesh::rows : spacetime::StreakMesh::remeshed;
-  o.collapse = args.collapse;
-  // The default width is the widest split allows: a smaller --split narrows it with it.
-  o.prune = command.count("--prune") > 0 ? args.prune : std::min(args.prune, 0.5 * args.split);
-  o.release_step = args.release_step;
-  o.releases_per_break = args.releases_per_break;
-  o.seed_count = args.seed_count;
-  o.insertion = args.insertion == "exact" ? spacetime::ParticleInsertion::exact
-                                          : spacetime::ParticleInsertion::interpolate;
-  o.max_vertices = caps.max_vertices;
-  o.coarsen_age = args.coarsen_age;
-  o.flat_split = args.flat_split;
-  o.vertex_budget = command.count("--vertex-budget") > 0 ? args.vertex_budget : o.max_vertices / 2;
-  if (!args.region.empty()) o.region = parse_box(args.region, "--region", true);
-  if (o.mesh == spacetime::StreakMesh::rows)
-    for (const char* remeshed_only : {"--coarsen-age", "--vertex-budget", "--region", "--flat-split"})
-      if (command.count(remeshed_only) > 0)
-        throw InvalidArgument(std::string(remeshed_only) + " applies to --mesh remeshed only");
-  o.seed_name = args.seed;
-  o.field_name = args.field;
-  if (!args.device.empty()) o.device = advect::parse_device(args.device);
-  if (!args.device_memory.empty()) o.device_bytes = spacetime::parse_bytes(args.device_memory);
-  return o;
-}
-
-std::size_t streak_cache_budget(const StreakArgs& args) {
-  return args.budget.empty() ? cache_budget_for(args.limits.memory_bytes)
-                             : spacetime::parse_bytes(args.budget);
-}
-
 void add_streak_command(CLI::App& app) {
   auto args = std::make_shared<StreakArgs>();
+  auto options = std::make_shared<OptionSet>();
+  auto preview = std::make_shared<PreviewFlags>();
   CLI::App* c = app.add_subcommand(
       "streak",
       "Build a streak surface (dye released continuously from a seed curve) as a "
@@ -352,25 +215,26 @@ void add_streak_command(CLI::App& app) {
                 "timed vector grids")
       ->required();
   c->add_option("--seed", args->seed, "Seed curve (as for `stream`; 2D flows take z = 0)");
-  add_streak_flags(*c, *args);
+  add_streak_options(*options, *args);
+  add_option_flags(*c, options);
   c->add_option("--out", args->out, "Output collection DIR/NAME.pvd (frames go to DIR/NAME/)")
       ->required();
   c->add_option("--report", args->report, "Write the JSON report here");
-  add_preview_flags(*c, args->preview);
+  add_preview_flags(*c, *preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args, c]() {
-    check_preview(args->preview);
+  c->callback([args, options, preview, c]() {
+    check_preview(*preview);
     if (args->frames.empty()) throw InvalidArgument("--frames is required (the observation times)");
     if (args->route == "spacetime") {
-      run_spacetime_route(*args);
+      run_spacetime_route(*args, *preview);
       return;
     }
     if (args->seed.empty()) throw InvalidArgument("--seed is required (the curve the dye leaves)");
     if (args->route == "streak-line") {
-      run_streak_line_route(*args, parse_seed(args->seed));
+      run_streak_line_route(*args, parse_seed(args->seed), *preview);
       return;
     }
-    spacetime::StreakOptions o = streak_options(*c, *args);
+    spacetime::StreakOptions o = streak_options(*options, *args);
     io::MeshSeriesWriter writer(args->out);  // checks the extension and the folder
     if (!args->report.empty()) io::check_writable(args->report);
     const SeedCurve seed = parse_seed(args->seed);
@@ -479,7 +343,7 @@ void add_streak_command(CLI::App& app) {
     }
     std::fflush(stdout);
     if (!last_frame.empty())
-      draw_run_pictures(args->preview, last_frame, args->report, args->quiet);
+      draw_run_pictures(*preview, last_frame, args->report, args->quiet);
     if (!result.frames.empty() && result.frames.back().faces == 0)
       std::fprintf(stderr,
                    "orthofront: warning: the last frame has no faces: at an edge of %g the dye "

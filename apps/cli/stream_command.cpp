@@ -2,10 +2,11 @@
 #include <iostream>
 
 #include "cli/commands.h"
-#include "cli/edge_default.h"
-#include "cli/engine_options.h"
+#include "cli/option_flags.h"
+#include "jobs/edge_default.h"
+#include "jobs/engine_options.h"
 #include "cli/pictures.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "cli/quality_warnings.h"
 #include "cli/surface_job.h"
 #include "orthofront/advect/batch_advector.h"
@@ -17,6 +18,8 @@
 #include "orthofront/io/report_json.h"
 
 namespace orthofront::cli {
+
+using namespace jobs;
 
 namespace {
 struct StreamArgs {
@@ -33,6 +36,7 @@ struct StreamArgs {
 
 void add_stream_command(CLI::App& app) {
   auto args = std::make_shared<StreamArgs>();
+  auto options = std::make_shared<OptionSet>();
   CLI::App* c = app.add_subcommand("stream", "Build a stream surface of a steady field");
   c->add_option("--field", args->job.field, "Field: NAME[:key=value,...] (see `orthofront fields`)")
       ->required();
@@ -40,10 +44,8 @@ void add_stream_command(CLI::App& app) {
                 "Seed: line:x0,y0,z0:x1,y1,z1 | circle:c:n:r[:open] | arc:c:n:r:a0,a1 | "
                 "file:PATH.csv[:closed]")
       ->required();
-  c->add_option("--seed-count", args->job.seed_count, "Vertices on the seed curve")
-      ->capture_default_str();
-  add_engine_flags(*c, args->job.options);
-  add_memory_flag(*c, args->limits);
+  add_stream_options(*options, args->job, args->limits);
+  add_option_flags(*c, options);
   c->add_option("--device", args->job.device,
                 "Gridded fields: advance the front by bulk advection on cpu or cuda; auto: cuda "
                 "for fronts of at least " + std::to_string(advect::kCudaSteadyFrontBreakEven) +
@@ -66,8 +68,8 @@ void add_stream_command(CLI::App& app) {
       ->capture_default_str();
   add_preview_flags(*c, args->preview);
   c->add_flag("--quiet", args->quiet, "No summary on stdout");
-  c->callback([args, c]() {
-    apply_memory_flag(*c, args->limits, args->job.options);
+  c->callback([args, options, c]() {
+    apply_memory_limits(*options, args->limits, args->job.options);
     check_preview(args->preview);
     const std::filesystem::path out = args->out;
     if (!io::is_mesh_extension(out))

@@ -1,8 +1,11 @@
 #include "keyword_options.h"
 
+#include <pybind11/stl.h>
+
 #include <algorithm>
 #include <string>
-#include <vector>
+
+#include "orthofront/error.h"
 
 namespace py = pybind11;
 
@@ -10,9 +13,14 @@ namespace orthofront::python {
 
 namespace {
 
-std::string option_name(std::string keyword) {
+std::string keyword_of(std::string name) {
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+std::string option_of(std::string keyword) {
   std::replace(keyword.begin(), keyword.end(), '_', '-');
-  return "--" + keyword;
+  return keyword;
 }
 
 std::string value_text(py::object value) {
@@ -29,58 +37,72 @@ std::string joined(const py::sequence& items, const char* separator) {
   return text;
 }
 
+const char* type_name(const jobs::OptionSpec& spec) {
+  switch (spec.type) {
+    case jobs::OptionType::real: return "FLOAT";
+    case jobs::OptionType::integer: return "INT";
+    case jobs::OptionType::count: return "UINT";
+    case jobs::OptionType::flag: return "BOOL";
+    case jobs::OptionType::choice: return "TEXT:choice";
+    case jobs::OptionType::text: return "TEXT";
+  }
+  return "TEXT";
+}
+
 }  // namespace
 
-py::list option_schema(const CLI::App& command) {
+py::list option_schema(const jobs::OptionSet& options) {
   py::list out;
-  for (const CLI::Option* option : command.get_options()) {
-    std::string flag = option->get_name();
-    if (flag == "--help" || flag.rfind("--", 0) != 0 || option->get_group().empty()) continue;
-    std::string keyword = flag.substr(2);
-    std::replace(keyword.begin(), keyword.end(), '-', '_');
+  for (const jobs::OptionSpec& spec : options.specs()) {
+    if (spec.group == jobs::OptionGroup::baseline) continue;  // benchmarks' switches
     py::dict entry;
-    entry["name"] = keyword;
-    entry["option"] = flag;
-    entry["type"] = option->get_type_name();
-    entry["default"] = option->get_default_str();
-    entry["flag"] = option->get_expected_max() == 0;
-    entry["help"] = option->get_description();
+    entry["name"] = keyword_of(spec.name);
+    entry["option"] = "--" + spec.name;
+    entry["type"] = type_name(spec);
+    entry["default"] = spec.show_default ? spec.current() : std::string();
+    entry["flag"] = spec.type == jobs::OptionType::flag;
+    entry["help"] = spec.doc;
+    entry["unit"] = spec.unit;
+    entry["group"] = jobs::group_title(spec.group);
+    entry["choices"] = spec.choices;
+    entry["required"] = spec.required;
     out.append(entry);
   }
   return out;
 }
 
-void parse_keywords(CLI::App& command, const py::kwargs& options) {
-  std::vector<std::string> tokens;
-  for (const auto& [key, value] : options) {
-    const std::string name = option_name(key.cast<std::string>());
+void parse_keywords(jobs::OptionSet& options, const py::kwargs& keywords) {
+  for (const auto& [key, value] : keywords) {
+    const std::string keyword = key.cast<std::string>();
+    const std::string name = option_of(keyword);
+    const jobs::OptionSpec* spec = options.find(name);
+    if (spec == nullptr)
+      throw py::type_error("unexpected keyword argument '" + keyword +
+                           "' (keywords are the command-line options with '_' for '-')");
     if (value.is_none()) continue;
-    if (py::isinstance<py::bool_>(value)) {
-      if (value.cast<bool>()) tokens.push_back(name);
-      continue;
-    }
-    tokens.push_back(name);
     const py::object object = py::reinterpret_borrow<py::object>(value);
-    if (py::isinstance<py::tuple>(object))
-      tokens.push_back(joined(object, ":"));
+    std::string text;
+    if (py::isinstance<py::bool_>(object))
+      text = object.cast<bool>() ? "true" : "false";
+    else if (py::isinstance<py::tuple>(object))
+      text = joined(object, ":");
     else if (py::isinstance<py::list>(object))
-      tokens.push_back(joined(object, ","));
+      text = joined(object, ",");
     else if (py::hasattr(object, "ndim") && object.attr("ndim").cast<int>() > 0)
-      tokens.push_back(joined(object.attr("tolist")(), ","));  // a numpy array
+      text = joined(object.attr("tolist")(), ",");  // a numpy array
     else
-      tokens.push_back(value_text(object));
+      text = value_text(object);
+    if (spec->type != jobs::OptionType::flag && py::isinstance<py::bool_>(object))
+      throw py::type_error(keyword + ": takes a value, not True or False");
+    try {
+      options.set(name, text);
+    } catch (const InvalidArgument& e) {
+      throw py::value_error(keyword + ": " + e.what());
+    }
   }
-  std::reverse(tokens.begin(), tokens.end());  // CLI11 takes a vector last argument first
-  try {
-    command.parse(tokens);
-  } catch (const CLI::ExtrasError& e) {
-    throw py::type_error(std::string("unexpected keyword argument: ") + e.what() +
-                         " (keywords are the command-line options with '_' for '-')");
-  } catch (const CLI::RequiredError& e) {
-    throw py::type_error(std::string("missing keyword argument: ") + e.what());
-  } catch (const CLI::ParseError& e) {
-    throw py::value_error(e.what());
-  }
+  const std::vector<std::string> missing = options.missing();
+  if (!missing.empty())
+    throw py::type_error("missing keyword argument: " + keyword_of(missing.front()));
 }
 
 }  // namespace orthofront::python

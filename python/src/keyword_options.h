@@ -1,22 +1,18 @@
 #pragma once
-/// Python keyword arguments as command-line options: `edge=0.05, mu_mode="paper"` is parsed as
-/// `--edge 0.05 --mu-mode paper` by the same CLI11 definitions the commands use, so the module
-/// takes the command line's names, defaults and checks.
+/// Python keyword arguments as a job's options (jobs/option_set.h): the same names as the
+/// command line's, '_' for '-', with the same defaults and checks.
 #include <pybind11/pybind11.h>
 
-#include <CLI/CLI.hpp>
+#include "jobs/option_set.h"
 
 namespace orthofront::python {
 
-/// Parses `options` with `command`. True adds a flag, False and None leave it out, a tuple is
-/// joined with ':' (--release 0:1) and a list with ',' (--frames 1,2,3). Throws TypeError for a
-/// keyword the command does not take and ValueError for a value it refuses, both naming the
-/// keyword.
-void parse_keywords(CLI::App& command, const pybind11::kwargs& options);
+/// Parses `keywords` into `options`: an unknown keyword or a missing required one is a
+/// TypeError, a value the option refuses a ValueError naming the keyword. None leaves the default.
+void parse_keywords(jobs::OptionSet& options, const pybind11::kwargs& keywords);
 
-/// The keywords `command` takes, in its order, each a dict: `name` (the keyword), `option` (the
-/// flag), `type` (CLI11's type name: FLOAT, INT, UINT, TEXT, ...), `default` (its text; empty:
-/// none), `flag` (takes no value) and `help`. Hidden options and --help are left out.
-pybind11::list option_schema(const CLI::App& command);
+/// The options the keywords set, one dict each (name, option, type, default, flag, help, unit,
+/// group, choices, required), benchmarks' baselines left out.
+pybind11::list option_schema(const jobs::OptionSet& options);
 
 }  // namespace orthofront::python

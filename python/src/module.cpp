@@ -10,14 +10,14 @@
 #include <string>
 #include <vector>
 
-#include "cli/edge_default.h"
-#include "cli/engine_options.h"
-#include "cli/path_args.h"
-#include "cli/time_arg.h"
-#include "cli/seed_spec.h"
-#include "cli/streak_args.h"
-#include "cli/streak_report.h"
-#include "cli/surface_job.h"
+#include "jobs/edge_default.h"
+#include "jobs/engine_options.h"
+#include "jobs/path_job.h"
+#include "jobs/time_arg.h"
+#include "jobs/seed_spec.h"
+#include "jobs/streak_job.h"
+#include "jobs/streak_report.h"
+#include "jobs/stream_job.h"
 #include "keyword_options.h"
 #include "numpy_grid.h"
 #include "orthofront/error.h"
@@ -85,7 +85,7 @@ SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name,
                        bool* planar = nullptr) {
   if (py::isinstance<py::str>(seed)) {
     name = seed.cast<std::string>();
-    return cli::parse_seed(name);
+    return jobs::parse_seed(name);
   }
   const auto points = FloatArray::ensure(seed);
   if (!points || points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3) ||
@@ -116,55 +116,48 @@ py::dict surface_dict(const Mesh& mesh, const nlohmann::json& report) {
   return out;
 }
 
-void add_stream_keywords(CLI::App& command, cli::SurfaceJob& job, cli::MemoryLimits& limits) {
-  command.add_option("--seed-count", job.seed_count, "Vertices on the seed curve")
-      ->capture_default_str();
-  cli::add_engine_flags(command, job.options);
-  cli::add_memory_flag(command, limits);
-}
-
 /// The keywords of stream_surface, path_surface or streak_surface (`kind`: stream, path,
 /// streak), as option_schema lists them: the Python package builds their signatures and
 /// docstrings from it.
 py::list keyword_schema(const std::string& kind) {
-  CLI::App command(kind);
+  jobs::OptionSet options;
   if (kind == "stream") {
-    cli::SurfaceJob job;
-    cli::MemoryLimits limits;
-    add_stream_keywords(command, job, limits);
-    return option_schema(command);
+    jobs::SurfaceJob job;
+    jobs::MemoryLimits limits;
+    jobs::add_stream_options(options, job, limits);
+    return option_schema(options);
   }
   if (kind == "path") {
-    cli::PathArgs args;
-    cli::add_path_flags(command, args);
-    return option_schema(command);
+    jobs::PathArgs args;
+    jobs::add_path_options(options, args);
+    return option_schema(options);
   }
   if (kind == "streak") {
-    cli::StreakArgs args;
-    cli::add_streak_flags(command, args);
-    return option_schema(command);
+    jobs::StreakArgs args;
+    jobs::add_streak_options(options, args);
+    return option_schema(options);
   }
   throw py::value_error("kind must be stream, path or streak, got '" + kind + "'");
 }
 
 py::dict stream_surface(const py::object& field_in, const py::object& seed_in, bool closed,
                         const py::kwargs& options) {
-  cli::SurfaceJob job;
-  cli::MemoryLimits limits;
-  CLI::App command("stream_surface");
-  add_stream_keywords(command, job, limits);
-  parse_keywords(command, options);
-  cli::apply_memory_flag(command, limits, job.options);
+  jobs::SurfaceJob job;
+  jobs::MemoryLimits limits;
+  jobs::OptionSet set;
+  jobs::add_stream_options(set, job, limits);
+  parse_keywords(set, options);
+  jobs::apply_memory_limits(set, limits, job.options);
   const PyField field = resolve_field(field_in);
   const auto* grid = dynamic_cast<const GridField*>(field.field.get());
-  const cli::EdgeChoice edge = cli::choose_edge(job.options.edge, command.count("--edge") > 0,
+  const jobs::EdgeChoice edge = jobs::choose_edge(job.options.edge, set.given("edge"),
                                                 grid ? &grid->grid().geometry : nullptr);
   job.options.edge = edge.edge;
   const SeedCurve curve = resolve_seed(seed_in, closed, job.seed);
   job.field = field.name;
-  cli::check_seed_count(job.seed_count, job.options.max_vertices);
+  jobs::check_seed_count(job.seed_count, job.options.max_vertices);
   const Seed<3> seed = make_seed(curve, job.seed_count);
-  cli::check_stream_seed(*field.field, seed, job);
+  jobs::check_stream_seed(*field.field, seed, job);
   InterruptCheck interrupt;
   SurfaceResult result;
   {
@@ -177,7 +170,7 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   report["field"] = job.field;
   report["seed"] = job.seed;
   report["seed_count"] = job.seed_count;
-  cli::add_edge_keys(report, edge);
+  jobs::add_edge_keys(report, edge);
   report["complete"] = result.report.complete;
   report["limits"] = limits.to_json();
   return surface_dict(result.mesh, report);
@@ -185,14 +178,14 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
 
 py::dict path_surface(const py::object& field_in, const py::object& seed_in, bool closed,
                       const py::kwargs& options) {
-  cli::PathArgs args;
-  CLI::App command("path_surface");
-  cli::add_path_flags(command, args);
-  parse_keywords(command, options);
-  cli::apply_memory_flag(command, args.limits, args.options);
+  jobs::PathArgs args;
+  jobs::OptionSet set;
+  jobs::add_path_options(set, args);
+  parse_keywords(set, options);
+  jobs::apply_memory_limits(set, args.limits, args.options);
   bool planar_seed = false;
   const SeedCurve seed = resolve_seed(seed_in, closed, args.seed, &planar_seed);
-  cli::check_seed_count(args.seed_count, args.options.max_vertices);
+  jobs::check_seed_count(args.seed_count, args.options.max_vertices);
 
   std::unique_ptr<UnsteadyField> analytic;
   PySeries series;
@@ -214,10 +207,10 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
                     series.name);
   // Numbers, or for NetCDF series dates and durations, as the command line takes them.
   const io::TimeSeries* timed = analytic ? nullptr : series.series.get();
-  args.t0 = cli::resolve_time(args.t0_text, "t0", timed ? timed->time(0) : 0.0, timed);
-  args.t1 = cli::resolve_time(args.t1_text, "t1", args.t0, timed);
-  spacetime::PathSurfaceOptions o = cli::path_options(args);
-  const cli::EdgeChoice edge = cli::choose_edge(o.engine.edge, command.count("--edge") > 0,
+  args.t0 = jobs::resolve_time(args.t0_text, "t0", timed ? timed->time(0) : 0.0, timed);
+  args.t1 = jobs::resolve_time(args.t1_text, "t1", args.t0, timed);
+  spacetime::PathSurfaceOptions o = jobs::path_options(args);
+  const jobs::EdgeChoice edge = jobs::choose_edge(o.engine.edge, set.given("edge"),
                                                 timed ? &timed->geometry() : nullptr);
   o.engine.edge = edge.edge;
   InterruptCheck interrupt;
@@ -229,7 +222,7 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
     if (analytic) {
       result = spacetime::build_path_surface(*analytic, seed, args.seed_count, o);
     } else {
-      const spacetime::CacheOptions co = cli::path_cache_options(args);
+      const spacetime::CacheOptions co = jobs::path_cache_options(args);
       cache_budget = co.budget_bytes;
       spacetime::BrickCache cache(*series.series, co);
       result = spacetime::build_path_surface(cache, seed, args.seed_count, o);
@@ -247,7 +240,7 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   report["field"] = args.field;
   report["seed"] = args.seed;
   report["seed_count"] = args.seed_count;
-  cli::add_edge_keys(report, edge);
+  jobs::add_edge_keys(report, edge);
   report["complete"] = result.report.complete;
   report["path"] = spacetime::to_json(result.path);
   report["path"]["positions"] = spacetime::path_positions(result, args.flat);
@@ -260,10 +253,10 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
 
 py::dict streak_surface(const py::object& field_in, const py::object& seed_in, bool closed,
                         const py::kwargs& options) {
-  cli::StreakArgs args;
-  CLI::App command("streak_surface");
-  cli::add_streak_flags(command, args);
-  parse_keywords(command, options);
+  jobs::StreakArgs args;
+  jobs::OptionSet set;
+  jobs::add_streak_options(set, args);
+  parse_keywords(set, options);
   if (args.route != "direct")
     throw py::value_error("route '" + args.route +
                           "': the module builds the direct route; the command line writes the "
@@ -288,9 +281,9 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   args.field = series.name;
   check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
                     series.name);
-  spacetime::StreakOptions o = cli::streak_options(command, args);
-  const cli::EdgeChoice edge = cli::choose_edge(
-      o.edge, command.count("--edge") > 0, analytic ? nullptr : &series.series->geometry());
+  spacetime::StreakOptions o = jobs::streak_options(set, args);
+  const jobs::EdgeChoice edge = jobs::choose_edge(
+      o.edge, set.given("edge"), analytic ? nullptr : &series.series->geometry());
   o.edge = edge.edge;
   if (analytic && o.device)
     throw py::value_error("device: bulk advection reads gridded series, not analytic fields");
@@ -306,17 +299,17 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
       result = spacetime::build_streak_surface(*analytic, seed, o, sink);
     } else {
       spacetime::CacheOptions co;
-      co.budget_bytes = cli::streak_cache_budget(args);
+      co.budget_bytes = jobs::streak_cache_budget(args);
       cache_budget = co.budget_bytes;
       spacetime::BrickCache cache(*series.series, co);
       result = spacetime::build_streak_surface(cache, seed, o, sink);
     }
   }
   interrupt.rethrow_if_raised();
-  nlohmann::json report = cli::streak_report_json(result);
+  nlohmann::json report = jobs::streak_report_json(result);
   report["field"] = args.field;
   report["seed"] = args.seed;
-  cli::add_edge_keys(report, edge);
+  jobs::add_edge_keys(report, edge);
   report["limits"] = args.limits.to_json();
   if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
   py::list frame_list;

@@ -149,10 +149,16 @@ def test_streak_surface_frames_match_the_command_line(tmp_path, orthofront_binar
 
 
 def test_keywords_are_the_command_line_options():
-    with pytest.raises(TypeError, match="--no-such-option"):
+    # Named as Python spells them.
+    with pytest.raises(TypeError, match="'no_such_option'"):
         orthofront.stream_surface("abc", "line:0,0,0:1,0,0", no_such_option=3)
-    with pytest.raises(ValueError, match="mu-mode"):
+    with pytest.raises(ValueError, match="mu_mode: 'sideways' is not one of damping, paper"):
         orthofront.stream_surface("abc", "line:0,0,0:1,0,0", mu_mode="sideways")
+    with pytest.raises(ValueError, match="flat_split: -1 is below 0"):
+        orthofront.streak_surface("double-gyre", "line:0.3,0.3,0:0.3,0.45,0", release=(0, 1),
+                                  frames=[1], flat_split=-1)
+    with pytest.raises(TypeError, match="edge: takes a value"):
+        orthofront.stream_surface("abc", "line:0,0,0:1,0,0", edge=True)
     with pytest.raises(ValueError, match="seed-count"):
         orthofront.stream_surface("abc", "line:0,0,0:1,0,0", seed_count=1)
     with pytest.raises(TypeError, match="release"):
@@ -316,6 +322,32 @@ def test_signatures_and_docstrings_list_every_keyword_with_its_default():
     assert streak["flat_split"].default == 0.01
     assert streak["insert"].default == "exact"
     assert streak["mesh"].default == "remeshed"
+
+
+def test_keywords_are_the_command_lines_flags_with_the_same_defaults(orthofront_binary):
+    # One schema (apps/jobs) makes both: every keyword is a flag of the command, shown with the
+    # same default, and the command's flags beyond them are its files, pictures and devices.
+    import re
+    cli_only = {"field", "seed", "out", "report", "quiet", "help", "exr", "exr_bins",
+                "device", "device_min_vertices", "device_memory", "preview", "preview_size",
+                "no_preview"}
+    for kind in ("stream", "path", "streak"):
+        text = run_cli(orthofront_binary, kind, "--help").stdout
+        flags = {}
+        for line in text.splitlines():
+            m = re.match(r"\s+(?:-\w,\s*)?--([\w-]+)(.*)", line)
+            if m:
+                flags[m.group(1).replace("-", "_")] = m.group(2)
+        keywords = orthofront._orthofront._keywords(kind)
+        for k in keywords:
+            assert k["name"] in flags, (kind, k["name"])
+            if k["default"] and not k["flag"] and k["name"] != "max_vertices":  # from memory now
+                shown = flags[k["name"]]
+                assert ("=%s " % k["default"] in shown + " " or "[%s]" % k["default"] in shown), (
+                    kind, k["name"], k["default"], shown)
+        extra = set(flags) - {k["name"] for k in keywords}
+        assert extra <= cli_only | {name for name in extra if name.startswith("preview")}, (
+            kind, extra - cli_only)
 
 
 def test_keywords_given_at_their_defaults_change_nothing():

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "apps/cli_run.h"
-#include "cli/edge_default.h"
+#include "jobs/edge_default.h"
 #include "temp_dir.h"
 
 namespace fs = std::filesystem;
@@ -19,7 +19,7 @@ TEST_CASE("the default edge of gridded data is its cell size", "[apps][edge]") {
   uniform.dimension = 2;
   uniform.size = {101, 51, 1};
   uniform.spacing = Vec3(0.02, 0.01, 0);  // ParaView writes a 2D image with z spacing 0
-  CHECK(cli::grid_cell_size(uniform) == 0.01);
+  CHECK(jobs::grid_cell_size(uniform) == 0.01);
 
   // Rectilinear: each axis's median width, so a few refined wall cells do not set it; in 3D
   // the middle of the three.
@@ -29,24 +29,24 @@ TEST_CASE("the default edge of gridded data is its cell size", "[apps][edge]") {
   rect.axes[0] = {0, 0.001, 0.002, 1, 2, 3};  // widths 0.001 0.001 0.998 1 1: median 0.998
   rect.axes[1] = {0, 2};
   rect.axes[2] = {0, 1.5};
-  CHECK(cli::grid_cell_size(rect) == Approx(1.5));
+  CHECK(jobs::grid_cell_size(rect) == Approx(1.5));
   // An ocean grid in metres: 50 km x 30 km cells, 10 m layers. The layers do not set it.
   GridGeometry ocean;
   ocean.dimension = 3;
   ocean.size = {100, 100, 40};
   ocean.spacing = Vec3(50e3, 30e3, 10);
-  CHECK(cli::grid_cell_size(ocean) == 30e3);
+  CHECK(jobs::grid_cell_size(ocean) == 30e3);
 
-  const cli::EdgeChoice from_grid = cli::choose_edge(0.05, false, &uniform);
+  const jobs::EdgeChoice from_grid = jobs::choose_edge(0.05, false, &uniform);
   CHECK(from_grid.edge == 0.01);
   CHECK(from_grid.source == "grid cell");
-  CHECK(cli::edge_note(from_grid).find("0.01: the grid's cell size (--edge sets it)") !=
+  CHECK(jobs::edge_note(from_grid).find("0.01: the grid's cell size (--edge sets it)") !=
         std::string::npos);
-  const cli::EdgeChoice given = cli::choose_edge(0.05, true, &uniform);
+  const jobs::EdgeChoice given = jobs::choose_edge(0.05, true, &uniform);
   CHECK(given.edge == 0.05);
   CHECK(given.source == "--edge");
-  CHECK(cli::edge_note(given).empty());
-  const cli::EdgeChoice analytic = cli::choose_edge(0.05, false, nullptr);
+  CHECK(jobs::edge_note(given).empty());
+  const jobs::EdgeChoice analytic = jobs::choose_edge(0.05, false, nullptr);
   CHECK(analytic.edge == 0.05);
   CHECK(analytic.source == "default");
 }

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "apps/cli_run.h"
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 #include "orthofront/io/mesh_io.h"
 #include "temp_dir.h"
 
@@ -56,7 +56,7 @@ void check_valid_mesh(const Mesh& mesh, std::size_t vertices, std::size_t faces)
 
 TEST_CASE("memory limits: the vertex cap is half the memory at 300 B a vertex, at most 50 M",
           "[apps][memory]") {
-  using namespace orthofront::cli;
+  using namespace orthofront::jobs;
   CHECK(vertex_budget_for(128 * kMiB) == 128 * kMiB / 2 / 300);
   CHECK(vertex_budget_for(std::size_t{1} << 40) == 50'000'000);  // 1 TiB: the cap
   CHECK(vertex_budget_for(0) == 50'000'000);                     // unknown memory
@@ -74,7 +74,7 @@ TEST_CASE("memory limits: the vertex cap is half the memory at 300 B a vertex, a
 
 TEST_CASE("memory limits: the memory available is bounded by ulimit -v (RLIMIT_AS)",
           "[apps][memory]") {
-  using namespace orthofront::cli;
+  using namespace orthofront::jobs;
 #if defined(__SANITIZE_ADDRESS__)
   // AddressSanitizer reserves terabytes of address space and maps more as it goes: a limit of
   // what is used now plus a little would end the child in the sanitizer, not in the code tested.

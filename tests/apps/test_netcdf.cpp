@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "apps/cli_run.h"
-#include "cli/time_arg.h"
+#include "jobs/time_arg.h"
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/io/mesh_io.h"
 #include "orthofront/io/netcdf_series.h"
@@ -693,7 +693,7 @@ TEST_CASE("NetCDF: --t0 and --t1 take dates in the series' calendar and duration
   TempDir dir;
   const fs::path days = write_days(dir);
   namespace io = orthofront::io;
-  using orthofront::cli::resolve_time;
+  using orthofront::jobs::resolve_time;
   const auto series = io::open_netcdf_series(io::expand_file_pattern((days / "day*.nc").string()));
   const double first = series->time(0);
   REQUIRE(first == 2333664000.0);

@@ -106,7 +106,7 @@ TEST_CASE("stream rejects bad input naming the value, with no output file", "[cl
        "--seed-count 100000000 exceeds the vertex budget"},
       {"a negative seed-shot budget",
        "stream --field saddle3d --shot-evaluations -3" + good_seed + out,
-       "--shot-evaluations: Value -3 not in range"},
+       "--shot-evaluations: -3 is below 0"},
       {"an edge that would refine the seed past the vertex budget",
        "stream --field saddle3d --edge 1e-9" + good_seed + out, "raise --edge"},
   };

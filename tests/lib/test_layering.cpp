@@ -4,6 +4,7 @@
 #include <fstream>
 #include <regex>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -32,4 +33,47 @@ TEST_CASE("lib/ includes no I/O library header and never writes to stdout or std
     }
   }
   CHECK(files > 10);
+}
+
+namespace {
+
+// Every #include line of the sources under `folder` matching `forbidden`, as "file:line: text".
+std::vector<std::string> includes_matching(const fs::path& folder, const std::regex& forbidden) {
+  std::vector<std::string> hits;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    const auto ext = entry.path().extension();
+    if (ext != ".h" && ext != ".cpp") continue;
+    std::ifstream in(entry.path());
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+      ++number;
+      if (std::regex_search(line, forbidden))
+        hits.push_back(entry.path().string() + ":" + std::to_string(number) + ": " + line);
+    }
+  }
+  return hits;
+}
+
+}  // namespace
+
+TEST_CASE("the jobs layer and Python never include the command line", "[layering]") {
+  const fs::path source(ORTHOFRONT_SOURCE_DIR);
+  // apps/jobs holds every front end's options and checks: no command-line parser in it.
+  const std::regex command_line(R"(#\s*include\s*[<"](cli/|CLI/))");
+  for (const char* folder : {"apps/jobs", "python/src"}) {
+    INFO(folder);
+    REQUIRE(fs::is_directory(source / folder));
+    const std::vector<std::string> hits = includes_matching(source / folder, command_line);
+    std::string listed;
+    for (const std::string& hit : hits) listed += hit + "\n";
+    INFO(listed);
+    CHECK(hits.empty());
+  }
+  // And Python links the jobs library, not the CLI's.
+  std::ifstream cmake(source / "python" / "CMakeLists.txt");
+  std::string text, line;
+  while (std::getline(cmake, line)) text += line + "\n";
+  CHECK(text.find("orthofront_cli") == std::string::npos);
+  CHECK(text.find("orthofront_jobs") != std::string::npos);
 }

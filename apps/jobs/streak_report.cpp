@@ -1,4 +1,4 @@
-#include "cli/streak_report.h"
+#include "jobs/streak_report.h"
 
 #include <cmath>
 #include <exception>
@@ -7,7 +7,7 @@
 #include "orthofront/io/report_json.h"
 #include "orthofront/spacetime/path_command_json.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 namespace {
 
 double parse_time(const std::string& text, const std::string& option) {
@@ -173,4 +173,4 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& r) {
         {"decode", r.decode_seconds}}}};
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

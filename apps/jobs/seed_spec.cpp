@@ -1,4 +1,4 @@
-#include "cli/seed_spec.h"
+#include "jobs/seed_spec.h"
 
 #include <charconv>
 #include <fstream>
@@ -8,7 +8,7 @@
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 namespace {
 
@@ -115,4 +115,4 @@ SeedCurve parse_seed(const std::string& spec) {
                         "' (expected line, circle, arc or file)");
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

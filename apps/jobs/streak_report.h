@@ -8,7 +8,7 @@
 
 #include "orthofront/spacetime/streak_surface.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// "T0:T1". Throws InvalidArgument naming the text.
 std::pair<double, double> parse_streak_release(const std::string& text);
@@ -16,4 +16,4 @@ std::pair<double, double> parse_streak_release(const std::string& text);
 std::vector<double> parse_streak_frames(const std::string& text);
 nlohmann::json streak_report_json(const spacetime::StreakReport& report);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

@@ -10,11 +10,11 @@ namespace orthofront::io {
 class TimeSeries;
 }
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// The time `text` gives for `option`. A duration counts from `origin` (for --t0 the series' first
 /// time, for --t1 the run's t0); `series` is null for an analytic field.
 double resolve_time(const std::string& text, const std::string& option, double origin,
                     const io::TimeSeries* series);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

@@ -8,9 +8,9 @@
 
 #include "orthofront/seed/seed_curve.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// Throws InvalidArgument naming the malformed part (or io::IoError for an unreadable file).
 SeedCurve parse_seed(const std::string& spec);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

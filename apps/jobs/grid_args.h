@@ -8,7 +8,7 @@
 #include "orthofront/io/hdf5_layout.h"
 #include "orthofront/types.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// "NX,NY,NZ" or "NX,NY" (NZ = 1: a 2D grid). Throws InvalidArgument naming the bad part.
 std::array<std::int64_t, 3> parse_resolution(const std::string& text);
@@ -29,4 +29,4 @@ std::string sidecar_text(const io::Hdf5WriteOptions& options, const std::string&
 /// "bricked", "chunked" or "per-step".
 io::Hdf5Storage parse_layout(const std::string& text);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

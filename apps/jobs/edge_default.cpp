@@ -1,11 +1,11 @@
-#include "cli/edge_default.h"
+#include "jobs/edge_default.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <limits>
 #include <vector>
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 double grid_cell_size(const GridGeometry& grid) {
   std::vector<double> sides;
@@ -50,4 +50,4 @@ std::string edge_note(const EdgeChoice& choice) {
   return text;
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

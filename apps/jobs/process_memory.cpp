@@ -1,4 +1,4 @@
-#include "cli/process_memory.h"
+#include "jobs/process_memory.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 namespace {
 // The value of a "Key:   N kB" line of a /proc file, in bytes.
 std::size_t proc_kib(const char* file, const std::string& key) {
@@ -124,4 +124,4 @@ std::string format_memory(std::size_t bytes) {
   return text;
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

@@ -8,7 +8,7 @@
 
 #include "orthofront/field/grid.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// Of each axis with more than one sample its median spacing (so a rectilinear grid's refined
 /// wall cells do not set it alone); of those the smaller in 2D, the middle one in 3D (so the
@@ -33,4 +33,4 @@ void add_edge_keys(nlohmann::json& report, const EdgeChoice& choice);
 /// that sets it; empty where it was given.
 std::string edge_note(const EdgeChoice& choice);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

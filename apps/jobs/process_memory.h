@@ -4,7 +4,7 @@
 #include <cstddef>
 #include <string>
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 /// This process's peak resident set (VmHWM).
 std::size_t peak_rss_bytes();
@@ -35,4 +35,4 @@ std::size_t cache_budget_for(std::size_t memory_bytes);
 /// "123 MiB", "1.5 GiB": memory figures in messages and on the progress line.
 std::string format_memory(std::size_t bytes);
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

@@ -1,4 +1,4 @@
-#include "cli/time_arg.h"
+#include "jobs/time_arg.h"
 
 #include <cctype>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include "orthofront/io/netcdf_series.h"
 #endif
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 namespace {
 
 std::string lower(std::string text) {
@@ -89,4 +89,4 @@ double resolve_time(const std::string& text, const std::string& option, double o
   throw refuse("expected " + kinds);
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

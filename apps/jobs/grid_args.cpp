@@ -1,4 +1,4 @@
-#include "cli/grid_args.h"
+#include "jobs/grid_args.h"
 
 #include <charconv>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "orthofront/error.h"
 
-namespace orthofront::cli {
+namespace orthofront::jobs {
 
 namespace {
 
@@ -111,4 +111,4 @@ io::Hdf5Storage parse_layout(const std::string& text) {
   throw InvalidArgument("--layout '" + text + "' must be bricked, chunked or per-step");
 }
 
-}  // namespace orthofront::cli
+}  // namespace orthofront::jobs

@@ -1,0 +1,50 @@
+#pragma once
+/// One stream-surface job: its options, as every front end takes them, and the checks of its
+/// seed.
+#include <cstddef>
+#include <string>
+
+#include "jobs/engine_options.h"
+#include "jobs/option_set.h"
+#include "orthofront/advect/batch_advector.h"
+#include "orthofront/engine/stream_surface.h"
+#include "orthofront/field/field.h"
+#include "orthofront/seed/seed.h"
+
+namespace orthofront::jobs {
+
+struct SurfaceJob {
+  std::string field;          ///< field spec
+  std::string seed;           ///< seed spec
+  int seed_count = 20;
+  StreamSurfaceOptions options;
+  std::string device;         ///< device: empty (per vertex), cpu, cuda or auto
+  std::size_t device_min_vertices = 0;  ///< 0: every front (cpu, cuda), the break-even (auto)
+  std::string device_memory;  ///< empty: half the device's free memory
+  /// false: ℓ (options.edge) is the grid's cell size where the field is a grid; the runner
+  /// sets it and edge_source.
+  bool edge_given = true;
+  std::string edge_source = "--edge";
+};
+
+/// Adds the seed count, the engine's options and the memory.
+void add_stream_options(OptionSet& set, SurfaceJob& job, MemoryLimits& limits);
+
+/// What the bulk front advance did (device).
+struct DeviceUse {
+  std::string backend;        ///< empty: no device; "none (...)": auto found nothing to do
+  std::size_t min_vertices = 0, calls = 0;
+  advect::AdvectionStatistics statistics;
+};
+
+/// Refuses a seed with fewer than 2 vertices inside `field`'s domain with data, or one where the
+/// flow stands still at every vertex (InvalidArgument naming job.seed and job.field).
+void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job);
+
+/// A warning (empty when none) for a run whose rows alone, about seed_length / ℓ vertices a
+/// step, would pass options.max_vertices before options.max_steps: it names the seed's length,
+/// the edge, the estimate and the cap, and suggests an edge from the domain's extent.
+std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,
+                               const StreamSurfaceOptions& options);
+
+}  // namespace orthofront::jobs
