@@ -350,6 +350,45 @@ def test_keywords_are_the_command_lines_flags_with_the_same_defaults(orthofront_
             kind, extra - cli_only)
 
 
+def test_paraview_properties_are_keywords_with_the_same_defaults_and_choices():
+    # The ParaView filters set the functions' keywords: each property's keyword is one of the
+    # kind's options, its default the option's (Edge 0 stands for the data's cell size, which
+    # the option leaves to the data too), and its list of words the option's choices.
+    import re
+    path = os.path.join(os.path.dirname(orthofront.__file__), os.pardir, "paraview",
+                        "orthofront_filters.py")
+    source = open(path).read()
+    property_re = re.compile(
+        r'@smproperty\.(\w+)\(name="(\w+)"(?P<args>[^)]*)\)(?P<decorators>(?:\s*@[^\n]*\n'
+        r'(?:\s*\'[^\n]*\n)*)*)\s*def Set\2\(self[^)]*\):\n(?P<body>(?:\s{8}[^\n]*\n)+)')
+    checked = 0
+    for cls, kind in (("StreamSurface", "stream"), ("PathSurface", "path"),
+                      ("StreakSurface", "streak")):
+        start = source.index("class %s(" % cls)
+        end = source.find("\nclass ", start + 1)
+        body = source[start:end if end > 0 else len(source)]
+        schema = {k["name"]: k for k in orthofront._orthofront._keywords(kind)}
+        for m in property_re.finditer(body):
+            key = re.search(r'self\._set\("(\w+)"', m.group("body"))
+            if not key:
+                continue  # Vectors, Options, SpacetimeOut: the filter's own
+            key = key.group(1)
+            assert key in schema, (cls, m.group(2), key)
+            entry = schema[key]
+            default = re.search(r"default_values=([^,)]+)", m.group("args"))
+            if default and entry["default"] and key != "edge":
+                shown = default.group(1).strip().strip('"')
+                try:
+                    assert float(shown) == float(entry["default"]), (cls, key, shown)
+                except ValueError:
+                    assert shown == entry["default"], (cls, key, shown)
+            words = re.findall(r'<String value="([^"]+)"/>', m.group("decorators") or "")
+            if words:
+                assert words == entry["choices"], (cls, key, words, entry["choices"])
+            checked += 1
+    assert checked >= 15
+
+
 def test_keywords_given_at_their_defaults_change_nothing():
     seed = "line:-2,1,0:-2,2,0"
     plain = orthofront.stream_surface("saddle", seed, edge=0.1, steps=20)
