@@ -195,15 +195,6 @@ Vec3 vector(const Document& d, const json& v, const std::string& path) {
   return out;
 }
 
-const std::set<std::string>& surface_keys() {
-  static const std::set<std::string> keys{
-      "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
-      "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
-      "tolerance", "integrator", "insertion", "format",  "release", "frames", "split",
-      "merge",    "release_step", "releases_per_break", "shot_evaluations"};
-  return keys;
-}
-
 std::string known(const std::set<std::string>& keys) {
   std::string out;
   for (const auto& k : keys) out += (out.empty() ? "" : ", ") + k;
@@ -218,8 +209,8 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
   for (const auto& [key, v] : table.items()) {
     const std::string at = path + "." + key;
     if (extra.count(key)) continue;
-    if (!surface_keys().count(key))
-      d.fail(at, "unknown key (known: " + known(surface_keys()) +
+    if (!batch_surface_keys().count(key))
+      d.fail(at, "unknown key (known: " + known(batch_surface_keys()) +
                      (extra.empty() ? "" : "; and for this family: " + known(extra)) + ")");
     StreamSurfaceOptions& o = spec.options;
     if (key == "name") {
@@ -270,8 +261,9 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       if (k == "dopri5") o.integrator = IntegratorKind::dopri5;
       else if (k == "rk4") o.integrator = IntegratorKind::rk4;
       else d.fail(at, "must be \"dopri5\" or \"rk4\", got " + v.dump());
-    } else if (key == "insertion") {
+    } else if (key == "insertion" || key == "insert") {
       spec.insertion = text(d, v, at);  // checked with the kind (check_spec)
+      spec.insertion_key = key;
     } else if (key == "release") {
       spec.release = text(d, v, at);
       try {
@@ -308,7 +300,11 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
 // Checks a finished spec (after defaults and the family's own keys).
 void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
   if (!s.insertion.empty()) {
-    const std::string at = path + ".insertion";
+    // Each kind's key is its option's name: streak surfaces take insert (insertion, the older
+    // spelling, too), stream and path surfaces insertion.
+    const std::string at = path + "." + s.insertion_key;
+    if (s.kind != SurfaceKind::streak && s.insertion_key == "insert")
+      d.fail(at, "insert is a streak surface's key; stream and path surfaces take insertion");
     if (s.kind == SurfaceKind::streak) {
       if (s.insertion != "exact" && s.insertion != "interpolate")
         d.fail(at, "a streak surface's insertion is \"exact\" or \"interpolate\", got \"" +
@@ -360,6 +356,16 @@ std::uint64_t fnv1a(const std::string& text) {
 }
 
 }  // namespace
+
+const std::set<std::string>& batch_surface_keys() {
+  static const std::set<std::string> keys{
+      "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
+      "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
+      "tolerance", "integrator", "insertion", "insert", "format",  "release", "frames", "split",
+      "merge",    "release_step", "releases_per_break", "shot_evaluations"};
+  return keys;
+}
+
 
 BatchJob read_batch_job(const std::filesystem::path& file) {
   const Document d = parse(file);

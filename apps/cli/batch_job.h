@@ -4,6 +4,7 @@
 /// docs/batch.md for the keys.
 #include <cstdint>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@ struct SurfaceSpec {
   std::string frames;               ///< "START:END:COUNT" or "t1,t2,..."
   double split = 1.5, merge = 0.5, release_step = 0;
   int releases_per_break = 1;
+  std::string insertion_key = "insertion";  ///< the key it was given under (streak: insert)
   std::string insertion;            ///< as given (stream/path: streamline|cubic|linear; streak: exact|interpolate)
   bool steps_given = false;
   bool seed_count_given = false;    ///< else 20 (stream, path) or derived from ℓ (streak), as the commands
@@ -56,5 +58,9 @@ struct BatchJob {
 BatchJob read_batch_job(const std::filesystem::path& file);
 
 const char* to_string(SurfaceKind kind);
+
+/// The keys a surface of a job file takes, besides a family's own: the kinds' option names
+/// with '_' for '-' (jobs/*_job.h), and the job's own name, kind, field, seed and format.
+const std::set<std::string>& batch_surface_keys();
 
 }  // namespace orthofront::cli

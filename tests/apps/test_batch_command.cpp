@@ -449,6 +449,12 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
               "\"line:0,0,0:1,0,0\"\n");
   CHECK(m.find("summary.toml:") != std::string::npos);
   CHECK(m.find("the name 'summary' is reserved") != std::string::npos);
+  // insert is a streak surface's key (as `streak --insert`); stream surfaces take insertion.
+  m = refused("insert.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
+              "\"line:0,0,0:1,0,0\"\ninsert = \"cubic\"\n");
+  CHECK(m.find("insert.toml:6: surface[0].insert: insert is a streak surface's key") !=
+        std::string::npos);
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
 }
@@ -513,6 +519,20 @@ TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte 
     CHECK(s["surfaces"][0]["frames"] == 4);
   }
   CHECK(read_text(dir / "out1" / "dye" / "dye_0003.vtp") != read_text(dir / "out3" / "dye" / "dye_0003.vtp"));
+  // insert (the option's name) and insertion (the older key) are the same surface.
+  for (const char* key : {"insert", "insertion"}) {
+    write_text(dir / (std::string(key) + ".toml"),
+               std::string("[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\n"
+                           "kind = \"streak\"\nseed = \"line:0.3,0.3,0:0.3,0.45,0\"\n"
+                           "release = \"0:1\"\nframes = \"0.5:1:2\"\nedge = 0.05\n") +
+                   key + " = \"interpolate\"\n");
+    const auto r = run("batch " + quoted(dir / (std::string(key) + ".toml")) + " --out " +
+                       quoted(dir / (std::string("by-") + key)));
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+  }
+  CHECK(read_text(dir / "by-insert" / "dye" / "dye_0001.vtp") ==
+        read_text(dir / "by-insertion" / "dye" / "dye_0001.vtp"));
   write_text(dir / "zero.toml",
              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
              "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"

@@ -3,10 +3,12 @@
 #include <catch2/catch.hpp>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <memory>
 #include <set>
 #include <string>
 
+#include "cli/batch_job.h"
 #include "cli/option_flags.h"
 #include "jobs/option_set.h"
 #include "jobs/path_job.h"
@@ -145,4 +147,32 @@ TEST_CASE("option schema: choices ignore case, switches set their member either 
   CHECK_THROWS_WITH(set.set("time-budget", "0"), "0 is not a positive number");
   // Defaults are shown as the shortest text that reads back as the same number.
   CHECK(set.find("tolerance")->current() == "1e-09");
+}
+
+TEST_CASE("option schema: a job file's surface keys are the kinds' option names", "[apps][options]") {
+  // The union of the three kinds' options, as job files spell them ('_' for '-').
+  std::set<std::string> options;
+  jobs::SurfaceJob job;
+  jobs::MemoryLimits limits;
+  jobs::PathArgs path;
+  jobs::StreakArgs streak;
+  jobs::OptionSet stream_set, path_set, streak_set;
+  jobs::add_stream_options(stream_set, job, limits);
+  jobs::add_path_options(path_set, path);
+  jobs::add_streak_options(streak_set, streak);
+  for (const jobs::OptionSet* set : {&stream_set, &path_set, &streak_set})
+    for (const jobs::OptionSpec& spec : set->specs()) {
+      std::string key = spec.name;
+      std::replace(key.begin(), key.end(), '-', '_');
+      options.insert(key);
+    }
+  const std::set<std::string> own{"name", "kind", "field", "seed", "format"};
+  for (const std::string& key : cli::batch_surface_keys()) {
+    INFO(key);
+    CHECK((own.count(key) == 1 || options.count(key) == 1));
+  }
+  // Each kind's spelling: streak surfaces take insert, the others insertion.
+  CHECK(streak_set.find("insert") != nullptr);
+  CHECK(stream_set.find("insertion") != nullptr);
+  CHECK(cli::batch_surface_keys().count("insert") == 1);
 }
