@@ -46,17 +46,6 @@ void add_stream_command(CLI::App& app) {
       ->required();
   add_stream_options(*options, args->job, args->limits);
   add_option_flags(*c, options);
-  c->add_option("--device", args->job.device,
-                "Gridded fields: advance the front by bulk advection on cpu or cuda; auto: cuda "
-                "for fronts of at least " + std::to_string(advect::kCudaSteadyFrontBreakEven) +
-                    " vertices where a device is present. Default: per vertex")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
-  c->add_option("--device-min-vertices", args->job.device_min_vertices,
-                "With --device: smaller fronts advance per vertex (0: every front for cpu and "
-                "cuda, the break-even size for auto)");
-  c->add_option("--device-memory", args->job.device_memory,
-                "With --device cuda/auto: what the device may hold of the grid (default: half "
-                "its free memory)");
   c->add_option("--out", args->out, "Output mesh (.vtp, .ply or .obj)")->required();
   c->add_option("--report", args->report, "Write the JSON report here");
   c->add_option("--exr", args->exr,

@@ -2,9 +2,15 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
+#include "jobs/edge_default.h"
+#include "orthofront/advect/steady_front_integrator.h"
+#include "orthofront/error.h"
+#include "orthofront/field/grid_field.h"
 #include "orthofront/seed/seed_check.h"
+#include "orthofront/spacetime/brick_cache.h"
 
 namespace orthofront::jobs {
 
@@ -12,6 +18,94 @@ void add_stream_options(OptionSet& set, SurfaceJob& job, MemoryLimits& limits) {
   set.integer("seed-count", job.seed_count, "Vertices on the seed curve");
   add_engine_options(set, job.options);
   add_memory_option(set, limits);
+  set.text("device", job.device,
+           "Gridded fields: advance the front by bulk advection on cpu or cuda; auto: cuda for "
+           "fronts of at least " +
+               std::to_string(advect::kCudaSteadyFrontBreakEven) +
+               " vertices where a device is present. Default: per vertex")
+      .one_of({"cpu", "cuda", "auto"})
+      .group(OptionGroup::performance)
+      .derived_default();
+  set.count("device-min-vertices", job.device_min_vertices,
+            "With --device: smaller fronts advance per vertex (0: every front for cpu and cuda, "
+            "the break-even size for auto)")
+      .group(OptionGroup::performance);
+  set.text("device-memory", job.device_memory,
+           "With --device cuda/auto: what the device may hold of the grid (default: half its "
+           "free memory)")
+      .group(OptionGroup::performance)
+      .derived_default();
+}
+
+namespace {
+
+// Fronts smaller than this advance per vertex under a device (auto: the break-even size).
+std::size_t device_min_vertices(const SurfaceJob& job) {
+  if (job.device_min_vertices > 0 || job.device != "auto") return job.device_min_vertices;
+  return advect::kCudaSteadyFrontBreakEven;
+}
+
+// The front advance through the bulk backend, for a gridded field.
+std::unique_ptr<advect::SteadyFrontIntegrator> bulk_advance(const SurfaceJob& job,
+                                                            const Field3& field) {
+  if (job.device.empty()) return nullptr;
+  const auto* grid = dynamic_cast<const GridField*>(&field);
+  if (!grid)
+    throw InvalidArgument("--device: bulk advection moves particles through a grid; '" +
+                          job.field + "' is not a gridded field");
+  const advect::Device device = advect::parse_device(job.device);
+  const std::size_t bytes =
+      job.device_memory.empty() ? 0 : spacetime::parse_bytes(job.device_memory);
+  advect::SteadyBackendFactory factory;
+  if (device == advect::Device::auto_select) {
+    // CUDA starts (and is looked for) only when a front reaches the break-even size.
+    factory = [bytes]() -> std::shared_ptr<advect::BatchAdvector> {
+      if (!advect::cuda_available()) return nullptr;
+      return advect::make_advector(advect::Device::cuda, bytes);
+    };
+  } else {
+    std::shared_ptr<advect::BatchAdvector> backend = advect::make_advector(device, bytes);
+    factory = [backend] { return backend; };
+  }
+  return std::make_unique<advect::SteadyFrontIntegrator>(
+      *grid, factory, advect::front_method(job.options), device_min_vertices(job));
+}
+
+}  // namespace
+
+Seed<3> prepare_stream_seed(const Field3& field, const SeedCurve& curve, SurfaceJob& job) {
+  const auto* grid = dynamic_cast<const GridField*>(&field);
+  const EdgeChoice edge =
+      choose_edge(job.options.edge, job.edge_given, grid ? &grid->grid().geometry : nullptr);
+  job.options.edge = edge.edge;
+  job.edge_source = edge.source;
+  if (job.seed_count < 2)
+    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
+  if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
+    throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
+                          " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
+                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
+  const Seed<3> seed = make_seed(curve, job.seed_count);
+  check_stream_seed(field, seed, job);
+  return seed;
+}
+
+SurfaceResult run_stream_job(const Field3& field, const Seed<3>& seed, const SurfaceJob& job,
+                             const ProgressCallback& progress, const StopRequest& stop,
+                             DeviceUse* used) {
+  const std::unique_ptr<advect::SteadyFrontIntegrator> bulk = bulk_advance(job, field);
+  SurfaceResult result = build_stream_surface(field, seed, job.options, progress, {}, stop,
+                                              bulk.get());
+  if (bulk && used) {
+    used->min_vertices = device_min_vertices(job);
+    used->backend = bulk->backend_name();
+    if (used->backend.empty())
+      used->backend = "none (auto: no front reached " + std::to_string(used->min_vertices) +
+                      " vertices, or no CUDA device)";
+    used->calls = bulk->calls();
+    used->statistics = bulk->statistics();
+  }
+  return result;
 }
 
 void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job) {

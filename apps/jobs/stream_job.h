@@ -10,6 +10,7 @@
 #include "orthofront/engine/stream_surface.h"
 #include "orthofront/field/field.h"
 #include "orthofront/seed/seed.h"
+#include "orthofront/seed/seed_curve.h"
 
 namespace orthofront::jobs {
 
@@ -27,7 +28,7 @@ struct SurfaceJob {
   std::string edge_source = "--edge";
 };
 
-/// Adds the seed count, the engine's options and the memory.
+/// Adds the seed count, the engine's options, the memory and the device.
 void add_stream_options(OptionSet& set, SurfaceJob& job, MemoryLimits& limits);
 
 /// What the bulk front advance did (device).
@@ -40,6 +41,17 @@ struct DeviceUse {
 /// Refuses a seed with fewer than 2 vertices inside `field`'s domain with data, or one where the
 /// flow stands still at every vertex (InvalidArgument naming job.seed and job.field).
 void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJob& job);
+
+/// The seed of `job` on `field`: sets ℓ from the field's grid unless job.edge_given (and
+/// job.edge_source), checks the seed count against the vertex cap and the seed against the
+/// domain (InvalidArgument naming them).
+Seed<3> prepare_stream_seed(const Field3& field, const SeedCurve& curve, SurfaceJob& job);
+
+/// Builds the surface from a prepared seed, the front advanced by bulk advection on job.device
+/// where one is named (gridded fields only: InvalidArgument otherwise); `used` gets what it did.
+SurfaceResult run_stream_job(const Field3& field, const Seed<3>& seed, const SurfaceJob& job,
+                             const ProgressCallback& progress, const StopRequest& stop,
+                             DeviceUse* used);
 
 /// A warning (empty when none) for a run whose rows alone, about seed_length / ℓ vertices a
 /// step, would pass options.max_vertices before options.max_steps: it names the seed's length,

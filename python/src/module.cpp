@@ -149,28 +149,28 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   parse_keywords(set, options);
   jobs::apply_memory_limits(set, limits, job.options);
   const PyField field = resolve_field(field_in);
-  const auto* grid = dynamic_cast<const GridField*>(field.field.get());
-  const jobs::EdgeChoice edge = jobs::choose_edge(job.options.edge, set.given("edge"),
-                                                grid ? &grid->grid().geometry : nullptr);
-  job.options.edge = edge.edge;
   const SeedCurve curve = resolve_seed(seed_in, closed, job.seed);
   job.field = field.name;
-  jobs::check_seed_count(job.seed_count, job.options.max_vertices);
-  const Seed<3> seed = make_seed(curve, job.seed_count);
-  jobs::check_stream_seed(*field.field, seed, job);
+  job.edge_given = set.given("edge");
+  const Seed<3> seed = jobs::prepare_stream_seed(*field.field, curve, job);
   InterruptCheck interrupt;
   SurfaceResult result;
+  jobs::DeviceUse device;
   {
     py::gil_scoped_release release;
-    result = build_stream_surface(*field.field, seed, job.options,
-                                  [&](const Progress&) { return interrupt.keep_going(); });
+    result = jobs::run_stream_job(
+        *field.field, seed, job, [&](const Progress&) { return interrupt.keep_going(); }, {},
+        &device);
   }
   interrupt.rethrow_if_raised();
   nlohmann::json report = io::to_json(result.report);
   report["field"] = job.field;
   report["seed"] = job.seed;
   report["seed_count"] = job.seed_count;
-  jobs::add_edge_keys(report, edge);
+  jobs::add_edge_keys(report, {job.options.edge, job.edge_source});
+  if (!device.backend.empty())
+    report["device"] = spacetime::device_json(device.backend, device.min_vertices, device.calls,
+                                              device.statistics);
   report["complete"] = result.report.complete;
   report["limits"] = limits.to_json();
   return surface_dict(result.mesh, report);

@@ -389,6 +389,25 @@ def test_paraview_properties_are_keywords_with_the_same_defaults_and_choices():
     assert checked >= 15
 
 
+def test_stream_surface_takes_the_device_as_the_command_line_does(orthofront_binary, tmp_path):
+    # One runner (jobs::run_stream_job) for both: a linear field is exact on its grid, so the
+    # bulk advance stays on y z = 0.2 as the per-vertex one does, and an analytic field is refused.
+    h5 = str(tmp_path / "saddle.h5")
+    run_cli(orthofront_binary, "generate", "--field", "saddle3d", "--resolution", "33,33,33",
+            "--out", h5, "--quiet")
+    seed = "line:-1,2,0.1:1,2,0.1"
+    plain = orthofront.stream_surface(h5, seed, seed_count=20, edge=0.1, steps=100)
+    bulk = orthofront.stream_surface(h5, seed, seed_count=20, edge=0.1, steps=100, device="cpu")
+    assert len(bulk.vertices) == len(plain.vertices)
+    assert np.max(np.abs(bulk.vertices[:, 1] * bulk.vertices[:, 2] - 0.2)) < 1e-6
+    assert bulk.report["device"]["backend"] == "cpu"
+    assert "device" not in plain.report
+    with pytest.raises(ValueError, match="not a gridded field"):
+        orthofront.stream_surface("saddle3d", seed, steps=5, device="cpu")
+    with pytest.raises(ValueError, match="device: 'gpu' is not one of cpu, cuda, auto"):
+        orthofront.stream_surface(h5, seed, device="gpu")
+
+
 def test_keywords_given_at_their_defaults_change_nothing():
     seed = "line:-2,1,0:-2,2,0"
     plain = orthofront.stream_surface("saddle", seed, edge=0.1, steps=20)
