@@ -1,23 +1,14 @@
 #include "cli/surface_job.h"
 
-#include <cmath>
 #include <cstdio>
-#include <memory>
 
-#include "orthofront/io/open_field.h"
-#include "jobs/edge_default.h"
 #include "cli/progress_bar.h"
 #include "jobs/seed_spec.h"
-#include "orthofront/advect/steady_front_integrator.h"
-#include "orthofront/error.h"
-#include "orthofront/field/grid_field.h"
-#include "orthofront/seed/seed_check.h"
-#include "orthofront/spacetime/brick_cache.h"
+#include "orthofront/io/open_field.h"
 
 namespace orthofront::cli {
 
 using namespace jobs;
-
 
 SurfaceResult run_surface(SurfaceJob& job, bool show_progress, DeviceUse* used) {
   const auto field = io::open_field(job.field);

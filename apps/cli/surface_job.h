@@ -1,5 +1,6 @@
 #pragma once
-/// One stream-surface job as the command line describes it, and its summary text.
+/// A stream-surface job run from the command line (a file field, a progress bar), and its
+/// summary text.
 #include <cstddef>
 #include <string>
 
