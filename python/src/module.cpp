@@ -153,6 +153,16 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
   job.field = field.name;
   job.edge_given = set.given("edge");
   const Seed<3> seed = jobs::prepare_stream_seed(*field.field, curve, job);
+  // The command line's warning of a run its rows alone would stop at the vertex cap, as a
+  // Python warning.
+  std::string cap = jobs::vertex_cap_warning(curve.length(), field.field->domain().extent(),
+                                             job.options);
+  if (!cap.empty()) {
+    const std::string prefix = "orthofront: warning: ";
+    if (cap.rfind(prefix, 0) == 0) cap.erase(0, prefix.size());
+    while (!cap.empty() && cap.back() == '\n') cap.pop_back();
+    if (PyErr_WarnEx(PyExc_UserWarning, cap.c_str(), 1) != 0) throw py::error_already_set();
+  }
   InterruptCheck interrupt;
   SurfaceResult result;
   jobs::DeviceUse device;

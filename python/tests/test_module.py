@@ -408,6 +408,17 @@ def test_stream_surface_takes_the_device_as_the_command_line_does(orthofront_bin
         orthofront.stream_surface(h5, seed, device="gpu")
 
 
+def test_stream_surface_warns_of_a_run_its_rows_would_stop_at_the_vertex_cap():
+    # As `stream` prints it: 101 vertices a row for 100 steps cannot fit 2,000 vertices.
+    with pytest.warns(UserWarning, match="past the vertex cap of 2000"):
+        orthofront.stream_surface("saddle3d", "line:-0.5,2,0.1:0.5,2,0.1", edge=0.01,
+                                  seed_count=101, max_vertices=2000)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        orthofront.stream_surface("saddle3d", "line:-0.5,2,0.1:0.5,2,0.1", edge=0.1, steps=10)
+
+
 def test_keywords_given_at_their_defaults_change_nothing():
     seed = "line:-2,1,0:-2,2,0"
     plain = orthofront.stream_surface("saddle", seed, edge=0.1, steps=20)
