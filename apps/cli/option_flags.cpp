@@ -10,20 +10,13 @@ using namespace jobs;
 
 namespace {
 
-std::string type_name(const jobs::OptionSpec& spec) {
-  switch (spec.type) {
-    case jobs::OptionType::real: return "FLOAT";
-    case jobs::OptionType::integer: return "INT";
-    case jobs::OptionType::count: return "UINT";
-    case jobs::OptionType::flag: return "";
-    case jobs::OptionType::text: return "TEXT";
-    case jobs::OptionType::choice: {
-      std::string words;
-      for (const std::string& c : spec.choices) words += (words.empty() ? "" : ",") + c;
-      return "TEXT:{" + words + "}";
-    }
-  }
-  return "TEXT";
+// CLI11's style: the kind, and for a choice its words (TEXT:{exact,interpolate}).
+std::string flag_type(const jobs::OptionSpec& spec) {
+  std::string name = jobs::type_name(spec);
+  if (spec.type != jobs::OptionType::choice) return name;
+  std::string words;
+  for (const std::string& c : spec.choices) words += (words.empty() ? "" : ",") + c;
+  return name + ":{" + words + "}";
 }
 
 }  // namespace
@@ -44,7 +37,7 @@ void add_option_flags(CLI::App& command, const std::shared_ptr<jobs::OptionSet>&
       option = command.add_flag_callback(flag, [set]() { set("true"); }, doc);
     } else {
       option = command.add_option_function<std::string>(flag, set, doc);
-      option->type_name(type_name(spec));
+      option->type_name(flag_type(spec));
       if (spec.show_default) option->default_str(spec.current());
     }
     if (spec.required) option->required();

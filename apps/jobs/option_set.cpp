@@ -55,6 +55,18 @@ const char* group_title(OptionGroup group) {
   return "";
 }
 
+const char* type_name(const OptionSpec& spec) {
+  switch (spec.type) {
+    case OptionType::real: return "FLOAT";
+    case OptionType::integer: return "INT";
+    case OptionType::count: return "UINT";
+    case OptionType::flag: return "BOOL";
+    case OptionType::choice:
+    case OptionType::text: return "TEXT";
+  }
+  return "TEXT";
+}
+
 std::size_t choice_index(const std::vector<std::string>& choices, const std::string& text) {
   const std::string wanted = lower(text);
   for (std::size_t i = 0; i < choices.size(); ++i)

@@ -1,9 +1,8 @@
 #pragma once
 /// The options of a job, written once: each option's name, member, default, check, one-line doc,
-/// unit and group. The command line, the batch file and Python's keyword arguments are made from
-/// it (cli/option_flags.h, jobs/batch keys, python/src/keyword_options.h), so they take the same
-/// names, defaults and checks; each front end spells the names its own way (--flat-split,
-/// flat_split).
+/// unit and group. The command line's flags (cli/option_flags.h) and Python's keyword arguments
+/// (python/src/keyword_options.h) are made from it, so they take the same names, defaults and
+/// checks; each front end spells the names its own way (--flat-split, flat_split).
 #include <cstddef>
 #include <functional>
 #include <map>
@@ -99,6 +98,9 @@ class OptionSet {
   std::set<std::string> given_;
   friend class Adder;
 };
+
+/// The value's kind as help pages name it: FLOAT, INT, UINT, TEXT, BOOL (a choice: TEXT).
+const char* type_name(const OptionSpec& spec);
 
 /// Which of `choices` `text` is (ignoring case); throws InvalidArgument listing them.
 std::size_t choice_index(const std::vector<std::string>& choices, const std::string& text);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "jobs/edge_default.h"
+#include "jobs/path_job.h"
 #include "orthofront/advect/steady_front_integrator.h"
 #include "orthofront/error.h"
 #include "orthofront/field/grid_field.h"
@@ -79,12 +80,7 @@ Seed<3> prepare_stream_seed(const Field3& field, const SeedCurve& curve, Surface
       choose_edge(job.options.edge, job.edge_given, grid ? &grid->grid().geometry : nullptr);
   job.options.edge = edge.edge;
   job.edge_source = edge.source;
-  if (job.seed_count < 2)
-    throw InvalidArgument("--seed-count must be at least 2, got " + std::to_string(job.seed_count));
-  if (static_cast<std::size_t>(job.seed_count) > job.options.max_vertices)
-    throw InvalidArgument("--seed-count " + std::to_string(job.seed_count) +
-                          " exceeds the vertex budget of " + std::to_string(job.options.max_vertices) +
-                          " (--max-vertices, or half of --memory at ~300 B a vertex)");
+  check_seed_count(job.seed_count, job.options.max_vertices);
   const Seed<3> seed = make_seed(curve, job.seed_count);
   check_stream_seed(field, seed, job);
   return seed;

@@ -174,8 +174,8 @@ def streak_surface(field, seed, closed=False, **options):
 
 
 # The keyword arguments are the command line's options: their names, defaults and help come
-# from the same CLI11 definitions (``_orthofront._keywords``), so signatures and docstrings
-# cannot drift from what the functions take.
+# from the same option schema (apps/jobs, listed by ``_orthofront._keywords``), so signatures and
+# docstrings cannot drift from what the functions take.
 _DATA_DEFAULTS = {"edge": "the grid's cell size for gridded data, else %s",
                   "max_vertices": "from memory, half of it at ~300 B a vertex (now %s)"}
 

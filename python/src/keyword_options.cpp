@@ -37,18 +37,6 @@ std::string joined(const py::sequence& items, const char* separator) {
   return text;
 }
 
-const char* type_name(const jobs::OptionSpec& spec) {
-  switch (spec.type) {
-    case jobs::OptionType::real: return "FLOAT";
-    case jobs::OptionType::integer: return "INT";
-    case jobs::OptionType::count: return "UINT";
-    case jobs::OptionType::flag: return "BOOL";
-    case jobs::OptionType::choice: return "TEXT:choice";
-    case jobs::OptionType::text: return "TEXT";
-  }
-  return "TEXT";
-}
-
 }  // namespace
 
 py::list option_schema(const jobs::OptionSet& options) {
@@ -58,7 +46,7 @@ py::list option_schema(const jobs::OptionSet& options) {
     py::dict entry;
     entry["name"] = keyword_of(spec.name);
     entry["option"] = "--" + spec.name;
-    entry["type"] = type_name(spec);
+    entry["type"] = jobs::type_name(spec);
     entry["default"] = spec.show_default ? spec.current() : std::string();
     entry["flag"] = spec.type == jobs::OptionType::flag;
     entry["help"] = spec.doc;
@@ -81,6 +69,8 @@ void parse_keywords(jobs::OptionSet& options, const py::kwargs& keywords) {
                            "' (keywords are the command-line options with '_' for '-')");
     if (value.is_none()) continue;
     const py::object object = py::reinterpret_borrow<py::object>(value);
+    if (spec->type != jobs::OptionType::flag && py::isinstance<py::bool_>(object))
+      throw py::type_error(keyword + ": takes a value, not True or False");
     std::string text;
     if (py::isinstance<py::bool_>(object))
       text = object.cast<bool>() ? "true" : "false";
@@ -92,8 +82,6 @@ void parse_keywords(jobs::OptionSet& options, const py::kwargs& keywords) {
       text = joined(object.attr("tolist")(), ",");  // a numpy array
     else
       text = value_text(object);
-    if (spec->type != jobs::OptionType::flag && py::isinstance<py::bool_>(object))
-      throw py::type_error(keyword + ": takes a value, not True or False");
     try {
       options.set(name, text);
     } catch (const InvalidArgument& e) {
