@@ -66,8 +66,8 @@ void add_streak_options(OptionSet& set, StreakArgs& args) {
   set.real("flat-split", args.flat_split,
            "--mesh remeshed: an edge where the surface departs from its chord by less than this "
            "many edge lengths is split at its midpoint, with no integration (in 2D, every edge "
-           "inside the dye; the new label is interpolated); 0: every new particle is placed as "
-           "--insert says")
+           "inside the dye; the new label is interpolated), and a curved edge of the dye's boundary "
+           "by the cubic through four of its particles where that is as close; 0: every new particle is placed as --insert says")
       .at_least(0)
       .unit("edge lengths");
   set.real("coarsen-age", args.coarsen_age,

@@ -124,6 +124,7 @@ nlohmann::json streak_report_json(const spacetime::StreakReport& r) {
         {"diverged_insertions", r.diverged_insertions},
         {"inexact_ends", r.inexact_ends},
         {"flat_insertions", r.flat_insertions},
+        {"curve_insertions", r.curve_insertions},
         {"smoothed", r.smoothed},
         {"steps_shortened", r.steps_shortened},
         {"faces_turned", r.faces_turned},

@@ -128,7 +128,7 @@ class RemeshedStreakBuilder {
   Move advance(double t_to, bool may_retry);
   // Moves to t_to in steps that keep every face on its side, adapting the mesh between them.
   bool advance_to(double t_to);
-  bool adapt();
+  bool adapt(bool full = true);
   // Every edge (once) whose length `keep` accepts.
   template <class Keep>
   std::vector<Split> edges_where(const Keep& keep) const;
@@ -152,7 +152,19 @@ class RemeshedStreakBuilder {
   // also L·turn / 8 from the boundary curve's turn over the edge (a circle of radius R gives
   // L² / 8R either way). Infinity where an end's fan does not hold the edge (a vertex where two
   // sheets touch).
-  double chord_departure(std::int32_t f, int e, std::vector<Topology::HalfEdge>& ring) const;
+  // On the dye's boundary, also gives the boundary's next vertex past each end in `beyond`
+  // (none elsewhere).
+  double chord_departure(std::int32_t f, int e, std::vector<Topology::HalfEdge>& ring,
+                         std::array<std::int32_t, 2>& beyond) const;
+  // Where a boundary edge's new particle goes by the cubic through the edge's ends and the
+  // boundary vertices beyond them: in the label that varies along a boundary that is a streak
+  // line (one s) or a time line (one τ), which puts the label midpoint where its path goes, and
+  // elsewhere (a boundary cut by pruning, a stop, the region) by length along the boundary.
+  // False where the cubic departs from either quadratic through three of the points (which
+  // bounds its error) by more than `tolerance`: curved boundaries the chord cannot follow are
+  // mostly smooth at the scale of ℓ, and these need no integration.
+  bool boundary_cubic(std::int32_t a, std::int32_t b, const std::array<std::int32_t, 2>& beyond,
+                      double tolerance, Vec3& at) const;
   // Exact particles of a split land where the path of their label midpoint goes, which in a
   // sheared parametrization can lie well off the edge (and fold the faces beside it). One
   // chord step of Gauss-Newton on the label, with the derivative of the faces beside the edge,
@@ -165,7 +177,10 @@ class RemeshedStreakBuilder {
   void collapse_pass();
   std::size_t flip_pass();  // returns the flips made
   void flip_around_reshaped();
-  double smallest_angle(std::int32_t a, std::int32_t b, std::int32_t c, const Vec3& xa) const;
+  // The cosine of the smallest angle of (a, b, c) with a at xa: the largest of its corners'
+  // cosines, which orders triangles by their smallest angle (reversed) without trigonometry.
+  double smallest_angle_cosine(std::int32_t a, std::int32_t b, std::int32_t c,
+                               const Vec3& xa) const;
   void smooth_pass();
   // face_flags_[f] = flag(f, scratch ring) for every live face, in parallel.
   template <class Flag>
@@ -423,7 +438,7 @@ bool RemeshedStreakBuilder::advance_to(double t_to) {
       ++report_.steps_shortened;
       continue;
     }
-    if (t_ < t_to && !adapt()) return false;
+    if (t_ < t_to && !adapt(false)) return false;
     // The next step: as long as its particles move about ℓ, never longer than the release step.
     const double grow = last_move_ > 0 ? o_.edge / last_move_ : 2.0;
     step_now_ = std::min(step_, dt * std::clamp(grow, 0.5, 2.0));
@@ -480,7 +495,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   const std::size_t n = chosen.size();
   std::vector<Vec3> exact_x, near_x;
   std::vector<double> exact_from, exact_s, exact_tau;
-  std::vector<std::size_t> exact_of, near_of, flat_of;
+  std::vector<std::size_t> exact_of, near_of, flat_of, curve_of;
   std::vector<Vec3> x(n);
   std::vector<double> ms(n), mtau(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -494,10 +509,19 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     const bool young = t_ - mtau[k] <= 4 * (t_ - previous_t_);
     // Where the surface is flat across the edge its midpoint lies on it: no path is needed
     // (young particles are released anyway, their paths are short).
-    if (o_.flat_split > 0 && !young &&
-        chord_departure(chosen[k].face, chosen[k].edge, ring_) <= o_.flat_split * edge_at(a, b)) {
-      flat_of.push_back(k);
-      continue;
+    if (o_.flat_split > 0 && !young) {
+      const double tolerance = o_.flat_split * edge_at(a, b);
+      std::array<std::int32_t, 2> beyond{};
+      if (chord_departure(chosen[k].face, chosen[k].edge, ring_, beyond) <= tolerance) {
+        flat_of.push_back(k);
+        continue;
+      }
+      Vec3 on_curve;
+      if (boundary_cubic(a, b, beyond, tolerance, on_curve)) {
+        curve_of.push_back(k);
+        x[k] = on_curve;
+        continue;
+      }
     }
     // An end placed by interpolation does not lie on its label's path, so the path of the label
     // midpoint has no reason to pass near the edge: it mostly lands off it, and would be
@@ -548,6 +572,7 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
     x[k] = 0.5 * (x_[idx(c[chosen[k].edge])] + x_[idx(c[(chosen[k].edge + 1) % 3])]);
     status[k] = ParticleStatus::moving;
   }
+  for (const std::size_t k : curve_of) status[k] = ParticleStatus::moving;  // x[k] is set
   for (int round = 0; round < 2; ++round)
     if (!steer_to_midpoints(chosen, exact_of, x, status, ms, mtau)) return false;
   // Where even the steered particle lands far from the edge (its label's path went elsewhere:
@@ -621,8 +646,10 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
   }
   report_.diverged_insertions += folding_exact;
   report_.exact_insertions += exact_of.size() - far.size() - folding_exact;
-  report_.interpolated_insertions += near_of.size() + far.size() + folding_exact + flat_of.size();
+  report_.interpolated_insertions +=
+      near_of.size() + far.size() + folding_exact + flat_of.size() + curve_of.size();
   report_.flat_insertions += flat_of.size();
+  report_.curve_insertions += curve_of.size();
   std::vector<char> cropped(n, 0);
   if (o_.region)
     for (std::size_t k = 0; k < n; ++k) crop(x[k], status[k], cropped[k]);
@@ -666,7 +693,9 @@ bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
 }
 
 double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
-                                              std::vector<Topology::HalfEdge>& ring) const {
+                                              std::vector<Topology::HalfEdge>& ring,
+                                              std::array<std::int32_t, 2>& beyond) const {
+  beyond = {none, none};
   const auto& c = topo_.face(f);
   const std::int32_t ends[2] = {c[e], c[(e + 1) % 3]};
   const std::int32_t g = topo_.neighbor(f, e);
@@ -681,7 +710,6 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
   // distance r. An error in the plane's tilt reads as curvature too, which only errs toward
   // integrating.
   double curvature = 0;
-  std::int32_t beyond[2] = {none, none};  // along the boundary, the next vertex past each end
   for (int i = 0; i < 2; ++i) {
     const std::int32_t v = ends[i], other = ends[1 - i];
     const bool fan_on_boundary = topo_.fan(v, ring);
@@ -695,9 +723,15 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
         if (across > 0) curvature = std::max(curvature, 2 * std::abs(height) / across);
       }
     }
-    if (!holds) return unknown;
+    if (!holds) {
+      beyond = {none, none};
+      return unknown;
+    }
     if (g != none) continue;
-    if (!fan_on_boundary) return unknown;
+    if (!fan_on_boundary) {
+      beyond = {none, none};
+      return unknown;
+    }
     // The fan runs from the boundary edge leaving v to the one entering it.
     const std::int32_t next = topo_.to(ring.front());
     const std::int32_t previous = topo_.opposite(ring.back().face, ring.back().edge);
@@ -705,8 +739,10 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
       beyond[i] = previous;
     else if (previous == other)
       beyond[i] = next;
-    else
+    else {
+      beyond = {none, none};
       return unknown;
+    }
   }
   const Vec3 d = x_[idx(ends[1])] - x_[idx(ends[0])];
   double departure = curvature * d.squaredNorm() / 8;
@@ -718,6 +754,56 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
     departure = std::max(departure, d.norm() * std::atan2(ta.cross(tb).norm(), ta.dot(tb)) / 8);
   }
   return departure;
+}
+
+bool RemeshedStreakBuilder::boundary_cubic(std::int32_t a, std::int32_t b,
+                                           const std::array<std::int32_t, 2>& beyond,
+                                           double tolerance, Vec3& at) const {
+  if (beyond[0] == none || beyond[1] == none) return false;
+  const std::int32_t v[4] = {beyond[0], a, b, beyond[1]};
+  const double near_s = s_[idx(a)];
+  Eigen::Vector2d label[4];
+  for (int i = 0; i < 4; ++i) label[i] = label_near(v[i], near_s);
+  // The label that varies along the boundary: the other one is the same at all four, to
+  // 1e-6 of its range (smoothing along a boundary interpolates labels, with rounding).
+  const double range[2] = {1.0, std::max(o_.release_end - o_.release_begin, 1e-300)};
+  int along = -1;
+  for (int l = 0; l < 2 && along < 0; ++l) {
+    const int other = 1 - l;
+    bool fixed = true;
+    for (int i = 1; i < 4; ++i)
+      fixed = fixed && std::abs(label[i][other] - label[0][other]) <= 1e-6 * range[other];
+    if (fixed) along = l;
+  }
+  // Elsewhere (a boundary cut by pruning, a stop or the region) the boundary is a curve on
+  // the surface with no label of its own: it is parametrized by its length.
+  double u[4];
+  if (along >= 0) {
+    for (int i = 0; i < 4; ++i) u[i] = label[i][along];
+  } else {
+    u[0] = 0;
+    for (int i = 1; i < 4; ++i) u[i] = u[i - 1] + (x_[idx(v[i])] - x_[idx(v[i - 1])]).norm();
+  }
+  const double sign = u[2] > u[1] ? 1 : -1;
+  for (int i = 0; i < 3; ++i)
+    if (!(sign * (u[i + 1] - u[i]) > 0)) return false;  // strictly monotone
+  const double um = 0.5 * (u[1] + u[2]);
+  // Lagrange interpolation at um through the points `from` .. `to` of v.
+  const auto lagrange = [&](int from, int to) {
+    Vec3 p = Vec3::Zero();
+    for (int i = from; i <= to; ++i) {
+      double w = 1;
+      for (int j = from; j <= to; ++j)
+        if (j != i) w *= (um - u[j]) / (u[i] - u[j]);
+      p += w * x_[idx(v[i])];
+    }
+    return p;
+  };
+  const Vec3 cubic = lagrange(0, 3);
+  const double error = std::max((cubic - lagrange(0, 2)).norm(), (cubic - lagrange(1, 3)).norm());
+  if (!(error <= tolerance)) return false;
+  at = cubic;
+  return true;
 }
 
 double RemeshedStreakBuilder::label_area(std::int32_t f) const {
@@ -1011,19 +1097,23 @@ std::size_t RemeshedStreakBuilder::flip_pass() {
   return report_.flips - before;
 }
 
-double RemeshedStreakBuilder::smallest_angle(std::int32_t, std::int32_t b, std::int32_t c,
-                                             const Vec3& xa) const {
+double RemeshedStreakBuilder::smallest_angle_cosine(std::int32_t, std::int32_t b, std::int32_t c,
+                                                    const Vec3& xa) const {
   const Vec3& xb = x_[idx(b)];
   const Vec3& xc = x_[idx(c)];
-  return std::min({angle_at(xa, xb, xc), angle_at(xb, xc, xa), angle_at(xc, xa, xb)});
+  const auto cosine = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 u = q - p, w = r - p;
+    return u.dot(w) / std::sqrt(u.squaredNorm() * w.squaredNorm());
+  };
+  return std::max({cosine(xa, xb, xc), cosine(xb, xc, xa), cosine(xc, xa, xb)});
 }
 
 void RemeshedStreakBuilder::smooth_pass() {
   if (!o_.smooth) return;
-  const double good = 30.0 * M_PI / 180.0;
+  const double good = std::cos(30.0 * M_PI / 180.0);  // faces with an angle under 30°
   flag_faces([&](std::int32_t f, std::vector<Topology::HalfEdge>&) {
     const auto& c = topo_.face(f);
-    return static_cast<std::uint8_t>(smallest_angle(c[0], c[1], c[2], x_[idx(c[0])]) < good);
+    return static_cast<std::uint8_t>(!(smallest_angle_cosine(c[0], c[1], c[2], x_[idx(c[0])]) <= good));
   });
   // The particles that may move: those placed by interpolation (an exact particle would leave
   // its label's path), not on the newest row, at a corner of a face with an angle under 30°.
@@ -1075,7 +1165,7 @@ void RemeshedStreakBuilder::smooth_pass() {
     }
     const Vec3 p = xv + 0.5 * d;
     // Every face around keeps its side, no edge grows to split, and the smallest angle grows.
-    double before = M_PI, after = M_PI;
+    double before = -1, after = -1;  // the smallest angles' cosines
     bool ok = true;
     for (const Topology::HalfEdge& h : ring_) {
       const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
@@ -1087,10 +1177,10 @@ void RemeshedStreakBuilder::smooth_pass() {
         ok = false;
         break;
       }
-      before = std::min(before, smallest_angle(v, q, r, xv));
-      after = std::min(after, smallest_angle(v, q, r, p));
+      before = std::max(before, smallest_angle_cosine(v, q, r, xv));
+      after = std::max(after, smallest_angle_cosine(v, q, r, p));
     }
-    if (!ok || !(after > before)) continue;
+    if (!ok || !(after < before)) continue;
     // The label (and the position one break ago) where p lies in the old fan.
     for (const Topology::HalfEdge& h : ring_) {
       const std::int32_t q = topo_.to(h), r = topo_.opposite(h.face, h.edge);
@@ -1309,12 +1399,16 @@ void RemeshedStreakBuilder::keep_budget(std::size_t particles) {
   }
 }
 
-bool RemeshedStreakBuilder::adapt() {
+// A full adaptation follows every break (releases and frames). The shorter moves between breaks
+// (where particles would go farther than about ℓ in one) are followed by the passes that keep
+// lengths and filaments in bounds only: the flip sweep and smoothing, which shape faces, wait for
+// the break.
+bool RemeshedStreakBuilder::adapt(bool full) {
   const auto start = Clock::now();
   prune_pass();
   // The move changed every face: one sweep over all of them. Splits and collapses change the
   // faces around a vertex: the flips they call for are sought there.
-  flip_pass();
+  if (full) flip_pass();
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
     std::size_t splits = 0;
     reshaped_.clear();
@@ -1325,7 +1419,7 @@ bool RemeshedStreakBuilder::adapt() {
   reshaped_.clear();
   collapse_pass();
   flip_around_reshaped();
-  smooth_pass();
+  if (full) smooth_pass();
   report_.refine_seconds += seconds_since(start);
   return true;
 }

@@ -92,7 +92,10 @@ struct StreakOptions {
   /// (from the surface's largest curvature around the edge, and along the dye's boundary from
   /// the boundary's turn). Where the surface is flat the midpoint lies on it exactly, wherever
   /// its label's path goes: in a 2D flow the dye is a region of the plane, so inside it every
-  /// split is such. The particle's label is interpolated (on_path 0), and smoothing may move it.
+  /// split is such. On a curved boundary of the dye, the particle goes where the cubic through
+  /// four boundary particles puts it (in their label along a streak line or a time line, which
+  /// is the label midpoint's place; by length along a cut), where that cubic departs from the
+  /// quadratics through three of them by less than flat_split · ℓ. The particle's label is interpolated (on_path 0), and smoothing may move it.
   /// A filament left one face wide ends in a face whose inner edge is a diagonal, and is pruned
   /// later than with exact particles (its end reads wider than it is). 0: every new particle is
   /// placed as `insertion` says.
@@ -206,6 +209,10 @@ struct StreakReport {
   /// Remeshed: of interpolated_insertions, particles placed at the midpoint of an edge where the
   /// surface is flat (flat_split), with no integration.
   std::size_t flat_insertions = 0;
+  /// Remeshed: of interpolated_insertions, particles placed on a curved boundary of the dye by
+  /// the cubic through four boundary particles, where its error estimate is within flat_split,
+  /// with no integration.
+  std::size_t curve_insertions = 0;
   std::size_t smoothed = 0;  ///< Remeshed: particles moved by smoothing (counted per move)
   /// Remeshed, growth controls: collapses of edges no shorter than collapse·ℓ (allowed only by
   /// a coarsened length), times the vertex budget lowered the coarsening age, and that age at
