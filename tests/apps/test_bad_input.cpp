@@ -605,6 +605,17 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
   for (const auto& p : mesh.positions) CHECK(p.y() == Approx(0.5).margin(1e-12));
 }
 
+TEST_CASE("bad input: options that exclude each other", "[apps][bad-input]") {
+  TempDir out("bad-input-out");
+  const std::string outputs =
+      " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
+  // 2D path positions are written pressed flat or in space-time, not both.
+  check_refused(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --flat "
+                    "--spacetime-out" +
+                    outputs),
+                "--flat and --spacetime-out", "exclude each other", out);
+}
+
 TEST_CASE("bad input: vertex budgets too small", "[apps][bad-input]") {
   TempDir out("bad-input-out");
   const std::string outputs =

@@ -173,11 +173,11 @@ TEST_CASE("the gap behind the square cylinder closes where its sides come within
   // The seed is cut where it meets the cylinder; its halves run on side by side 3 to 4 ℓ apart.
   const std::string seed = "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.1 --steps 400";
   const Surface open = stream(cylinder, seed + " --no-close-gaps", "cylinder-gap-open");
-  const Surface within_l = stream(cylinder, seed, "cylinder-gap-default");
+  const Surface within_2l = stream(cylinder, seed, "cylinder-gap-default");
   const Surface closed = stream(cylinder, seed + " --gap-distance 4", "cylinder-gap-closed");
-  // Within ℓ (the default) the sides never come: nothing changes.
-  CHECK(within_l.quality.faces == open.quality.faces);
-  CHECK(within_l.report["counts"]["gaps_closed"]["faces"].get<std::size_t>() == 0);
+  // Within 2 ℓ (the default) the sides never come: nothing changes.
+  CHECK(within_2l.quality.faces == open.quality.faces);
+  CHECK(within_2l.report["counts"]["gaps_closed"]["faces"].get<std::size_t>() == 0);
   // Within 4 ℓ most of the wake's gap closes: 183 faces; the boundary loses 352 edges.
   const auto& gaps = closed.report["counts"]["gaps_closed"];
   CHECK(gaps["faces"].get<std::size_t>() > 150);
@@ -185,6 +185,21 @@ TEST_CASE("the gap behind the square cylinder closes where its sides come within
   CHECK(closed.quality.boundary_edges + 300 < open.quality.boundary_edges);
   check_valid(closed);
   CHECK(closed.quality.inconsistent_edges == 0);
+
+  // At twice the edge the same halves run 1.5 to 2 ℓ apart: the default closes them where they
+  // come within 2 ℓ, and within ℓ they stay open.
+  const std::string coarse =
+      "--seed line:-10,-3,0:-10,3,0 --seed-count 20 --edge 0.2 --steps 200";
+  const Surface coarse_open = stream(cylinder, coarse + " --gap-distance 1", "cylinder-coarse-1");
+  const Surface coarse_default = stream(cylinder, coarse, "cylinder-coarse-default");
+  CHECK(coarse_open.report["counts"]["gaps_closed"]["faces"].get<std::size_t>() == 0);
+  const auto& coarse_gaps = coarse_default.report["counts"]["gaps_closed"];
+  CHECK(coarse_gaps["stretches"].get<std::size_t>() >= 2);
+  CHECK(coarse_gaps["faces"].get<std::size_t>() > 20);
+  CHECK(coarse_default.quality.faces ==
+        coarse_open.quality.faces + coarse_gaps["faces"].get<std::size_t>());
+  check_valid(coarse_default);
+  CHECK(coarse_default.quality.inconsistent_edges == 0);
 }
 
 TEST_CASE("seed shots on a budget: the square cylinder's recirculation stops integrating its age",

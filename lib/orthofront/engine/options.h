@@ -92,8 +92,10 @@ struct StreamSurfaceOptions {
   /// Stream surfaces: where the surface tore (a rip, an obstacle, a no-data cut) and its halves
   /// run side by side again downstream, zip their boundaries together where they come within
   /// gap_distance·ℓ of each other over at least 2ℓ (mesh/close_gaps.h), once the surface is built.
+  /// 2ℓ by default: halves that meet again behind an obstacle a little over ℓ apart close, with
+  /// closing faces at most 2ℓ across.
   bool close_gaps = true;
-  double gap_distance = 1.0;
+  double gap_distance = 2.0;
   /// Undo a strip whose faces fold over a neighbour (normals more than 90° apart) and take the
   /// vertices on the fold out of the front, which ends their stream lines there (orthogonal
   /// method only; the timeline baseline is left as the paper has it).
