@@ -242,6 +242,11 @@ void check_refused(const Run& r, const std::string& file, const std::string& wor
   clear(out);
 }
 
+// The output and report options of a run writing into out.
+std::string outputs_in(const TempDir& out) {
+  return " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
+}
+
 }  // namespace
 
 TEST_CASE("bad input: missing, empty and truncated grid files of every format",
@@ -516,8 +521,7 @@ TEST_CASE("bad input: NaN regions and fill values are no data", "[apps][bad-inpu
   for (const char* file : {"nan.vec", "fill.h5"}) {
     INFO(file);
     const std::string field = " --field " + quoted(dir / file);
-    const std::string outputs =
-        " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
+    const std::string outputs = outputs_in(out);
     {
       INFO("a seed wholly in the region without data is refused");
       const Run r = run("stream" + field + " --seed line:1,8,5:9,8,5" + outputs);
@@ -607,8 +611,7 @@ TEST_CASE("bad input: seeds outside, half outside, of zero length, in still flow
 
 TEST_CASE("bad input: options that exclude each other", "[apps][bad-input]") {
   TempDir out("bad-input-out");
-  const std::string outputs =
-      " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
+  const std::string outputs = outputs_in(out);
   // 2D path positions are written pressed flat or in space-time, not both.
   check_refused(run("path --field double-gyre --seed line:0.3,0.25,0:0.9,0.7,0 --flat "
                     "--spacetime-out" +
@@ -618,8 +621,7 @@ TEST_CASE("bad input: options that exclude each other", "[apps][bad-input]") {
 
 TEST_CASE("bad input: vertex budgets too small", "[apps][bad-input]") {
   TempDir out("bad-input-out");
-  const std::string outputs =
-      " --out " + quoted(out / "s.vtp") + " --report " + quoted(out / "s.json");
+  const std::string outputs = outputs_in(out);
   // Refused up front: the seed alone exceeds the budget.
   check_refused(run("stream --field saddle3d --seed line:-1,2,0.1:1,2,0.1 --seed-count 50 "
                     "--max-vertices 10" +

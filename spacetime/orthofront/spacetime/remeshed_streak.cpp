@@ -700,6 +700,10 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
   const std::int32_t ends[2] = {c[e], c[(e + 1) % 3]};
   const std::int32_t g = topo_.neighbor(f, e);
   constexpr double unknown = std::numeric_limits<double>::infinity();
+  const auto not_known = [&] {
+    beyond = {none, none};
+    return unknown;
+  };
   const Vec3 mid = 0.5 * (x_[idx(ends[0])] + x_[idx(ends[1])]);
   Vec3 n = normal(c[0], c[1], c[2]);
   if (g != none) n += normal(topo_.face(g)[0], topo_.face(g)[1], topo_.face(g)[2]);
@@ -723,15 +727,9 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
         if (across > 0) curvature = std::max(curvature, 2 * std::abs(height) / across);
       }
     }
-    if (!holds) {
-      beyond = {none, none};
-      return unknown;
-    }
+    if (!holds) return not_known();
     if (g != none) continue;
-    if (!fan_on_boundary) {
-      beyond = {none, none};
-      return unknown;
-    }
+    if (!fan_on_boundary) return not_known();
     // The fan runs from the boundary edge leaving v to the one entering it.
     const std::int32_t next = topo_.to(ring.front());
     const std::int32_t previous = topo_.opposite(ring.back().face, ring.back().edge);
@@ -739,10 +737,8 @@ double RemeshedStreakBuilder::chord_departure(std::int32_t f, int e,
       beyond[i] = previous;
     else if (previous == other)
       beyond[i] = next;
-    else {
-      beyond = {none, none};
-      return unknown;
-    }
+    else
+      return not_known();
   }
   const Vec3 d = x_[idx(ends[1])] - x_[idx(ends[0])];
   double departure = curvature * d.squaredNorm() / 8;
