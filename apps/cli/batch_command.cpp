@@ -22,6 +22,7 @@
 #include "cli/batch_job.h"
 #include "cli/commands.h"
 #include "orthofront/io/open_field.h"
+#include "jobs/edge_default.h"
 #include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
 #include "jobs/seed_spec.h"
@@ -99,9 +100,12 @@ class SurfaceTask {
   SurfaceSpec spec_;
   bool ready_ = false;
   int resumed_at_step_ = -1;  ///< the front step a checkpoint resumed it at (-1: not resumed)
+  int seed_count_ = 0;
+  EdgeChoice edge_;  ///< ℓ and where it came from (the key, or the grid's cell size)
 
  public:
   int resumed_at_step() const { return resumed_at_step_; }
+  int seed_count() const { return seed_count_; }
 };
 
 class StreamTask final : public SurfaceTask {
@@ -109,15 +113,14 @@ class StreamTask final : public SurfaceTask {
   StreamTask(const SurfaceSpec& spec, const Field3& field, const EngineState<3>* resume)
       : SurfaceTask(spec) {
     const SeedCurve curve = parse_seed(spec.seed).translated(spec.offset);
-    seed_ = make_seed(curve, spec.seed_count);
-    SurfaceJob job;
-    job.field = spec.field;
-    job.seed = spec.seed;
-    job.seed_count = spec.seed_count;
-    job.options = spec.options;
-    if (!resume) check_stream_seed(field, seed_, job);
-    builder_ = resume ? std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options, *resume)
-                      : std::make_unique<SurfaceBuilder<3>>(field, seed_, spec.options);
+    // As `stream`: without an edge, a grid's cell size.
+    SurfaceJob job = stream_arguments(spec);
+    job.edge_given = spec.given("edge");
+    seed_count_ = job.seed_count;
+    seed_ = prepare_stream_seed(field, curve, job);
+    edge_ = {job.options.edge, job.edge_source};
+    builder_ = resume ? std::make_unique<SurfaceBuilder<3>>(field, seed_, job.options, *resume)
+                      : std::make_unique<SurfaceBuilder<3>>(field, seed_, job.options);
     if (resume) resumed_at_step_ = resume->step;
     ready_ = builder_->next();
   }
@@ -131,6 +134,7 @@ class StreamTask final : public SurfaceTask {
   std::pair<Mesh, json> finish() override {
     SurfaceResult r = builder_->finish();
     json report = io::to_json(r.report);
+    add_edge_keys(report, edge_);
     report["complete"] = r.report.complete && r.report.stop_reason != StopReason::vertex_budget;
     return {std::move(r.mesh), std::move(report)};
   }
@@ -144,8 +148,10 @@ class PathTask final : public SurfaceTask {
  public:
   /// From an in-memory flow, or one of the surfaces of a pass over `shared`.
   PathTask(const SurfaceSpec& spec, const UnsteadyField& flow, const spacetime::PathState* resume)
-      : SurfaceTask(spec) {
-    builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(flow, seed(), spec.seed_count,
+      : SurfaceTask(spec), args_(path_arguments(spec)) {
+    edge_ = choose_edge(args_.options.edge, spec.given("edge"), nullptr);
+    seed_count_ = args_.seed_count;
+    builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(flow, seed(), args_.seed_count,
                                                                options(), resume);
     if (resume) resumed_at_step_ = resumed_step(*resume);
     ready_ = builder_->next();
@@ -153,9 +159,13 @@ class PathTask final : public SurfaceTask {
   PathTask(const SurfaceSpec& spec, spacetime::StreamedField& shared,
            spacetime::BrickCache& cache, const spacetime::PathState* resume,
            std::shared_ptr<spacetime::SharedBulkAdvance> bulk)
-      : SurfaceTask(spec), bulk_(std::move(bulk)) {
+      : SurfaceTask(spec), args_(path_arguments(spec)), bulk_(std::move(bulk)) {
+    // As `path`: without an edge, the series' cell size.
+    edge_ = choose_edge(args_.options.edge, spec.given("edge"), &cache.series().geometry());
+    args_.options.edge = edge_.edge;
+    seed_count_ = args_.seed_count;
     builder_ = std::make_unique<spacetime::PathSurfaceBuilder>(shared, cache, seed(),
-                                                               spec.seed_count, options(), resume);
+                                                               args_.seed_count, options(), resume);
     if (resume) resumed_at_step_ = resumed_step(*resume);
     ready_ = builder_->next();
   }
@@ -173,10 +183,11 @@ class PathTask final : public SurfaceTask {
   std::pair<Mesh, json> finish() override {
     spacetime::PathSurfaceResult r = builder_->finish();
     json report = io::to_json(r.report);
+    add_edge_keys(report, edge_);
     report["path"] = spacetime::to_json(r.path);
     // As `path` writes them: a 2D flow's surface in (x, y, c t).
-    report["path"]["positions"] = spacetime::path_positions(r, false);
-    spacetime::place_for_output(r, false);
+    report["path"]["positions"] = spacetime::path_positions(r, args_.flat);
+    spacetime::place_for_output(r, args_.flat);
     report["complete"] = r.report.complete;
     return {std::move(r.mesh), std::move(report)};
   }
@@ -187,17 +198,11 @@ class PathTask final : public SurfaceTask {
   }
   SeedCurve seed() const { return parse_seed(spec_.seed).translated(spec_.offset); }
   spacetime::PathSurfaceOptions options() const {
-    spacetime::PathSurfaceOptions o;
-    o.engine = spec_.options;
-    o.t0 = spec_.t0;
-    o.t1 = spec_.t1;
-    o.time_scale = spec_.time_scale;
-    o.max_band = spec_.max_band;
-    o.seed_name = spec_.seed;
-    o.field_name = spec_.field;
+    spacetime::PathSurfaceOptions o = path_options(args_);
     o.shared_bulk = bulk_;
     return o;
   }
+  PathArgs args_;  // `path`'s arguments with the surface's options
   std::shared_ptr<spacetime::SharedBulkAdvance> bulk_;  // the pass's bulk front advance, or null
   std::unique_ptr<spacetime::PathSurfaceBuilder> builder_;
 };
@@ -482,7 +487,7 @@ class BatchRun {
         std::max<std::size_t>(default_vertex_budget() / todo.size(), 1000);
     for (std::size_t i : todo) {
       SurfaceSpec s = job_.surfaces[i];
-      if (!s.max_vertices_given) s.options.max_vertices = vertex_share;
+      if (!s.given("max-vertices")) s.options["max-vertices"] = std::to_string(vertex_share);
       try {
         std::optional<SurfaceState> saved = checkpoints_.load_state(s.name);
         std::unique_ptr<SurfaceTask> task;
@@ -613,20 +618,7 @@ class BatchRun {
     try {
       const std::filesystem::path pvd = output_path(job_, s);
       io::MeshSeriesWriter writer(pvd);
-      spacetime::StreakOptions o;
-      std::tie(o.release_begin, o.release_end) = parse_streak_release(s.release);
-      o.frames = parse_streak_frames(s.frames);
-      o.edge = s.options.edge;
-      o.split = s.split;
-      o.merge = s.merge;
-      o.release_step = s.release_step;
-      o.releases_per_break = s.releases_per_break;
-      o.seed_count = s.seed_count;
-      o.insertion = s.insertion == "interpolate" ? spacetime::ParticleInsertion::interpolate
-                                                 : spacetime::ParticleInsertion::exact;
-      o.max_vertices = s.options.max_vertices;
-      o.seed_name = s.seed;
-      o.field_name = s.field;
+      spacetime::StreakOptions o = streak_arguments(s);
       o.progress = [](const spacetime::StreakProgress&) { return !interrupted(); };
       if (!args_.device.empty() && !is_unsteady_field_name(s.field)) {
         o.device = advect::parse_device(args_.device);
@@ -637,10 +629,14 @@ class BatchRun {
       };
       const SeedCurve seed = parse_seed(s.seed).translated(s.offset);
       spacetime::StreakReport result;
+      EdgeChoice edge = choose_edge(o.edge, s.given("edge"), nullptr);
       if (is_unsteady_field_name(s.field)) {
         result = spacetime::build_streak_surface(*make_unsteady_field(s.field), seed, o, sink);
       } else {
         const auto series = io::open_time_series(s.field, "streak surfaces");
+        // As `streak`: without an edge, the series' cell size.
+        edge = choose_edge(o.edge, s.given("edge"), &series->geometry());
+        o.edge = edge.edge;
         spacetime::CacheOptions co;
         co.budget_bytes = job_.cache_budget.empty() ? cache_budget_for(available_memory_bytes())
                                                     : spacetime::parse_bytes(job_.cache_budget);
@@ -651,6 +647,7 @@ class BatchRun {
         throw Error("interrupted during streak surface '" + s.name +
                     "' (it runs again from its release on --resume)");
       json report = streak_report_json(result);
+      add_edge_keys(report, edge);
       report["name"] = s.name;
       report["field"] = s.field;
       report["seed"] = s.seed;
@@ -721,7 +718,7 @@ class BatchRun {
       report["field"] = s.field;
       report["seed"] = s.seed;
       report["seed_offset"] = {s.offset.x(), s.offset.y(), s.offset.z()};
-      report["seed_count"] = s.seed_count;
+      report["seed_count"] = task.seed_count();
       report["output"] = out.string();
       report["resumed_at_step"] = task.resumed_at_step();
       const bool complete = report.value("complete", true);

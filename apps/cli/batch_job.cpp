@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -10,9 +12,9 @@
 #include <set>
 #include <sstream>
 
-#include "orthofront/io/open_field.h"
 #include "jobs/process_memory.h"
 #include "jobs/streak_report.h"
+#include "jobs/time_arg.h"
 #include "orthofront/error.h"
 #include "orthofront/io/error.h"
 #include "orthofront/spacetime/brick_cache.h"
@@ -201,18 +203,111 @@ std::string known(const std::set<std::string>& keys) {
   return out;
 }
 
-// Applies the surface keys of `table` (at `path`) onto `spec`; `extra` are the family's own
-// keys, read by the caller.
-void apply_keys(const Document& d, const json& table, const std::string& path, SurfaceSpec& spec,
-                const std::set<std::string>& extra) {
+constexpr SurfaceKind kKinds[] = {SurfaceKind::stream, SurfaceKind::path, SurfaceKind::streak};
+
+// The job's own keys of a surface (the kinds' options are the rest).
+const std::set<std::string>& own_keys() {
+  static const std::set<std::string> keys{"name", "kind", "field", "seed", "format"};
+  return keys;
+}
+
+// A surface kind's option schema bound to arguments of its own: where a job file's keys meet the
+// kinds' options (a new kind adds its case here).
+class KindOptions {
+ public:
+  explicit KindOptions(SurfaceKind kind) {
+    switch (kind) {
+      case SurfaceKind::stream:
+        add_stream_options(set, stream, stream_limits);
+        break;
+      case SurfaceKind::path:
+        add_path_options(set, path);
+        break;
+      case SurfaceKind::streak:
+        add_streak_options(set, streak);
+        break;
+    }
+  }
+  KindOptions(const KindOptions&) = delete;
+  KindOptions& operator=(const KindOptions&) = delete;
+
+  OptionSet set;
+  SurfaceJob stream;
+  MemoryLimits stream_limits;
+  PathArgs path;
+  StreakArgs streak;
+};
+
+// A job file's key as the option it names: '_' for '-'; a streak surface's insert was once
+// spelt insertion, which it still reads.
+std::string option_of(SurfaceKind kind, const std::string& key) {
+  if (kind == SurfaceKind::streak && key == "insertion") return "insert";
+  std::string option = key;
+  std::replace(option.begin(), option.end(), '_', '-');
+  return option;
+}
+
+// Whether `kind` takes `option` as a surface key.
+bool takes(SurfaceKind kind, const KindOptions& options, const std::string& option) {
+  return options.set.find(option) != nullptr && batch_job_level(kind, option) == nullptr;
+}
+
+// The text option `spec` parses for a job file's value; InvalidArgument saying why there is none.
+std::string option_text(const OptionSpec& spec, const json& v) {
+  const auto finite_number = [&]() {
+    if (!v.is_number()) throw InvalidArgument("must be a number, got " + v.dump());
+    if (v.is_number_float() && !std::isfinite(v.get<double>()))
+      throw InvalidArgument("must be finite, got " + v.dump());
+    return v.dump();  // the shortest text that reads back as the same number
+  };
+  switch (spec.type) {
+    case OptionType::real:
+    case OptionType::integer:
+    case OptionType::count:
+      return finite_number();
+    case OptionType::flag:
+      if (!v.is_boolean()) throw InvalidArgument("must be true or false, got " + v.dump());
+      return v.get<bool>() ? "true" : "false";
+    case OptionType::choice:
+      if (!v.is_string()) throw InvalidArgument("must be a string, got " + v.dump());
+      return v.get<std::string>();
+    case OptionType::text:
+      if (v.is_number()) return finite_number();  // t0 = 0.5 as well as t0 = "0.5"
+      if (!v.is_string()) throw InvalidArgument("must be a string, got " + v.dump());
+      return v.get<std::string>();
+  }
+  return v.dump();
+}
+
+// Parses `v` into `options` as `option`, failing at `at`; returns the text parsed.
+std::string apply_option(const Document& d, KindOptions& options, const std::string& option,
+                         const json& v, const std::string& at) {
+  try {
+    const std::string text = option_text(*options.set.find(option), v);
+    options.set.set(option, text);
+    return text;
+  } catch (const InvalidArgument& e) {
+    d.fail(at, e.what());
+  }
+}
+
+// What a surface's table gives: the job's own keys, and the kinds' options by key with where
+// each was given.
+struct Given {
+  json value;
+  std::string at;  ///< key path, for messages
+};
+using Table = std::map<std::string, Given>;
+
+// Reads the job's own keys of `table` (at `path`) into `spec` and returns the rest (the kinds'
+// options); `extra` are the family's own keys, read by the caller.
+Table read_table(const Document& d, const json& table, const std::string& path, SurfaceSpec& spec,
+                 const std::set<std::string>& extra) {
   if (!table.is_object()) d.fail(path, "must be a table, got " + table.dump());
+  Table options;
   for (const auto& [key, v] : table.items()) {
     const std::string at = path + "." + key;
     if (extra.count(key)) continue;
-    if (!batch_surface_keys().count(key))
-      d.fail(at, "unknown key (known: " + known(batch_surface_keys()) +
-                     (extra.empty() ? "" : "; and for this family: " + known(extra)) + ")");
-    StreamSurfaceOptions& o = spec.options;
     if (key == "name") {
       spec.name = text(d, v, at);
       if (spec.name.empty() || spec.name.find_first_of("/\\:*?\"<>| ") != std::string::npos ||
@@ -228,114 +323,124 @@ void apply_keys(const Document& d, const json& table, const std::string& path, S
       spec.field = text(d, v, at);
     } else if (key == "seed") {
       spec.seed = text(d, v, at);
-    } else if (key == "seed_count") {
-      spec.seed_count = static_cast<int>(integer(d, v, at, 2, 10'000'000));
-      spec.seed_count_given = true;
-    } else if (key == "edge") {
-      o.edge = positive(d, v, at);
-    } else if (key == "steps") {
-      o.max_steps = static_cast<int>(integer(d, v, at, 0, 1'000'000'000));
-      spec.steps_given = true;
-    } else if (key == "t0") {
-      spec.t0 = number(d, v, at);
-    } else if (key == "t1") {
-      spec.t1 = number(d, v, at);
-    } else if (key == "time_scale") {
-      spec.time_scale = number(d, v, at);
-      if (spec.time_scale < 0) d.fail(at, "must be >= 0 (0: derived), got " + v.dump());
-    } else if (key == "max_band") {
-      spec.max_band = number(d, v, at);
-      if (spec.max_band < 0) d.fail(at, "must be >= 0 (0: none), got " + v.dump());
-    } else if (key == "max_vertices") {
-      o.max_vertices = static_cast<std::size_t>(integer(d, v, at, 2, 4'000'000'000LL));
-      spec.max_vertices_given = true;
-    } else if (key == "damping") {
-      o.damping = number(d, v, at);
-      if (!(o.damping > 0 && o.damping < 1)) d.fail(at, "must lie in (0, 1), got " + v.dump());
-    } else if (key == "tolerance") {
-      o.tolerance = positive(d, v, at);
-    } else if (key == "shot_evaluations") {
-      o.shot_evaluations = static_cast<int>(integer(d, v, at, 0, 1'000'000'000));
-    } else if (key == "integrator") {
-      const std::string k = text(d, v, at);
-      if (k == "dopri5") o.integrator = IntegratorKind::dopri5;
-      else if (k == "rk4") o.integrator = IntegratorKind::rk4;
-      else d.fail(at, "must be \"dopri5\" or \"rk4\", got " + v.dump());
-    } else if (key == "insertion" || key == "insert") {
-      spec.insertion = text(d, v, at);  // checked with the kind (check_spec)
-      spec.insertion_key = key;
-    } else if (key == "release") {
-      spec.release = text(d, v, at);
-      try {
-        (void)parse_streak_release(spec.release);
-      } catch (const std::exception& e) {
-        d.fail(at, e.what());
-      }
-    } else if (key == "frames") {
-      spec.frames = text(d, v, at);
-      try {
-        (void)parse_streak_frames(spec.frames);
-      } catch (const std::exception& e) {
-        d.fail(at, e.what());
-      }
-    } else if (key == "split") {
-      spec.split = positive(d, v, at);
-    } else if (key == "merge") {
-      spec.merge = positive(d, v, at);
-    } else if (key == "release_step") {
-      spec.release_step = number(d, v, at);
-      if (spec.release_step < 0) d.fail(at, "must be >= 0 (0: derived), got " + v.dump());
-    } else if (key == "releases_per_break") {
-      const double k = number(d, v, at);
-      if (!(k >= 1 && k <= 1e6 && k == std::floor(k))) d.fail(at, "must be a whole number >= 1, got " + v.dump());
-      else spec.releases_per_break = static_cast<int>(k);
     } else if (key == "format") {
       spec.format = text(d, v, at);
       if (spec.format != "vtp" && spec.format != "ply" && spec.format != "obj")
         d.fail(at, "must be \"vtp\", \"ply\" or \"obj\", got " + v.dump());
+    } else {
+      options[key] = {v, at};
     }
+  }
+  return options;
+}
+
+// Checks the options of [defaults]: each must be a surface key of some kind, with a value that
+// kind takes.
+void check_defaults(const Document& d, const Table& defaults) {
+  for (const auto& [key, given] : defaults) {
+    bool taken = false;
+    const char* job_level = nullptr;
+    for (const SurfaceKind kind : kKinds) {
+      KindOptions options(kind);
+      const std::string option = option_of(kind, key);
+      if (!takes(kind, options, option)) {
+        if (!job_level) job_level = batch_job_level(kind, option);
+        continue;
+      }
+      taken = true;
+      apply_option(d, options, option, given.value, given.at);
+    }
+    if (taken) continue;
+    if (job_level) d.fail(given.at, job_level);
+    std::set<std::string> all;
+    for (const SurfaceKind kind : kKinds) {
+      const std::set<std::string> keys = batch_surface_keys(kind);
+      all.insert(keys.begin(), keys.end());
+    }
+    d.fail(given.at, "unknown key (known: " + known(all) + ")");
+  }
+}
+
+// Applies the options of [defaults] that the surface's kind takes, then its own (each must be
+// one its kind takes), onto spec.options.
+void resolve_options(const Document& d, const Table& defaults,
+                     const Table& own, const std::set<std::string>& extra, SurfaceSpec& spec) {
+  KindOptions options(spec.kind);
+  const std::string kind = to_string(spec.kind);
+  for (const auto& [key, given] : defaults) {
+    const std::string option = option_of(spec.kind, key);
+    if (own.count(key) == 0 && takes(spec.kind, options, option))
+      spec.options[option] = apply_option(d, options, option, given.value, given.at);
+  }
+  for (const auto& [key, given] : own) {
+    const std::string option = option_of(spec.kind, key);
+    if (const char* job_level = batch_job_level(spec.kind, option)) d.fail(given.at, job_level);
+    if (options.set.find(option) == nullptr) {
+      for (const SurfaceKind other : kKinds) {
+        KindOptions theirs(other);
+        if (takes(other, theirs, option_of(other, key)))
+          d.fail(given.at, key + " is a " + to_string(other) + " surface's key, not a " + kind +
+                               " surface's");
+      }
+      d.fail(given.at, "unknown key for a " + kind + " surface (known: " +
+                           known(batch_surface_keys(spec.kind)) +
+                           (extra.empty() ? "" : "; and for this family: " + known(extra)) + ")");
+    }
+    spec.options[option] = apply_option(d, options, option, given.value, given.at);
   }
 }
 
 // Checks a finished spec (after defaults and the family's own keys).
 void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
-  if (!s.insertion.empty()) {
-    // Each kind's key is its option's name: streak surfaces take insert (insertion, the older
-    // spelling, too), stream and path surfaces insertion.
-    const std::string at = path + "." + s.insertion_key;
-    if (s.kind != SurfaceKind::streak && s.insertion_key == "insert")
-      d.fail(at, "insert is a streak surface's key; stream and path surfaces take insertion");
-    if (s.kind == SurfaceKind::streak) {
-      if (s.insertion != "exact" && s.insertion != "interpolate")
-        d.fail(at, "a streak surface's insertion is \"exact\" or \"interpolate\", got \"" +
-                       s.insertion + "\"");
-    } else if (s.insertion == "streamline") {
-      s.options.insertion = Insertion::streamline;
-    } else if (s.insertion == "cubic") {
-      s.options.insertion = Insertion::cubic;
-    } else if (s.insertion == "linear") {
-      s.options.insertion = Insertion::linear;
-    } else if (s.insertion == "previous-row") {
-      s.options.insertion = Insertion::previous_row;
-    } else {
-      d.fail(at, "must be \"streamline\", \"previous-row\", \"cubic\" or \"linear\", got \"" +
-                     s.insertion + "\"");
-    }
-  }
-  if (s.kind == SurfaceKind::streak) {
-    if (s.release.empty()) d.fail(path, "a streak surface needs release (\"T0:T1\")");
-    if (s.frames.empty()) d.fail(path, "a streak surface needs frames (\"START:END:COUNT\")");
-    s.format = "pvd";
-  }
   if (s.name.empty()) d.fail(path, "needs a name");
   if (s.field.empty()) d.fail(path, "needs a field (here or as job.field)");
   if (s.seed.empty()) d.fail(path, "needs a seed");
-  if (s.kind == SurfaceKind::path && !(s.t1 > s.t0))
-    d.fail(path, "needs t0 < t1, got t0 = " + std::to_string(s.t0) + ", t1 = " +
-                     std::to_string(s.t1));
-  if (static_cast<std::size_t>(s.seed_count) > s.options.max_vertices)
-    d.fail(path, "seed_count " + std::to_string(s.seed_count) + " exceeds max_vertices " +
-                     std::to_string(s.options.max_vertices));
+  try {
+    switch (s.kind) {
+      case SurfaceKind::stream: {
+        const SurfaceJob job = stream_arguments(s);
+        check_seed_count(job.seed_count, job.options.max_vertices);
+        break;
+      }
+      case SurfaceKind::path: {
+        const PathArgs args = path_arguments(s);
+        check_seed_count(args.seed_count, args.options.max_vertices);
+        if (!(args.t1 > args.t0))
+          d.fail(path, "needs t0 < t1, got t0 = " + args.t0_text + ", t1 = " + args.t1_text);
+        break;
+      }
+      case SurfaceKind::streak:
+        if (!s.given("release")) d.fail(path, "a streak surface needs release (\"T0:T1\")");
+        if (!s.given("frames")) d.fail(path, "a streak surface needs frames (\"START:END:COUNT\")");
+        (void)streak_arguments(s);
+        s.format = "pvd";
+        break;
+    }
+  } catch (const InvalidArgument& e) {
+    // The commands' checks name their flags; a job file's keys are spelt with '_'.
+    std::string message = e.what();
+    for (std::size_t at = message.find("--"); at != std::string::npos; at = message.find("--", at)) {
+      message.erase(at, 2);
+      for (std::size_t i = at; i < message.size() && (std::isalnum(static_cast<unsigned char>(message[i])) || message[i] == '-'); ++i)
+        if (message[i] == '-') message[i] = '_';
+    }
+    d.fail(path, message);
+  }
+}
+
+// Applies a spec's options (checked when the job was read) onto a fresh binding of its kind.
+void replay(const SurfaceSpec& spec, KindOptions& options) {
+  for (const auto& [option, text] : spec.options) options.set.set(option, text);
+}
+
+// A path surface's t0 or t1: job files give numbers in the field's time unit.
+double job_time(const std::string& text, const char* key) {
+  try {
+    return resolve_time(text, key, 0, nullptr);
+  } catch (const InvalidArgument&) {
+    throw InvalidArgument(std::string(key) + " must be a number in the field's time unit, got '" +
+                          text + "'");
+  }
 }
 
 std::string member_name(const std::string& base, std::size_t k, std::size_t count) {
@@ -357,15 +462,61 @@ std::uint64_t fnv1a(const std::string& text) {
 
 }  // namespace
 
-const std::set<std::string>& batch_surface_keys() {
-  static const std::set<std::string> keys{
-      "name",     "kind",        "field",     "seed",      "seed_count", "edge",   "steps",
-      "t0",       "t1",          "time_scale", "max_band", "max_vertices", "damping",
-      "tolerance", "integrator", "insertion", "insert", "format",  "release", "frames", "split",
-      "merge",    "release_step", "releases_per_break", "shot_evaluations"};
-  return keys;
+SurfaceJob stream_arguments(const SurfaceSpec& spec) {
+  KindOptions options(SurfaceKind::stream);
+  replay(spec, options);
+  SurfaceJob job = options.stream;
+  job.field = spec.field;
+  job.seed = spec.seed;
+  return job;
 }
 
+PathArgs path_arguments(const SurfaceSpec& spec) {
+  KindOptions options(SurfaceKind::path);
+  replay(spec, options);
+  PathArgs args = options.path;
+  args.field = spec.field;
+  args.seed = spec.seed;
+  args.t0 = job_time(args.t0_text, "t0");
+  args.t1 = job_time(args.t1_text, "t1");
+  return args;
+}
+
+spacetime::StreakOptions streak_arguments(const SurfaceSpec& spec) {
+  KindOptions options(SurfaceKind::streak);
+  replay(spec, options);
+  options.streak.field = spec.field;
+  options.streak.seed = spec.seed;
+  return streak_options(options.set, options.streak);
+}
+
+const char* batch_job_level(SurfaceKind kind, const std::string& option) {
+  if (option == "memory")
+    return "memory is the job's: its surfaces share the memory available (give max_vertices)";
+  if (option == "cache-budget") return "the cache budget is the job's: give it as job.cache_budget";
+  if (option == "device" || option == "device-memory" || option == "device-min-vertices")
+    return "the device is the job's: give it as `batch --device` (and --device-memory)";
+  if (kind == SurfaceKind::path &&
+      (option == "cache-unit" || option == "no-prefetch" || option == "warm"))
+    return "the surfaces of one series share one cache: its unit, prefetch and warm runs are "
+           "`path`'s own (for timing)";
+  if (kind == SurfaceKind::streak && (option == "route" || option == "point"))
+    return "a job builds streak surfaces by the direct route (`streak --route` for the others)";
+  return nullptr;
+}
+
+std::set<std::string> batch_surface_keys(SurfaceKind kind) {
+  std::set<std::string> keys = own_keys();
+  if (kind == SurfaceKind::streak) keys.erase("format");
+  const KindOptions options(kind);
+  for (const OptionSpec& spec : options.set.specs()) {
+    if (spec.group == OptionGroup::baseline || batch_job_level(kind, spec.name)) continue;
+    std::string key = spec.name;
+    std::replace(key.begin(), key.end(), '-', '_');
+    keys.insert(key);
+  }
+  return keys;
+}
 
 BatchJob read_batch_job(const std::filesystem::path& file) {
   const Document d = parse(file);
@@ -376,7 +527,6 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
     if (!top.count(key)) d.fail(key, "unknown table (known: " + known(top) + ")");
 
   SurfaceSpec defaults;
-  defaults.options.max_vertices = default_vertex_budget();
   if (d.root.contains("job")) {
     const json& j = d.root["job"];
     if (!j.is_object()) d.fail("job", "must be a table");
@@ -402,9 +552,11 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
       }
     }
   }
+  Table default_options;
   if (d.root.contains("defaults")) {
-    apply_keys(d, d.root["defaults"], "defaults", defaults, {});
+    default_options = read_table(d, d.root["defaults"], "defaults", defaults, {});
     if (!defaults.name.empty()) d.fail("defaults.name", "a name cannot be a default");
+    check_defaults(d, default_options);
   }
 
   const auto array_of = [&](const char* key) -> std::vector<json> {
@@ -413,83 +565,100 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
     if (!a.is_array()) d.fail(key, "must be an array of tables ([[" + std::string(key) + "]])");
     return a.get<std::vector<json>>();
   };
-  const auto add = [&](SurfaceSpec s, const std::string& path) {
-    // As the commands: `stream` takes 100 steps, `path` runs until its path lines reach t1.
-    if (!s.steps_given) s.options.max_steps = s.kind == SurfaceKind::path ? 1'000'000 : 100;
-    if (!s.seed_count_given && s.kind == SurfaceKind::streak) s.seed_count = 0;
-    check_spec(d, path, s);
-    s.line = d.line_of(path);
-    job.surfaces.push_back(std::move(s));
+  // A family's (or a single surface's) table as one checked spec its members copy.
+  const auto base_of = [&](const json& table, const std::string& path, SurfaceKind kind,
+                           const std::set<std::string>& extra) {
+    SurfaceSpec base = defaults;
+    base.kind = kind;
+    const Table own = read_table(d, table, path, base, extra);
+    if (base.kind == SurfaceKind::streak && table.contains("format"))
+      d.fail(path + ".format", "a streak surface writes NAME.pvd; format is for stream and path surfaces");
+    resolve_options(d, default_options, own, extra, base);
+    base.line = d.line_of(path);
+    return base;
+  };
+  const auto family_name = [&](const SurfaceSpec& base, const std::string& path,
+                               const char* members) {
+    if (base.name.empty()) d.fail(path, std::string("needs a name (members are ") + members + ")");
   };
 
   const auto surfaces = array_of("surface");
   for (std::size_t i = 0; i < surfaces.size(); ++i) {
     const std::string path = "surface[" + std::to_string(i) + "]";
-    SurfaceSpec s = defaults;
-    apply_keys(d, surfaces[i], path, s, {});
-    add(std::move(s), path);
+    SurfaceSpec s = base_of(surfaces[i], path, defaults.kind, {});
+    check_spec(d, path, s);
+    job.surfaces.push_back(std::move(s));
   }
   const auto rakes = array_of("rake");
   for (std::size_t i = 0; i < rakes.size(); ++i) {
     const std::string path = "rake[" + std::to_string(i) + "]";
-    SurfaceSpec base = defaults;
-    apply_keys(d, rakes[i], path, base, {"count", "offset"});
+    SurfaceSpec base = base_of(rakes[i], path, defaults.kind, {"count", "offset"});
     if (!rakes[i].contains("count")) d.fail(path, "needs count (seed lines in the rake)");
     if (!rakes[i].contains("offset")) d.fail(path, "needs offset (from one seed line to the next)");
     const auto count = static_cast<std::size_t>(integer(d, rakes[i]["count"], path + ".count", 1, 100'000));
     const Vec3 offset = vector(d, rakes[i]["offset"], path + ".offset");
-    if (base.name.empty()) d.fail(path, "needs a name (members are NAME-0, NAME-1, ...)");
+    family_name(base, path, "NAME-0, NAME-1, ...");
+    check_spec(d, path, base);
     for (std::size_t k = 0; k < count; ++k) {
       SurfaceSpec s = base;
       s.name = member_name(base.name, k, count);
       s.offset = static_cast<double>(k) * offset;
-      add(std::move(s), path);
+      job.surfaces.push_back(std::move(s));
     }
   }
   const auto grids = array_of("grid");
   for (std::size_t i = 0; i < grids.size(); ++i) {
     const std::string path = "grid[" + std::to_string(i) + "]";
-    SurfaceSpec base = defaults;
-    apply_keys(d, grids[i], path, base, {"count", "offset"});
+    SurfaceSpec base = base_of(grids[i], path, defaults.kind, {"count", "offset"});
     const json& count = grids[i].contains("count") ? grids[i]["count"] : json();
     const json& offset = grids[i].contains("offset") ? grids[i]["offset"] : json();
     if (!count.is_array() || count.size() != 2)
       d.fail(path + ".count", "must be [nu, nv], got " + count.dump());
     if (!offset.is_array() || offset.size() != 2)
       d.fail(path + ".offset", "must be [[u vector], [v vector]], got " + offset.dump());
-    if (base.name.empty()) d.fail(path, "needs a name (members are NAME-i-j)");
+    family_name(base, path, "NAME-i-j");
     const auto nu = static_cast<std::size_t>(integer(d, count[0], path + ".count[0]", 1, 10'000));
     const auto nv = static_cast<std::size_t>(integer(d, count[1], path + ".count[1]", 1, 10'000));
     const Vec3 du = vector(d, offset[0], path + ".offset[0]");
     const Vec3 dv = vector(d, offset[1], path + ".offset[1]");
+    check_spec(d, path, base);
     for (std::size_t u = 0; u < nu; ++u)
       for (std::size_t v = 0; v < nv; ++v) {
         SurfaceSpec s = base;
         s.name = member_name(member_name(base.name, u, nu), v, nv);
         s.offset = static_cast<double>(u) * du + static_cast<double>(v) * dv;
-        add(std::move(s), path);
+        job.surfaces.push_back(std::move(s));
       }
   }
   const auto sweeps = array_of("sweep");
   for (std::size_t i = 0; i < sweeps.size(); ++i) {
     const std::string path = "sweep[" + std::to_string(i) + "]";
-    SurfaceSpec base = defaults;
-    base.kind = SurfaceKind::path;
-    apply_keys(d, sweeps[i], path, base, {"t0_from", "t0_to", "count", "duration"});
-    if (base.kind != SurfaceKind::path) d.fail(path + ".kind", "a sweep over t0 is of path surfaces");
+    if (sweeps[i].is_object() && sweeps[i].contains("kind") && sweeps[i]["kind"] != "path")
+      d.fail(path + ".kind", "a sweep over t0 is of path surfaces");
+    const std::set<std::string> extra{"t0_from", "t0_to", "count", "duration"};
+    SurfaceSpec base = base_of(sweeps[i], path, SurfaceKind::path, extra);
     for (const char* key : {"t0_from", "t0_to", "count", "duration"})
       if (!sweeps[i].contains(key)) d.fail(path, std::string("needs ") + key);
+    for (const char* key : {"t0", "t1"})
+      if (sweeps[i].contains(key))
+        d.fail(path + "." + key, "a sweep's times are t0_from, t0_to and duration");
     const double from = number(d, sweeps[i]["t0_from"], path + ".t0_from");
     const double to = number(d, sweeps[i]["t0_to"], path + ".t0_to");
     const auto count = static_cast<std::size_t>(integer(d, sweeps[i]["count"], path + ".count", 1, 100'000));
     const double duration = positive(d, sweeps[i]["duration"], path + ".duration");
-    if (base.name.empty()) d.fail(path, "needs a name (members are NAME-0, NAME-1, ...)");
+    family_name(base, path, "NAME-0, NAME-1, ...");
+    const auto set_times = [](SurfaceSpec& s, double t0, double t1) {
+      s.options["t0"] = json(t0).dump();
+      s.options["t1"] = json(t1).dump();
+    };
+    set_times(base, from, from + duration);
+    check_spec(d, path, base);
     for (std::size_t k = 0; k < count; ++k) {
       SurfaceSpec s = base;
       s.name = member_name(base.name, k, count);
-      s.t0 = count == 1 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(count - 1);
-      s.t1 = s.t0 + duration;
-      add(std::move(s), path);
+      const double t0 = count == 1 ? from : from + (to - from) * static_cast<double>(k) / static_cast<double>(count - 1);
+      set_times(s, t0, t0 + duration);
+      job.surfaces.push_back(std::move(s));
     }
   }
   if (job.surfaces.empty()) d.fail("(top level)", "names no surface ([[surface]], [[rake]], [[grid]] or [[sweep]])");
@@ -504,16 +673,8 @@ BatchJob read_batch_job(const std::filesystem::path& file) {
     if (!seen.emplace(s.name, s.seed).second)
       throw InvalidArgument(job.file.string() + (s.line ? ":" + std::to_string(s.line) : "") +
                             ": two surfaces are named '" + s.name + "'");
-    const StreamSurfaceOptions& o = s.options;
     expanded.push_back({s.name, to_string(s.kind), s.field, s.seed,
-                        {s.offset.x(), s.offset.y(), s.offset.z()}, s.seed_count, s.t0, s.t1,
-                        s.time_scale, s.max_band, o.edge, o.max_steps,
-                        s.max_vertices_given ? o.max_vertices : 0, o.damping,
-                        o.tolerance, static_cast<int>(o.integrator), static_cast<int>(o.insertion),
-                        s.format, s.release, s.frames, s.split, s.merge, s.release_step,
-                        s.insertion});
-    // Added to jobs later: in the digest only where set, so earlier checkpoints still resume.
-    if (s.releases_per_break != 1) expanded.back().push_back(s.releases_per_break);
+                        {s.offset.x(), s.offset.y(), s.offset.z()}, s.format, s.options});
   }
   job.digest = fnv1a(expanded.dump() + "|" + job.cache_budget);
   return job;

@@ -4,11 +4,14 @@
 /// docs/batch.md for the keys.
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "orthofront/engine/options.h"
+#include "jobs/path_job.h"
+#include "jobs/streak_job.h"
+#include "jobs/stream_job.h"
 #include "orthofront/types.h"
 
 namespace orthofront::cli {
@@ -22,23 +25,22 @@ struct SurfaceSpec {
   std::string field;                ///< as --field takes it
   std::string seed;                 ///< as --seed takes it
   Vec3 offset = Vec3::Zero();       ///< families move the seed curve by this
-  int seed_count = 20;
-  double t0 = 0, t1 = 1;            ///< path
-  double time_scale = 0, max_band = 0;
-  StreamSurfaceOptions options;
   std::string format = "vtp";       ///< vtp, ply or obj (streak surfaces: a .pvd animation)
-  // Streak surfaces, as `streak` takes them.
-  std::string release;              ///< "T0:T1"
-  std::string frames;               ///< "START:END:COUNT" or "t1,t2,..."
-  double split = 1.5, merge = 0.5, release_step = 0;
-  int releases_per_break = 1;
-  std::string insertion_key = "insertion";  ///< the key it was given under (streak: insert)
-  std::string insertion;            ///< as given (stream/path: streamline|cubic|linear; streak: exact|interpolate)
-  bool steps_given = false;
-  bool seed_count_given = false;    ///< else 20 (stream, path) or derived from ℓ (streak), as the commands
-  bool max_vertices_given = false;  ///< else the memory available decides (not part of the digest)         ///< else stream surfaces take `stream`'s 100, path ones run to t1
+  /// The kind's options the job gives (the surface's own keys over [defaults]), by the option's
+  /// name ("seed-count"), as the text the option parses. Each was checked against the kind's
+  /// schema (jobs/*_job.h) when the file was read; what is not here takes the command's default.
+  std::map<std::string, std::string> options;
   int line = 0;                     ///< where the job file defines it (0: unknown)
+
+  bool given(const std::string& option) const { return options.count(option) > 0; }
 };
+
+/// The arguments of a stream surface's job: `stream`'s, with the spec's options applied.
+jobs::SurfaceJob stream_arguments(const SurfaceSpec& spec);
+/// A path surface's: `path`'s (t0 and t1 resolved: job files give them as numbers).
+jobs::PathArgs path_arguments(const SurfaceSpec& spec);
+/// A streak surface's library options, as `streak` makes them from its flags.
+spacetime::StreakOptions streak_arguments(const SurfaceSpec& spec);
 
 struct BatchJob {
   std::filesystem::path file;
@@ -59,8 +61,13 @@ BatchJob read_batch_job(const std::filesystem::path& file);
 
 const char* to_string(SurfaceKind kind);
 
-/// The keys a surface of a job file takes, besides a family's own: the kinds' option names
-/// with '_' for '-' (jobs/*_job.h), and the job's own name, kind, field, seed and format.
-const std::set<std::string>& batch_surface_keys();
+/// The keys a surface of `kind` takes in a job file, besides a family's own: the kind's options
+/// (jobs/*_job.h) with '_' for '-', less those a job sets for all its surfaces (batch_job_level),
+/// and the job's own name, kind, field, seed and format. Benchmarks' baselines are accepted but
+/// not listed.
+std::set<std::string> batch_surface_keys(SurfaceKind kind);
+
+/// Why a kind's option is not a surface key (it belongs to the whole job), or null when it is one.
+const char* batch_job_level(SurfaceKind kind, const std::string& option);
 
 }  // namespace orthofront::cli

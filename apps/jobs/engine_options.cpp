@@ -11,12 +11,13 @@ namespace orthofront::jobs {
 
 void add_engine_options(OptionSet& set, StreamSurfaceOptions& o) {
   using G = OptionGroup;
-  set.real("edge", o.edge, "Target edge length ℓ (world units)").unit("world units");
-  set.integer("steps", o.max_steps, "Number of front steps").group(G::budget);
+  set.real("edge", o.edge, "Target edge length ℓ (world units)").positive().unit("world units");
+  set.integer("steps", o.max_steps, "Number of front steps").at_least(0).group(G::budget);
   o.max_vertices = default_vertex_budget();
   set.count("max-vertices", o.max_vertices,
             "Stop once the mesh has this many vertices (default: what half of --memory holds at "
             "~300 B a vertex, at most 50 M; the figure shown is for the memory available now)")
+      .at_least(2)
       .group(G::budget);
   set.real("time-budget", o.time_budget_seconds, "Stop after this many seconds")
       .positive()
@@ -29,8 +30,9 @@ void add_engine_options(OptionSet& set, StreamSurfaceOptions& o) {
   set.choice<MuMode>("mu-mode", o.mu_mode, {{"damping", MuMode::damping}, {"paper", MuMode::paper}},
                      "damping (unit-invariant, default) or paper (unit kernel, mu+)");
   set.real("damping", o.damping,
-           "Share kappa of the orthogonality error removed per front step (damping mode)");
-  set.real("mu", o.mu, "mu+ of paper mode");
+           "Share kappa of the orthogonality error removed per front step (damping mode)")
+      .between(0.0, 1.0);
+  set.real("mu", o.mu, "mu+ of paper mode").at_least(0);
   set.choice<NegativeAlpha>("negative-alpha", o.negative_alpha,
                             {{"clamp", NegativeAlpha::clamp}, {"keep", NegativeAlpha::keep}},
                             "clamp (default) or keep (may fold)");
@@ -86,9 +88,11 @@ void add_engine_options(OptionSet& set, StreamSurfaceOptions& o) {
   set.choice<IntegratorKind>("integrator", o.integrator,
                              {{"dopri5", IntegratorKind::dopri5}, {"rk4", IntegratorKind::rk4}},
                              "dopri5 (adaptive, default) or rk4");
-  set.real("tolerance", o.tolerance, "Integrator tolerance (relative; absolute = tol * edge)");
+  set.real("tolerance", o.tolerance, "Integrator tolerance (relative; absolute = tol * edge)")
+      .positive();
   set.real("timeline-step", o.timeline_step,
-           "Time step of the timeline baseline (0: edge / median seed speed)");
+           "Time step of the timeline baseline (0: edge / median seed speed)")
+      .at_least(0);
 }
 
 void add_memory_option(OptionSet& set, MemoryLimits& limits) {

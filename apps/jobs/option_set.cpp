@@ -114,6 +114,19 @@ OptionSet::Adder& OptionSet::Adder::range(double lo, double hi) {
   };
   return *this;
 }
+OptionSet::Adder& OptionSet::Adder::between(double lo, double hi) {
+  OptionSpec& s = spec();
+  auto parse = s.assign;
+  auto value = s.number;
+  s.assign = [parse, value, lo, hi](const std::string& text) {
+    parse(text);
+    const double v = value();
+    if (!(v > lo && v < hi))
+      throw InvalidArgument(text + " is not strictly between " + number_text(lo) + " and " +
+                            number_text(hi));
+  };
+  return *this;
+}
 OptionSet::Adder& OptionSet::Adder::at_least(double lo) { return range(lo, 1e308); }
 OptionSet::Adder& OptionSet::Adder::positive() {
   OptionSpec& s = spec();

@@ -57,6 +57,8 @@ class OptionSet {
     Adder& at_least(double lo);
     Adder& positive();          ///< > 0
     Adder& range(double lo, double hi);
+    /// Numbers: strictly between lo and hi.
+    Adder& between(double lo, double hi);
     /// Text: one of these words.
     Adder& one_of(std::vector<std::string> words);
 

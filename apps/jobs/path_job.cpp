@@ -22,7 +22,8 @@ void add_path_options(OptionSet& set, PathArgs& args) {
       .group(G::input);
   set.real("time-scale", args.time_scale,
            "c of the lifted time coordinate tau = c (t - t0) (length per time unit); 0: median "
-           "seed speed at t0");
+           "seed speed at t0")
+      .at_least(0);
   set.text("cache-budget", args.budget,
            "Memory for resident and in-flight data (e.g. 256MiB, 2GiB); never exceeded "
            "(default: a quarter of --memory, now " +

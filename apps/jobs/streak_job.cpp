@@ -28,7 +28,7 @@ void add_streak_options(OptionSet& set, StreakArgs& args) {
            "of --point at all times as one surface in (x, y, t) (.vtp, .ply, .obj)")
       .one_of({"direct", "streak-line", "spacetime"});
   set.text("point", args.point, "--route spacetime: the release point x,y").group(G::input);
-  set.real("edge", args.edge, "Target edge length").unit("world units");
+  set.real("edge", args.edge, "Target edge length").positive().unit("world units");
   set.text("mesh", args.mesh,
            "remeshed: a triangle mesh whose vertices keep their release labels (s, tau), adapted "
            "by split, collapse and flip so its size follows the surface's area; rows: rows of "
@@ -36,6 +36,7 @@ void add_streak_options(OptionSet& set, StreakArgs& args) {
       .one_of({"remeshed", "rows"});
   set.real("collapse", args.collapse,
            "--mesh remeshed: collapse edges shorter than this many edge lengths")
+      .positive()
       .unit("edge lengths");
   set.real("prune", args.prune,
            "--mesh remeshed: remove filaments of dye narrower than this many edge lengths (a mesh "
@@ -44,20 +45,25 @@ void add_streak_options(OptionSet& set, StreakArgs& args) {
       .at_least(0)
       .unit("edge lengths");
   set.real("split", args.split, "Split edges longer than this many edge lengths")
+      .positive()
       .unit("edge lengths");
   set.real("merge", args.merge,
            "--mesh rows: remove particles whose edges are both shorter than this many edge "
            "lengths")
+      .positive()
       .unit("edge lengths");
   set.real("release-step", args.release_step,
            "Time between released rows (0: edge over the largest speed on the seed; --mesh rows: "
-           "over the median speed)");
+           "over the median speed)")
+      .at_least(0);
   set.integer("releases-per-break", args.releases_per_break,
               "--mesh rows: rows released per refinement; the rows released between move from "
               "their release times to the next break in one call")
+      .at_least(1)
       .group(G::performance);
   set.integer("seed-count", args.seed_count,
-              "Particles per row at release (0: seed length / edge + 1)");
+              "Particles per row at release (0: seed length / edge + 1)")
+      .at_least(0);
   set.text("insert", args.insertion,
            "How inserted particles are placed: exact (released at their own (s, tau) and "
            "integrated; a streamed series then reads earlier steps again) or interpolate (cubic; "
@@ -87,6 +93,7 @@ void add_streak_options(OptionSet& set, StreakArgs& args) {
       .group(G::budget);
   set.count("max-vertices", args.max_vertices,
             "Stop when the particles exceed this (default: from --memory)")
+      .at_least(2)
       .group(G::budget)
       .derived_default();
   add_memory_option(set, args.limits);

@@ -430,11 +430,31 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   m = refused("range.json",
               "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [\n  {\"name\": \"a\", "
               "\"seed\": \"line:0,0,0:1,0,0\"},\n  {\"name\": \"b\",\n   \"edge\": -1}]}");
-  CHECK(m.find("range.json:5: surface[1].edge: must be a number > 0") != std::string::npos);
+  CHECK(m.find("range.json:5: surface[1].edge: -1 is not a positive number") != std::string::npos);
   m = refused("budget.toml",
               "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\n"
               "seed = \"line:0,0,0:1,0,0\"\nshot_evaluations = -5\n");
-  CHECK(m.find("budget.toml:6: surface[0].shot_evaluations: must lie in [0, 1000000000]") !=
+  CHECK(m.find("budget.toml:6: surface[0].shot_evaluations: -5 is below 0") != std::string::npos);
+  // Each kind takes its own options: a streak surface's keys are not a stream surface's.
+  m = refused("kinds.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nkind = \"stream\"\n"
+              "seed = \"line:0,0,0:1,0,0\"\nflat_split = 0.1\n");
+  CHECK(m.find("kinds.toml:7: surface[0].flat_split: flat_split is a streak surface's key, not a "
+               "stream surface's") != std::string::npos);
+  // What the whole job shares is not a surface's.
+  m = refused("memory.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\n"
+              "seed = \"line:0,0,0:1,0,0\"\ncache_budget = \"1GiB\"\n");
+  CHECK(m.find("memory.toml:6: surface[0].cache_budget: the cache budget is the job's") !=
+        std::string::npos);
+  m = refused("flag.toml",
+              "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nkind = \"stream\"\n"
+              "seed = \"line:0,0,0:1,0,0\"\nno_rip = 1\n");
+  CHECK(m.find("flag.toml:7: surface[0].no_rip: must be true or false, got 1") != std::string::npos);
+  m = refused("time.toml",
+              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\n"
+              "seed = \"line:0.3,0.2,0:0.3,0.8,0\"\nt1 = \"30 days\"\n");
+  CHECK(m.find("time.toml:3: surface[0]: t1 must be a number in the field's time unit, got '30 days'") !=
         std::string::npos);
   m = refused("bad.json", "{\"job\": {\"field\": \"saddle3d\"},\n \"surface\": [{\"name\": }]}");
   CHECK(m.find("bad.json:2: not valid JSON") != std::string::npos);
@@ -453,8 +473,8 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
   m = refused("insert.toml",
               "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nseed = "
               "\"line:0,0,0:1,0,0\"\ninsert = \"cubic\"\n");
-  CHECK(m.find("insert.toml:6: surface[0].insert: insert is a streak surface's key") !=
-        std::string::npos);
+  CHECK(m.find("insert.toml:6: surface[0].insert: insert is a streak surface's key, not a path "
+               "surface's") != std::string::npos);
   m = refused("missing.toml.nothere", "");
   CHECK(m.find("expected .toml or .json") != std::string::npos);
 }
@@ -487,22 +507,22 @@ TEST_CASE("batch: a surface's seed-shot budget is the one `stream --shot-evaluat
 TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte for byte",
           "[batch]") {
   TempDir dir("batch-streak");
-  // As `streak --mesh rows` (batch jobs build row meshes) defaults, and with three releases a
-  // break (`--releases-per-break 3`).
+  // As `streak` defaults (a remeshed mesh), and as `streak --mesh rows --releases-per-break 3`.
   for (const int k : {1, 3}) {
     INFO(k << " releases per break");
     const std::string tag = std::to_string(k);
     write_text(dir / ("job" + tag + ".toml"),
                "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"dye\"\nkind = \"streak\"\n"
                "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:2\"\nframes = \"0.5:3:4\"\n"
-               "edge = 0.03\n" + (k == 1 ? std::string() : "releases_per_break = " + tag + "\n"));
+               "edge = 0.03\n" + (k == 1 ? std::string() : "mesh = \"rows\"\nreleases_per_break = " + tag + "\n"));
     const fs::path out = dir / ("out" + tag), alone = dir / ("alone" + tag);
     const auto r = run("batch " + quoted(dir / ("job" + tag + ".toml")) + " --out " + quoted(out) + " --quiet");
     INFO(r.output);
     REQUIRE(r.status == 0);
     fs::create_directories(alone);
     const auto a = run("streak --field double-gyre --seed line:0.3,0.3,0:0.3,0.45,0 --release "
-                       "0:2 --frames 0.5:3:4 --edge 0.03 --mesh rows --quiet --releases-per-break " + tag + " --out " +
+                       "0:2 --frames 0.5:3:4 --edge 0.03 --quiet" +
+                       (k == 1 ? std::string() : " --mesh rows --releases-per-break " + tag) + " --out " +
                        quoted(alone / "dye.pvd"));
     INFO(a.output);
     REQUIRE(a.status == 0);
@@ -539,7 +559,7 @@ TEST_CASE("batch: a streak surface of a job writes the frames of `streak`, byte 
              "releases_per_break = 0\n");
   const auto zero = run("batch " + quoted(dir / "zero.toml") + " --out " + quoted(dir / "zero"));
   CHECK(zero.status == 2);
-  CHECK(zero.output.find("zero.toml:9: surface[0].releases_per_break: must be a whole number >= 1, got 0") !=
+  CHECK(zero.output.find("zero.toml:9: surface[0].releases_per_break: 0 is below 1") !=
         std::string::npos);
 }
 
@@ -606,4 +626,29 @@ TEST_CASE("batch --device: the surfaces of a pass share one bulk backend and giv
   CHECK(!fs::exists(dir / "calls"));
   // The pass says how many backend calls could run at once (the CPU backend: one).
   CHECK(pass["device"]["concurrent_calls"] == 1);
+}
+
+TEST_CASE("batch: on real data a surface without edge takes the grid cell size as `stream` does",
+          "[batch][realdata]") {
+  const fs::path data = ORTHOFRONT_DATASETS_DIR;
+  const fs::path tornado = data / "tornado" / "1.vec";
+  if (!fs::exists(tornado)) {
+    WARN("skipped: " << tornado.string() << " not found");
+    return;
+  }
+  TempDir dir("batch-tornado");
+  write_text(dir / "job.toml", "[job]\nfield = " + nlohmann::json(tornado.string()).dump() +
+                                   "\n[[surface]]\nname = \"t\"\nkind = \"stream\"\n"
+                                   "seed = \"line:30,24,10:30,24,30\"\nsteps = 60\n");
+  const auto r = run("batch " + quoted(dir / "job.toml") + " --out " + quoted(dir / "out") +
+                     " --quiet");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  REQUIRE(run("stream --field " + quoted(tornado) +
+              " --seed line:30,24,10:30,24,30 --steps 60 --quiet --out " + quoted(dir / "t.vtp"))
+              .status == 0);
+  CHECK(read_text(dir / "out" / "t.vtp") == read_text(dir / "t.vtp"));
+  const auto report = nlohmann::json::parse(read_text(dir / "out" / "t.json"));
+  CHECK(report["edge_source"] == "grid cell");
+  CHECK(report["edge"] == 1.0);
 }

@@ -4,6 +4,8 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <set>
 #include <string>
@@ -149,30 +151,137 @@ TEST_CASE("option schema: choices ignore case, switches set their member either 
   CHECK(set.find("tolerance")->current() == "1e-09");
 }
 
-TEST_CASE("option schema: a job file's surface keys are the kinds' option names", "[apps][options]") {
-  // The union of the three kinds' options, as job files spell them ('_' for '-').
-  std::set<std::string> options;
-  jobs::SurfaceJob job;
-  jobs::MemoryLimits limits;
-  jobs::PathArgs path;
-  jobs::StreakArgs streak;
-  jobs::OptionSet stream_set, path_set, streak_set;
-  jobs::add_stream_options(stream_set, job, limits);
-  jobs::add_path_options(path_set, path);
-  jobs::add_streak_options(streak_set, streak);
-  for (const jobs::OptionSet* set : {&stream_set, &path_set, &streak_set})
-    for (const jobs::OptionSpec& spec : set->specs()) {
-      std::string key = spec.name;
-      std::replace(key.begin(), key.end(), '-', '_');
-      options.insert(key);
-    }
+namespace {
+
+std::string job_key(std::string option) {
+  std::replace(option.begin(), option.end(), '-', '_');
+  return option;
+}
+
+void write_job(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+}
+
+}  // namespace
+
+TEST_CASE("option schema: a job file's surface keys are each kind's options, with its defaults",
+          "[apps][options]") {
   const std::set<std::string> own{"name", "kind", "field", "seed", "format"};
-  for (const std::string& key : cli::batch_surface_keys()) {
-    INFO(key);
-    CHECK((own.count(key) == 1 || options.count(key) == 1));
+  for (const cli::SurfaceKind kind :
+       {cli::SurfaceKind::stream, cli::SurfaceKind::path, cli::SurfaceKind::streak}) {
+    INFO(cli::to_string(kind));
+    jobs::SurfaceJob job;
+    jobs::MemoryLimits limits;
+    jobs::PathArgs path;
+    jobs::StreakArgs streak;
+    jobs::OptionSet set;
+    if (kind == cli::SurfaceKind::stream) jobs::add_stream_options(set, job, limits);
+    if (kind == cli::SurfaceKind::path) jobs::add_path_options(set, path);
+    if (kind == cli::SurfaceKind::streak) jobs::add_streak_options(set, streak);
+    const std::set<std::string> keys = cli::batch_surface_keys(kind);
+    // Every option shown to users is a key, or the job's own with the reason why.
+    std::size_t options = 0;
+    for (const jobs::OptionSpec& spec : set.specs()) {
+      INFO(spec.name);
+      if (spec.group == jobs::OptionGroup::baseline) continue;
+      const char* job_level = cli::batch_job_level(kind, spec.name);
+      CHECK(keys.count(job_key(spec.name)) == (job_level ? 0u : 1u));
+      options += job_level ? 0 : 1;
+    }
+    // Nothing else but the job's own keys (a streak surface's format is its .pvd).
+    std::size_t others = 0;
+    for (const std::string& key : keys) {
+      INFO(key);
+      if (own.count(key)) {
+        ++others;
+        continue;
+      }
+      std::string option = key;
+      std::replace(option.begin(), option.end(), '_', '-');
+      CHECK(set.find(option) != nullptr);
+    }
+    CHECK(others == (kind == cli::SurfaceKind::streak ? 4u : 5u));
+    CHECK(keys.size() == options + others);
   }
-  // Each kind's spelling: streak surfaces take insert, the others insertion.
-  CHECK(streak_set.find("insert") != nullptr);
-  CHECK(stream_set.find("insertion") != nullptr);
-  CHECK(cli::batch_surface_keys().count("insert") == 1);
+  CHECK(cli::batch_surface_keys(cli::SurfaceKind::streak).count("insert") == 1);
+  CHECK(cli::batch_surface_keys(cli::SurfaceKind::stream).count("insertion") == 1);
+  CHECK(cli::batch_surface_keys(cli::SurfaceKind::streak).count("flat_split") == 1);
+  CHECK(cli::batch_surface_keys(cli::SurfaceKind::path).count("band_ramp") == 1);
+}
+
+TEST_CASE("option schema: a job file's surface without keys takes the command's defaults, and a "
+          "key the flag's value",
+          "[apps][options]") {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "orthofront-job-keys";
+  std::filesystem::create_directories(dir);
+  write_job(dir / "job.toml",
+            "[job]\nfield = \"double-gyre\"\n"
+            "[[surface]]\nname = \"a\"\nkind = \"stream\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "[[surface]]\nname = \"b\"\nkind = \"path\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "[[surface]]\nname = \"c\"\nkind = \"streak\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "release = \"0:1\"\nframes = \"1\"\n"
+            "[[surface]]\nname = \"d\"\nkind = \"stream\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "gap_distance = 3\nno_rip = true\nmethod = \"timeline\"\n"
+            "[[surface]]\nname = \"e\"\nkind = \"path\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "band_ramp = 0.25\nt0 = 0.5\nt1 = 2\n"
+            "[[surface]]\nname = \"f\"\nkind = \"streak\"\nseed = \"line:0,0,0:1,0,0\"\n"
+            "release = \"0:1\"\nframes = \"1\"\nflat_split = 0.25\ncollapse = 0.5\n");
+  const cli::BatchJob job = cli::read_batch_job(dir / "job.toml");
+  REQUIRE(job.surfaces.size() == 6);
+
+  // Untouched: every option as the command's set shows its default.
+  const auto same_defaults = [](const jobs::OptionSet& fresh, const jobs::OptionSet& replayed) {
+    for (const jobs::OptionSpec& spec : fresh.specs()) {
+      INFO(spec.name);
+      CHECK(replayed.find(spec.name)->current() == spec.current());
+    }
+  };
+  {
+    const jobs::SurfaceJob a = cli::stream_arguments(job.surfaces[0]);
+    jobs::SurfaceJob fresh_job, copy = a;
+    jobs::MemoryLimits l1, l2;
+    jobs::OptionSet fresh, replayed;
+    jobs::add_stream_options(fresh, fresh_job, l1);
+    jobs::add_stream_options(replayed, copy, l2);
+    same_defaults(fresh, replayed);
+  }
+  {
+    const jobs::PathArgs b = cli::path_arguments(job.surfaces[1]);
+    jobs::PathArgs fresh_args, copy = b;
+    jobs::OptionSet fresh, replayed;
+    jobs::add_path_options(fresh, fresh_args);
+    jobs::add_path_options(replayed, copy);
+    same_defaults(fresh, replayed);
+  }
+  {
+    jobs::StreakArgs args;
+    args.release = "0:1";
+    args.frames = "1";
+    jobs::OptionSet set;
+    jobs::add_streak_options(set, args);
+    set.mark_given("release");
+    const spacetime::StreakOptions expected = jobs::streak_options(set, args);
+    const spacetime::StreakOptions c = cli::streak_arguments(job.surfaces[2]);
+    CHECK(c.mesh == expected.mesh);
+    CHECK(c.edge == expected.edge);
+    CHECK(c.flat_split == expected.flat_split);
+    CHECK(c.prune == expected.prune);
+    CHECK(c.collapse == expected.collapse);
+    CHECK(c.seed_count == expected.seed_count);
+    CHECK(c.insertion == expected.insertion);
+  }
+  // Given: the member the flag sets.
+  const jobs::SurfaceJob d = cli::stream_arguments(job.surfaces[3]);
+  CHECK(d.options.gap_distance == 3);
+  CHECK_FALSE(d.options.rip);
+  CHECK(d.options.method == Method::timeline);
+  const jobs::PathArgs e = cli::path_arguments(job.surfaces[4]);
+  CHECK(e.band_ramp == 0.25);
+  CHECK(e.t0 == 0.5);
+  CHECK(e.t1 == 2);
+  const spacetime::StreakOptions f = cli::streak_arguments(job.surfaces[5]);
+  CHECK(f.flat_split == 0.25);
+  CHECK(f.collapse == 0.5);
+  std::filesystem::remove_all(dir);
 }
