@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -22,18 +23,6 @@
 namespace orthofront::cli {
 
 using namespace jobs;
-
-const char* to_string(SurfaceKind kind) {
-  switch (kind) {
-    case SurfaceKind::stream:
-      return "stream";
-    case SurfaceKind::path:
-      return "path";
-    case SurfaceKind::streak:
-      return "streak";
-  }
-  return "?";
-}
 
 namespace {
 
@@ -203,40 +192,11 @@ std::string known(const std::set<std::string>& keys) {
   return out;
 }
 
-constexpr SurfaceKind kKinds[] = {SurfaceKind::stream, SurfaceKind::path, SurfaceKind::streak};
-
 // The job's own keys of a surface (the kinds' options are the rest).
 const std::set<std::string>& own_keys() {
   static const std::set<std::string> keys{"name", "kind", "field", "seed", "format"};
   return keys;
 }
-
-// A surface kind's option schema bound to arguments of its own: where a job file's keys meet the
-// kinds' options (a new kind adds its case here).
-class KindOptions {
- public:
-  explicit KindOptions(SurfaceKind kind) {
-    switch (kind) {
-      case SurfaceKind::stream:
-        add_stream_options(set, stream, stream_limits);
-        break;
-      case SurfaceKind::path:
-        add_path_options(set, path);
-        break;
-      case SurfaceKind::streak:
-        add_streak_options(set, streak);
-        break;
-    }
-  }
-  KindOptions(const KindOptions&) = delete;
-  KindOptions& operator=(const KindOptions&) = delete;
-
-  OptionSet set;
-  SurfaceJob stream;
-  MemoryLimits stream_limits;
-  PathArgs path;
-  StreakArgs streak;
-};
 
 // A job file's key as the option it names: '_' for '-'; a streak surface's insert was once
 // spelt insertion, which it still reads.
@@ -314,11 +274,9 @@ Table read_table(const Document& d, const json& table, const std::string& path, 
           spec.name[0] == '.')
         d.fail(at, "must be a plain file name (no spaces, slashes or leading dot), got " + v.dump());
     } else if (key == "kind") {
-      const std::string k = text(d, v, at);
-      if (k == "stream") spec.kind = SurfaceKind::stream;
-      else if (k == "path") spec.kind = SurfaceKind::path;
-      else if (k == "streak") spec.kind = SurfaceKind::streak;
-      else d.fail(at, "must be \"stream\", \"path\" or \"streak\", got " + v.dump());
+      const std::optional<SurfaceKind> kind = parse_surface_kind(text(d, v, at));
+      if (!kind) d.fail(at, "must be \"stream\", \"path\" or \"streak\", got " + v.dump());
+      spec.kind = *kind;
     } else if (key == "field") {
       spec.field = text(d, v, at);
     } else if (key == "seed") {
@@ -340,7 +298,7 @@ void check_defaults(const Document& d, const Table& defaults) {
   for (const auto& [key, given] : defaults) {
     bool taken = false;
     const char* job_level = nullptr;
-    for (const SurfaceKind kind : kKinds) {
+    for (const SurfaceKind kind : kSurfaceKinds) {
       KindOptions options(kind);
       const std::string option = option_of(kind, key);
       if (!takes(kind, options, option)) {
@@ -353,7 +311,7 @@ void check_defaults(const Document& d, const Table& defaults) {
     if (taken) continue;
     if (job_level) d.fail(given.at, job_level);
     std::set<std::string> all;
-    for (const SurfaceKind kind : kKinds) {
+    for (const SurfaceKind kind : kSurfaceKinds) {
       const std::set<std::string> keys = batch_surface_keys(kind);
       all.insert(keys.begin(), keys.end());
     }
@@ -376,7 +334,7 @@ void resolve_options(const Document& d, const Table& defaults,
     const std::string option = option_of(spec.kind, key);
     if (const char* job_level = batch_job_level(spec.kind, option)) d.fail(given.at, job_level);
     if (options.set.find(option) == nullptr) {
-      for (const SurfaceKind other : kKinds) {
+      for (const SurfaceKind other : kSurfaceKinds) {
         KindOptions theirs(other);
         if (takes(other, theirs, option_of(other, key)))
           d.fail(given.at, key + " is a " + to_string(other) + " surface's key, not a " + kind +

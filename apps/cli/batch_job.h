@@ -9,14 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "jobs/path_job.h"
-#include "jobs/streak_job.h"
-#include "jobs/stream_job.h"
+#include "jobs/surface_kind.h"
 #include "orthofront/types.h"
 
 namespace orthofront::cli {
 
-enum class SurfaceKind { stream, path, streak };
+using jobs::SurfaceKind;
+using jobs::to_string;
 
 /// One surface of a job, with every default applied and every family expanded.
 struct SurfaceSpec {
@@ -58,8 +57,6 @@ struct BatchJob {
 /// (for example "job.toml:12: surface[2].edge: must be a number > 0, got -1"); io::IoError for
 /// a file that cannot be read.
 BatchJob read_batch_job(const std::filesystem::path& file);
-
-const char* to_string(SurfaceKind kind);
 
 /// The keys a surface of `kind` takes in a job file, besides a family's own: the kind's options
 /// (jobs/*_job.h) with '_' for '-', less those a job sets for all its surfaces (batch_job_level),

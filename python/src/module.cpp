@@ -18,6 +18,7 @@
 #include "jobs/streak_job.h"
 #include "jobs/streak_report.h"
 #include "jobs/stream_job.h"
+#include "jobs/surface_kind.h"
 #include "keyword_options.h"
 #include "numpy_grid.h"
 #include "orthofront/error.h"
@@ -120,24 +121,10 @@ py::dict surface_dict(const Mesh& mesh, const nlohmann::json& report) {
 /// streak), as option_schema lists them: the Python package builds their signatures and
 /// docstrings from it.
 py::list keyword_schema(const std::string& kind) {
-  jobs::OptionSet options;
-  if (kind == "stream") {
-    jobs::SurfaceJob job;
-    jobs::MemoryLimits limits;
-    jobs::add_stream_options(options, job, limits);
-    return option_schema(options);
-  }
-  if (kind == "path") {
-    jobs::PathArgs args;
-    jobs::add_path_options(options, args);
-    return option_schema(options);
-  }
-  if (kind == "streak") {
-    jobs::StreakArgs args;
-    jobs::add_streak_options(options, args);
-    return option_schema(options);
-  }
-  throw py::value_error("kind must be stream, path or streak, got '" + kind + "'");
+  const std::optional<jobs::SurfaceKind> known = jobs::parse_surface_kind(kind);
+  if (!known) throw py::value_error("kind must be stream, path or streak, got '" + kind + "'");
+  const jobs::KindOptions options(*known);
+  return option_schema(options.set);
 }
 
 py::dict stream_surface(const py::object& field_in, const py::object& seed_in, bool closed,
