@@ -330,8 +330,11 @@ void resolve_options(const Document& d, const Table& defaults,
     if (own.count(key) == 0 && takes(spec.kind, options, option))
       spec.options[option] = apply_option(d, options, option, given.value, given.at);
   }
+  std::map<std::string, std::string> keys_of;  // option -> the own key that gave it
   for (const auto& [key, given] : own) {
     const std::string option = option_of(spec.kind, key);
+    if (const auto [it, added] = keys_of.emplace(option, key); !added)
+      d.fail(given.at, key + " and " + it->second + " are one key; give one of them");
     if (const char* job_level = batch_job_level(spec.kind, option)) d.fail(given.at, job_level);
     if (options.set.find(option) == nullptr) {
       for (const SurfaceKind other : kSurfaceKinds) {

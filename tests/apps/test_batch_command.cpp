@@ -451,6 +451,12 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
               "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nkind = \"stream\"\n"
               "seed = \"line:0,0,0:1,0,0\"\nno_rip = 1\n");
   CHECK(m.find("flag.toml:7: surface[0].no_rip: must be true or false, got 1") != std::string::npos);
+  m = refused("both.toml",
+              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\nkind = \"streak\"\n"
+              "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:1\"\nframes = \"1\"\n"
+              "insert = \"exact\"\ninsertion = \"interpolate\"\n");
+  CHECK(m.find("both.toml:10: surface[0].insertion: insertion and insert are one key") !=
+        std::string::npos);
   m = refused("time.toml",
               "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\n"
               "seed = \"line:0.3,0.2,0:0.3,0.8,0\"\nt1 = \"30 days\"\n");
