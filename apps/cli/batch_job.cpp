@@ -207,9 +207,9 @@ std::string option_of(SurfaceKind kind, const std::string& key) {
   return option;
 }
 
-// Whether `kind` takes `option` as a surface key.
-bool takes(SurfaceKind kind, const KindOptions& options, const std::string& option) {
-  return options.set.find(option) != nullptr && batch_job_level(kind, option) == nullptr;
+// Whether the kind of `options` takes `option` as a surface key.
+bool takes(const KindOptions& options, const std::string& option) {
+  return options.set.find(option) != nullptr && batch_job_level(options.kind, option) == nullptr;
 }
 
 // The text option `spec` parses for a job file's value; InvalidArgument saying why there is none.
@@ -295,13 +295,15 @@ Table read_table(const Document& d, const json& table, const std::string& path, 
 // Checks the options of [defaults]: each must be a surface key of some kind, with a value that
 // kind takes.
 void check_defaults(const Document& d, const Table& defaults) {
+  KindOptions stream(SurfaceKind::stream), path(SurfaceKind::path), streak(SurfaceKind::streak);
   for (const auto& [key, given] : defaults) {
     bool taken = false;
     const char* job_level = nullptr;
-    for (const SurfaceKind kind : kSurfaceKinds) {
-      KindOptions options(kind);
+    for (KindOptions* kind_options : {&stream, &path, &streak}) {
+      KindOptions& options = *kind_options;
+      const SurfaceKind kind = options.kind;
       const std::string option = option_of(kind, key);
-      if (!takes(kind, options, option)) {
+      if (!takes(options, option)) {
         if (!job_level) job_level = batch_job_level(kind, option);
         continue;
       }
@@ -327,7 +329,7 @@ void resolve_options(const Document& d, const Table& defaults,
   const std::string kind = to_string(spec.kind);
   for (const auto& [key, given] : defaults) {
     const std::string option = option_of(spec.kind, key);
-    if (own.count(key) == 0 && takes(spec.kind, options, option))
+    if (own.count(key) == 0 && takes(options, option))
       spec.options[option] = apply_option(d, options, option, given.value, given.at);
   }
   std::map<std::string, std::string> keys_of;  // option -> the own key that gave it
@@ -339,7 +341,7 @@ void resolve_options(const Document& d, const Table& defaults,
     if (options.set.find(option) == nullptr) {
       for (const SurfaceKind other : kSurfaceKinds) {
         KindOptions theirs(other);
-        if (takes(other, theirs, option_of(other, key)))
+        if (takes(theirs, option_of(other, key)))
           d.fail(given.at, key + " is a " + to_string(other) + " surface's key, not a " + kind +
                                " surface's");
       }
@@ -351,11 +353,30 @@ void resolve_options(const Document& d, const Table& defaults,
   }
 }
 
+// A command's message in a job file's spelling: --seed-count becomes seed_count.
+std::string job_key_spelling(std::string message) {
+  for (std::size_t at = message.find("--"); at != std::string::npos; at = message.find("--", at)) {
+    message.erase(at, 2);
+    for (std::size_t i = at; i < message.size() &&
+                             (std::isalnum(static_cast<unsigned char>(message[i])) || message[i] == '-');
+         ++i)
+      if (message[i] == '-') message[i] = '_';
+  }
+  return message;
+}
+
 // Checks a finished spec (after defaults and the family's own keys).
 void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
   if (s.name.empty()) d.fail(path, "needs a name");
   if (s.field.empty()) d.fail(path, "needs a field (here or as job.field)");
   if (s.seed.empty()) d.fail(path, "needs a seed");
+  if (s.kind == SurfaceKind::streak) {
+    if (!s.given("release")) d.fail(path, "a streak surface needs release (\"T0:T1\")");
+    if (!s.given("frames")) d.fail(path, "a streak surface needs frames (\"START:END:COUNT\")");
+    s.format = "pvd";
+  }
+  // The commands' own checks of the arguments (they name flags).
+  std::optional<PathArgs> path_args;
   try {
     switch (s.kind) {
       case SurfaceKind::stream: {
@@ -363,30 +384,19 @@ void check_spec(const Document& d, const std::string& path, SurfaceSpec& s) {
         check_seed_count(job.seed_count, job.options.max_vertices);
         break;
       }
-      case SurfaceKind::path: {
-        const PathArgs args = path_arguments(s);
-        check_seed_count(args.seed_count, args.options.max_vertices);
-        if (!(args.t1 > args.t0))
-          d.fail(path, "needs t0 < t1, got t0 = " + args.t0_text + ", t1 = " + args.t1_text);
+      case SurfaceKind::path:
+        path_args = path_arguments(s);
+        check_seed_count(path_args->seed_count, path_args->options.max_vertices);
         break;
-      }
       case SurfaceKind::streak:
-        if (!s.given("release")) d.fail(path, "a streak surface needs release (\"T0:T1\")");
-        if (!s.given("frames")) d.fail(path, "a streak surface needs frames (\"START:END:COUNT\")");
         (void)streak_arguments(s);
-        s.format = "pvd";
         break;
     }
   } catch (const InvalidArgument& e) {
-    // The commands' checks name their flags; a job file's keys are spelt with '_'.
-    std::string message = e.what();
-    for (std::size_t at = message.find("--"); at != std::string::npos; at = message.find("--", at)) {
-      message.erase(at, 2);
-      for (std::size_t i = at; i < message.size() && (std::isalnum(static_cast<unsigned char>(message[i])) || message[i] == '-'); ++i)
-        if (message[i] == '-') message[i] = '_';
-    }
-    d.fail(path, message);
+    d.fail(path, job_key_spelling(e.what()));
   }
+  if (path_args && !(path_args->t1 > path_args->t0))
+    d.fail(path, "needs t0 < t1, got t0 = " + path_args->t0_text + ", t1 = " + path_args->t1_text);
 }
 
 // Applies a spec's options (checked when the job was read) onto a fresh binding of its kind.

@@ -99,44 +99,34 @@ OptionSet::Adder& OptionSet::Adder::derived_default() {
   return *this;
 }
 
-OptionSet::Adder& OptionSet::Adder::range(double lo, double hi) {
+OptionSet::Adder& OptionSet::Adder::check(std::function<void(double, const std::string&)> test) {
   OptionSpec& s = spec();
-  auto parse = s.assign;
-  auto value = s.number;
-  s.assign = [parse, value, lo, hi](const std::string& text) {
+  s.assign = [parse = s.assign, value = s.number, test = std::move(test)](const std::string& text) {
     parse(text);
-    const double v = value();
-    if (!(v >= lo && v <= hi)) {
-      if (hi >= 1e300) throw InvalidArgument(text + " is below " + number_text(lo));
-      throw InvalidArgument(text + " is not in the range " + number_text(lo) + " to " +
-                            number_text(hi));
-    }
+    test(value(), text);
   };
   return *this;
 }
+OptionSet::Adder& OptionSet::Adder::range(double lo, double hi) {
+  return check([lo, hi](double v, const std::string& text) {
+    if (v >= lo && v <= hi) return;
+    if (hi >= 1e300) throw InvalidArgument(text + " is below " + number_text(lo));
+    throw InvalidArgument(text + " is not in the range " + number_text(lo) + " to " +
+                          number_text(hi));
+  });
+}
 OptionSet::Adder& OptionSet::Adder::between(double lo, double hi) {
-  OptionSpec& s = spec();
-  auto parse = s.assign;
-  auto value = s.number;
-  s.assign = [parse, value, lo, hi](const std::string& text) {
-    parse(text);
-    const double v = value();
+  return check([lo, hi](double v, const std::string& text) {
     if (!(v > lo && v < hi))
       throw InvalidArgument(text + " is not strictly between " + number_text(lo) + " and " +
                             number_text(hi));
-  };
-  return *this;
+  });
 }
 OptionSet::Adder& OptionSet::Adder::at_least(double lo) { return range(lo, 1e308); }
 OptionSet::Adder& OptionSet::Adder::positive() {
-  OptionSpec& s = spec();
-  auto parse = s.assign;
-  auto value = s.number;
-  s.assign = [parse, value](const std::string& text) {
-    parse(text);
-    if (!(value() > 0)) throw InvalidArgument(text + " is not a positive number");
-  };
-  return *this;
+  return check([](double v, const std::string& text) {
+    if (!(v > 0)) throw InvalidArgument(text + " is not a positive number");
+  });
 }
 OptionSet::Adder& OptionSet::Adder::one_of(std::vector<std::string> words) {
   OptionSpec& s = spec();

@@ -64,6 +64,8 @@ class OptionSet {
 
    private:
     friend class OptionSet;
+    /// Numbers: after parsing, `test(value, text)` throws InvalidArgument for a value refused.
+    Adder& check(std::function<void(double, const std::string&)> test);
     Adder(OptionSet& set, std::size_t index) : set_(set), index_(index) {}
     OptionSpec& spec();
     OptionSet& set_;

@@ -451,6 +451,17 @@ TEST_CASE("batch: job file errors name the file, the line and the key", "[batch]
               "[job]\nfield = \"saddle3d\"\n[[surface]]\nname = \"a\"\nkind = \"stream\"\n"
               "seed = \"line:0,0,0:1,0,0\"\nno_rip = 1\n");
   CHECK(m.find("flag.toml:7: surface[0].no_rip: must be true or false, got 1") != std::string::npos);
+  // Checks after the keys are read name the surface once.
+  m = refused("order.toml",
+              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\n"
+              "seed = \"line:0.3,0.2,0:0.3,0.8,0\"\nt0 = 2\nt1 = 1\n");
+  CHECK(m.find("order.toml:3: surface[0]: needs t0 < t1, got t0 = 2, t1 = 1") != std::string::npos);
+  CHECK(m.find("surface[0]: order.toml") == std::string::npos);
+  m = refused("norelease.toml",
+              "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\nkind = \"streak\"\n"
+              "seed = \"line:0.3,0.2,0:0.3,0.8,0\"\n");
+  CHECK(m.find("norelease.toml:3: surface[0]: a streak surface needs release") != std::string::npos);
+  CHECK(m.find("surface[0]: norelease.toml") == std::string::npos);
   m = refused("both.toml",
               "[job]\nfield = \"double-gyre\"\n[[surface]]\nname = \"a\"\nkind = \"streak\"\n"
               "seed = \"line:0.3,0.3,0:0.3,0.45,0\"\nrelease = \"0:1\"\nframes = \"1\"\n"
