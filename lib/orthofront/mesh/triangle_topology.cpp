@@ -62,8 +62,17 @@ bool TriangleTopology::fan(std::int32_t v, std::vector<HalfEdge>& out) const {
 }
 
 bool TriangleTopology::on_boundary(std::int32_t v) const {
-  std::vector<HalfEdge> ring;
-  return fan(v, ring);
+  // fan()'s backward rotation alone: it meets a boundary edge or comes round to the start.
+  const std::int32_t start = vertex_face_[idx(v)];
+  if (start == none) return false;
+  std::int32_t f = start;
+  for (std::size_t steps = 0; steps <= faces_.size(); ++steps) {
+    const std::int32_t g = neighbors_[idx(f)][leaving(v, f).edge];
+    if (g == none) return true;
+    if (g == start) return false;
+    f = g;
+  }
+  throw Error("TriangleTopology: a vertex fan does not close");
 }
 
 bool TriangleTopology::adjacent(std::int32_t u, std::int32_t w) const {
@@ -227,12 +236,14 @@ bool TriangleTopology::flip(std::int32_t f, int e) {
 
 bool TriangleTopology::can_collapse(std::int32_t u, std::int32_t w) const {
   if (u == w) return false;
-  std::vector<HalfEdge> ring_u, ring_w;
+  // Scratch kept per thread: collapse passes ask this for many edges in a row.
+  thread_local std::vector<HalfEdge> ring_u, ring_w;
+  thread_local std::vector<std::int32_t> shared, opposite_corners, nu, nw, common;
   const bool u_boundary = fan(u, ring_u);
   const bool w_boundary = fan(w, ring_w);
   if (ring_u.empty() || ring_w.empty()) return false;
   // The faces holding both, and their corners opposite the edge.
-  std::vector<std::int32_t> shared, opposite_corners;
+  shared.clear(), opposite_corners.clear();
   for (const HalfEdge& h : ring_u) {
     const auto& c = faces_[idx(h.face)];
     if (c[0] == w || c[1] == w || c[2] == w) {
@@ -254,17 +265,17 @@ bool TriangleTopology::can_collapse(std::int32_t u, std::int32_t w) const {
     if (boundary_edges >= 2) return false;
   }
   // Link condition: the common neighbours of u and w are exactly the opposite corners.
-  const auto neighbours = [&](const std::vector<HalfEdge>& ring, bool boundary) {
-    std::vector<std::int32_t> n;
+  const auto neighbours = [&](const std::vector<HalfEdge>& ring, bool boundary,
+                              std::vector<std::int32_t>& n) {
+    n.clear();
     for (const HalfEdge& h : ring) n.push_back(to(h));
     if (boundary) n.push_back(opposite(ring.back().face, ring.back().edge));
     std::sort(n.begin(), n.end());
     n.erase(std::unique(n.begin(), n.end()), n.end());
-    return n;
   };
-  const std::vector<std::int32_t> nu = neighbours(ring_u, u_boundary);
-  const std::vector<std::int32_t> nw = neighbours(ring_w, w_boundary);
-  std::vector<std::int32_t> common;
+  neighbours(ring_u, u_boundary, nu);
+  neighbours(ring_w, w_boundary, nw);
+  common.clear();
   std::set_intersection(nu.begin(), nu.end(), nw.begin(), nw.end(), std::back_inserter(common));
   std::sort(opposite_corners.begin(), opposite_corners.end());
   if (std::adjacent_find(opposite_corners.begin(), opposite_corners.end()) != opposite_corners.end())

@@ -132,7 +132,16 @@ class RemeshedStreakBuilder {
   // Every edge (once) whose length `keep` accepts.
   template <class Keep>
   std::vector<Split> edges_where(const Keep& keep) const;
-  bool split_pass(std::size_t& splits);
+  // The same list for the edges of the faces around `near` only: in the order edges_where() would
+  // give them, each named by the face edges_where() names it by.
+  template <class Keep>
+  std::vector<Split> edges_near(const std::vector<std::int32_t>& near, const Keep& keep);
+  std::vector<std::int32_t> near_faces_;  // edges_near()'s scratch
+  std::vector<char> near_mark_;
+  // Splits the long edges; near_reshaped: only those around near_ (see there).
+  bool split_pass(std::size_t& splits, bool near_reshaped);
+  // The last split pass's new particles and the corners of the faces flipped after it.
+  std::vector<std::int32_t> near_, flipped_;
   // v's label (s, τ), s taken across s = 0 of a closed seed to lie within ½ of near_s.
   Eigen::Vector2d label_near(std::int32_t v, double near_s) const {
     double sv = s_[idx(v)];
@@ -224,6 +233,7 @@ class RemeshedStreakBuilder {
   std::vector<char> on_chain_;
   std::vector<char> label_exact_;  // the particle lies on its label's path (it was not interpolated)
   std::vector<Topology::HalfEdge> ring_;  // scratch for fans
+  mutable std::vector<Topology::HalfEdge> collapse_ring_;  // collapsible()'s
   // Scratch of the sweeps: a per-face-slot flag computed in parallel, and what a sweep changed.
   std::vector<std::uint8_t> face_flags_;
   std::vector<char> changed_faces_, changed_vertices_;
@@ -472,10 +482,53 @@ std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_where(con
   return edges;
 }
 
-bool RemeshedStreakBuilder::split_pass(std::size_t& splits) {
-  std::vector<Split> long_edges = edges_where([&](double length, std::int32_t a, std::int32_t b) {
-    return length > o_.split * edge_at(a, b);
+template <class Keep>
+std::vector<RemeshedStreakBuilder::Split> RemeshedStreakBuilder::edges_near(
+    const std::vector<std::int32_t>& near, const Keep& keep) {
+  near_mark_.resize(topo_.face_slots(), 0);
+  near_faces_.clear();
+  for (const std::int32_t v : near) {
+    topo_.fan(v, ring_);
+    for (const Topology::HalfEdge& h : ring_)
+      if (!near_mark_[idx(h.face)]) {
+        near_mark_[idx(h.face)] = 1;
+        near_faces_.push_back(h.face);
+      }
+  }
+  std::vector<Split> edges;
+  for (const std::int32_t f : near_faces_) {
+    const auto& c = topo_.face(f);
+    for (int e = 0; e < 3; ++e) {
+      std::int32_t g = topo_.neighbor(f, e);
+      if (g != none && g < f && near_mark_[idx(g)]) continue;  // g names it
+      const std::int32_t a = c[e], b = c[(e + 1) % 3];
+      const double length = (x_[idx(a)] - x_[idx(b)]).norm();
+      if (!keep(length, a, b)) continue;
+      if (g != none && g < f) {  // named by g, as in a sweep in face order
+        int ge = 0;
+        while (topo_.neighbor(g, ge) != f) ++ge;
+        edges.push_back({g, ge, length});
+      } else {
+        edges.push_back({f, e, length});
+      }
+    }
+  }
+  for (const std::int32_t f : near_faces_) near_mark_[idx(f)] = 0;
+  std::sort(edges.begin(), edges.end(), [](const Split& p, const Split& q) {
+    return p.face != q.face ? p.face < q.face : p.edge < q.edge;
   });
+  return edges;
+}
+
+bool RemeshedStreakBuilder::split_pass(std::size_t& splits, bool near_reshaped) {
+  // After the first pass, an edge is long only where that pass split (the edges of the faces
+  // it split now meet their new particles, or lead to where they landed) or in a face a flip
+  // then changed (flips make no long edge, but move edges between faces): around near_.
+  const auto is_long = [&](double length, std::int32_t a, std::int32_t b) {
+    return length > o_.split * edge_at(a, b);
+  };
+  std::vector<Split> long_edges =
+      near_reshaped ? edges_near(near_, is_long) : edges_where(is_long);
   if (long_edges.empty()) return true;
   std::sort(long_edges.begin(), long_edges.end(),
             [](const Split& a, const Split& b) { return a.length > b.length; });
@@ -918,9 +971,10 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
     if (std::abs(iu - iw) != 1) return false;
     if (!seed_.closed() && (iu == chain_.begin() || iu + 1 == chain_.end())) return false;
   }
-  if (!topo_.can_collapse(u, w)) return false;
-  std::vector<Topology::HalfEdge> ring;
+  // The geometric tests first: they refuse most edges, and the link condition costs more.
+  std::vector<Topology::HalfEdge>& ring = collapse_ring_;
   const bool boundary = topo_.fan(u, ring);
+  if (ring.empty()) return false;
   const Vec3& xu = x_[idx(u)];
   const Vec3& xw = x_[idx(w)];
   if (boundary) {
@@ -950,7 +1004,7 @@ bool RemeshedStreakBuilder::collapsible(std::int32_t u, std::int32_t w) const {
                                      (p1 - p2).squaredNorm()});
     if (area < 0.1 * longest) return false;  // smallest angle below about 6°
   }
-  return true;
+  return topo_.can_collapse(u, w);
 }
 
 void RemeshedStreakBuilder::collapse_pass() {
@@ -960,7 +1014,14 @@ void RemeshedStreakBuilder::collapse_pass() {
   if (collapse_passes_ % 64 == 0)
     std::erase_if(refused_, [&](const auto& r) { return r.second <= collapse_passes_; });
   std::vector<Split> short_edges = edges_where([&](double length, std::int32_t a, std::int32_t b) {
-    return length < o_.collapse * edge_at(a, b);
+    // An edge refused lately is left alone for a few passes: most refusals (a neighbour would
+    // turn or thin, a new edge would split) outlast one step, and short edges that stay short
+    // would be tried again at every step. Boundary edges are tried again sooner (they shape the
+    // boundary, and the loose ends of filaments). The pass refuses only edges it has already
+    // tried, so they can be left out of the list here.
+    if (!(length < o_.collapse * edge_at(a, b))) return false;
+    const auto refused = refused_.find(edge_key(a, b));
+    return refused == refused_.end() || refused->second <= collapse_passes_;
   });
   if (short_edges.empty()) {
     report_.coarsen_seconds += seconds_since(start);
@@ -968,18 +1029,6 @@ void RemeshedStreakBuilder::collapse_pass() {
   }
   std::sort(short_edges.begin(), short_edges.end(),
             [](const Split& a, const Split& b) { return a.length < b.length; });
-  // Boundary vertices, for a quick refusal of an inner edge between two of them (which would
-  // pinch the surface): exact for every vertex not yet touched by this pass's collapses.
-  std::vector<char> boundary(x_.size(), 0);
-  for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
-    const auto fi = static_cast<std::int32_t>(f);
-    if (!topo_.face_alive(fi)) continue;
-    for (int e = 0; e < 3; ++e)
-      if (topo_.neighbor(fi, e) == none) {
-        boundary[idx(topo_.face(fi)[e])] = 1;
-        boundary[idx(topo_.face(fi)[(e + 1) % 3])] = 1;
-      }
-  }
   std::vector<char> touched(x_.size(), 0);
   std::vector<Topology::HalfEdge> ring;
   for (const Split& sp : short_edges) {
@@ -990,21 +1039,15 @@ void RemeshedStreakBuilder::collapse_pass() {
     const double length = (x_[idx(a)] - x_[idx(b)]).norm();
     if (length >= o_.collapse * edge_at(a, b)) continue;
     const bool inner = topo_.neighbor(sp.face, sp.edge) != none;
-    if (inner && boundary[idx(a)] && boundary[idx(b)]) continue;
-    // An edge refused lately is left alone for a few passes: most refusals (a neighbour would
-    // turn or thin, a new edge would split) outlast one step, and short edges that stay short
-    // would be tried again at every step. Boundary edges are tried again sooner (they shape the
-    // boundary, and the loose ends of filaments).
-    const std::uint64_t key = edge_key(a, b);
-    if (const auto refused = refused_.find(key);
-        refused != refused_.end() && refused->second > collapse_passes_)
-      continue;
+    // An inner edge between two boundary vertices would pinch the surface. (Neither end was
+    // touched by this pass's collapses, so their fans are the pass's own.)
+    if (inner && topo_.on_boundary(a) && topo_.on_boundary(b)) continue;
     // The younger particle goes first: the older one has travelled further on its label.
     std::int32_t u = tau_[idx(a)] >= tau_[idx(b)] ? a : b, w = u == a ? b : a;
     if (!collapsible(u, w)) {
       std::swap(u, w);
       if (!collapsible(u, w)) {
-        refused_[key] = collapse_passes_ + (inner ? 8 : 2);
+        refused_[edge_key(a, b)] = collapse_passes_ + (inner ? 8 : 2);
         continue;
       }
     }
@@ -1218,6 +1261,8 @@ void RemeshedStreakBuilder::flip_around_reshaped() {
       const std::int32_t g = topo_.neighbor(f, e);
       if (g == none || !wants_flip(f, e) || !topo_.flip(f, e)) continue;
       ++report_.flips;
+      for (const std::int32_t v : topo_.face(f)) flipped_.push_back(v);
+      for (const std::int32_t v : topo_.face(g)) flipped_.push_back(v);
       work.push_back(f);
       work.push_back(g);
       break;
@@ -1300,7 +1345,10 @@ void RemeshedStreakBuilder::prune_pass() {
                                      (w < 0.5 * width ? thin : 0));
   });
   changed_vertices_.assign(x_.size(), 0);
+  const std::size_t pruned_before = report_.faces_pruned;
+  // Until something is removed no face is touched, and the flags alone decide.
   const auto touched = [&](std::int32_t f) {
+    if (report_.faces_pruned == pruned_before) return false;
     const auto& c = topo_.face(f);
     return changed_vertices_[idx(c[0])] || changed_vertices_[idx(c[1])] || changed_vertices_[idx(c[2])];
   };
@@ -1311,6 +1359,7 @@ void RemeshedStreakBuilder::prune_pass() {
   };
   std::vector<std::int32_t> work;
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
+    if (face_flags_[f] == 0 && report_.faces_pruned == pruned_before) continue;
     work.assign(1, static_cast<std::int32_t>(f));
     while (!work.empty()) {
       const std::int32_t g = work.back();
@@ -1323,6 +1372,7 @@ void RemeshedStreakBuilder::prune_pass() {
   }
   for (std::size_t f = 0; f < topo_.face_slots(); ++f) {
     const auto fi = static_cast<std::int32_t>(f);
+    if (face_flags_[f] == 0 && report_.faces_pruned == pruned_before) continue;
     if (!topo_.face_alive(fi)) continue;
     if (touched(fi) ? filament_width(fi, ring_) < 0.5 * width_at(fi) : (face_flags_[f] & thin) != 0)
       prune(fi);
@@ -1407,8 +1457,11 @@ bool RemeshedStreakBuilder::adapt(bool full) {
   if (full) flip_pass();
   for (int round = 0; round < o_.max_refinement_rounds; ++round) {
     std::size_t splits = 0;
+    near_.swap(reshaped_);
+    near_.insert(near_.end(), flipped_.begin(), flipped_.end());
     reshaped_.clear();
-    if (!split_pass(splits)) return false;
+    flipped_.clear();
+    if (!split_pass(splits, round > 0)) return false;
     if (splits == 0) break;
     flip_around_reshaped();
   }
@@ -1638,7 +1691,10 @@ StreakReport RemeshedStreakBuilder::run() {
       emit_frame(static_cast<int>(next_frame));
       ++next_frame;
     }
-    if (x_.size() > 2 * particles + 1024) compact();
+    // Dead slots (collapsed particles, faces gone) cost every sweep over vertices or faces.
+    if (x_.size() > particles + particles / 4 + 1024 ||
+        topo_.face_slots() > topo_.face_count() + topo_.face_count() / 4 + 1024)
+      compact();
     if (o_.progress) {
       StreakProgress p;
       p.t = t_;
