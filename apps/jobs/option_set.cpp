@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <system_error>
 
 #include "orthofront/error.h"
@@ -108,6 +109,8 @@ OptionSet::Adder& OptionSet::Adder::check(std::function<void(double, const std::
   return *this;
 }
 OptionSet::Adder& OptionSet::Adder::range(double lo, double hi) {
+  spec().lo = lo;
+  spec().hi = hi >= 1e300 ? std::numeric_limits<double>::infinity() : hi;
   return check([lo, hi](double v, const std::string& text) {
     if (v >= lo && v <= hi) return;
     if (hi >= 1e300) throw InvalidArgument(text + " is below " + number_text(lo));
@@ -116,6 +119,8 @@ OptionSet::Adder& OptionSet::Adder::range(double lo, double hi) {
   });
 }
 OptionSet::Adder& OptionSet::Adder::between(double lo, double hi) {
+  spec().lo = lo, spec().hi = hi;
+  spec().lo_open = spec().hi_open = true;
   return check([lo, hi](double v, const std::string& text) {
     if (!(v > lo && v < hi))
       throw InvalidArgument(text + " is not strictly between " + number_text(lo) + " and " +
@@ -124,6 +129,8 @@ OptionSet::Adder& OptionSet::Adder::between(double lo, double hi) {
 }
 OptionSet::Adder& OptionSet::Adder::at_least(double lo) { return range(lo, 1e308); }
 OptionSet::Adder& OptionSet::Adder::positive() {
+  spec().lo = 0;
+  spec().lo_open = true;
   return check([](double v, const std::string& text) {
     if (!(v > 0)) throw InvalidArgument(text + " is not a positive number");
   });

@@ -5,6 +5,7 @@
 /// checks; each front end spells the names its own way (--flat-split, flat_split).
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -40,6 +41,11 @@ struct OptionSpec {
   std::function<void(const std::string& text)> assign;
   /// Numbers: the member's value (for the range checks).
   std::function<double()> number;
+  /// Numbers: the accepted range as the checks state it, for panels that show one (-inf/inf
+  /// where open-ended; lo_open/hi_open: the bound itself is refused).
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false, hi_open = false;
 };
 
 /// A job kind's options, bound to the members of one arguments struct (which must outlive it).

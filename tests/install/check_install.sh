@@ -39,4 +39,32 @@ assert len(surface.faces) > 0
 print("python", orthofront.__file__, len(surface.vertices), "vertices")
 PY
 fi
+# The compiled ParaView plugin, where it was built: loaded from the prefix through
+# PV_PLUGIN_PATH, its libraries found there, and its filter run.
+plugin=$(ls "$prefix"/lib*/paraview-plugins/OrthofrontSurfaces/OrthofrontSurfaces.so 2>/dev/null || true)
+if [[ -n $plugin ]]; then
+  if ldd "$plugin" | grep -q "not found"; then
+    ldd "$plugin" >&2
+    echo "check_install: the installed ParaView plugin misses libraries" >&2
+    exit 1
+  fi
+  ldd "$(dirname "$plugin")/libOrthofrontFilters.so" | grep liborthofront_lib | grep -q "$prefix" ||
+    { echo "check_install: the installed plugin does not load the installed libraries" >&2; exit 1; }
+  if command -v pvbatch >/dev/null; then
+    cat >"$work/plugin.py" <<'PY'
+from paraview.simple import OrthofrontStreamSurface, Wavelet, Gradient
+from paraview import servermanager
+gradient = Gradient(Input=Wavelet(WholeExtent=[0, 8, 0, 8, 0, 8]), ScalarArray=["POINTS", "RTData"])
+gradient.UpdatePipeline()
+surface = OrthofrontStreamSurface(Input=gradient, Vectors=["POINTS", "Gradient"],
+                                  SeedPoint1=[-4, 0, 0], SeedPoint2=[4, 0, 0], Steps=3)
+surface.UpdatePipeline()
+print("plugin", servermanager.Fetch(surface).GetNumberOfPoints(), "points")
+PY
+    PV_PLUGIN_PATH=$(dirname "$plugin") pvbatch "$work/plugin.py" >"$work/plugin.log" 2>&1 ||
+      { cat "$work/plugin.log" >&2; exit 1; }
+    grep -qE "^plugin [1-9][0-9]* points" "$work/plugin.log" ||
+      { cat "$work/plugin.log" >&2; echo "check_install: the installed plugin made no surface" >&2; exit 1; }
+  fi
+fi
 echo "check_install: installed into $prefix and used from there"

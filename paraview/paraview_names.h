@@ -1,0 +1,109 @@
+#pragma once
+/// How the option schemas become ParaView properties: the names, which options the panel shows,
+/// and which take their default from the data. Shared by the property generator and the filters,
+/// so the properties a filter reads are the ones the XML declares.
+#include <cctype>
+#include <string>
+
+#include "jobs/surface_kind.h"
+
+namespace orthofront::paraview {
+
+/// The kinds the compiled plugin has filters for.
+inline constexpr jobs::SurfaceKind kPluginKinds[] = {jobs::SurfaceKind::stream};
+
+/// "flat-split" -> "FlatSplit" (the property and, with "Set", its setter).
+inline std::string property_name(const std::string& option) {
+  std::string name;
+  bool upper = true;
+  for (const char c : option) {
+    if (c == '-') {
+      upper = true;
+      continue;
+    }
+    name += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+    upper = false;
+  }
+  return name;
+}
+
+/// "flat-split" -> "Flat Split".
+inline std::string property_label(const std::string& option) {
+  std::string label;
+  bool upper = true;
+  for (const char c : option) {
+    if (c == '-') {
+      label += ' ';
+      upper = true;
+      continue;
+    }
+    label += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+    upper = false;
+  }
+  return label;
+}
+
+/// Options whose default comes from the data or the machine (the grid's cell size, the memory
+/// available): the panel shows 0 (or nothing) for "as the command line chooses it".
+inline bool from_data(const jobs::OptionSpec& spec) {
+  return !spec.show_default || spec.name == "edge" || spec.name == "max-vertices";
+}
+
+/// What the command line takes when a from_data() option is not given.
+inline std::string from_data_meaning(const jobs::OptionSpec& spec) {
+  if (spec.name == "edge") return "the input's cell size";
+  if (spec.name == "max-vertices") return "from the memory limit";
+  if (spec.name == "time-budget") return "no time limit";
+  if (spec.name == "memory") return "the memory available when the filter runs";
+  return "as the command line chooses it";
+}
+
+/// Baselines are never shown; the device is the command line's (the plugin runs on the CPU).
+inline bool on_panel(const jobs::OptionSpec& spec) {
+  return spec.group != jobs::OptionGroup::baseline && spec.name.rfind("device", 0) != 0;
+}
+
+/// The options on the panel's first page; the rest are advanced.
+inline bool shown_by_default(const jobs::OptionSpec& spec) {
+  return spec.name == "edge" || spec.name == "steps" || spec.name == "seed-count" ||
+         spec.name == "method";
+}
+
+inline const char* class_name(jobs::SurfaceKind kind) {
+  switch (kind) {
+    case jobs::SurfaceKind::stream: return "vtkOrthofrontStreamSurface";
+    case jobs::SurfaceKind::path: return "vtkOrthofrontPathSurface";
+    case jobs::SurfaceKind::streak: return "vtkOrthofrontStreakSurface";
+  }
+  return "";
+}
+inline const char* proxy_name(jobs::SurfaceKind kind) {
+  switch (kind) {
+    case jobs::SurfaceKind::stream: return "OrthofrontStreamSurface";
+    case jobs::SurfaceKind::path: return "OrthofrontPathSurface";
+    case jobs::SurfaceKind::streak: return "OrthofrontStreakSurface";
+  }
+  return "";
+}
+inline const char* filter_label(jobs::SurfaceKind kind) {
+  switch (kind) {
+    case jobs::SurfaceKind::stream: return "Orthofront Stream Surface";
+    case jobs::SurfaceKind::path: return "Orthofront Path Surface";
+    case jobs::SurfaceKind::streak: return "Orthofront Streak Surface";
+  }
+  return "";
+}
+inline const char* filter_help(jobs::SurfaceKind kind) {
+  switch (kind) {
+    case jobs::SurfaceKind::stream:
+      return "A stream surface of a steady vector field from a seed line, its front kept "
+             "orthogonal to the flow: flow-aligned, near-square quads (orthofront stream).";
+    case jobs::SurfaceKind::path:
+      return "A path surface of a time-dependent field from a seed line (orthofront path).";
+    case jobs::SurfaceKind::streak:
+      return "A streak surface of a time-dependent field from a seed line (orthofront streak).";
+  }
+  return "";
+}
+
+}  // namespace orthofront::paraview

@@ -1,0 +1,5 @@
+#include "vtkOrthofrontStreamSurface.h"
+
+#include "vtkObjectFactory.h"
+
+vtkStandardNewMacro(vtkOrthofrontStreamSurface);

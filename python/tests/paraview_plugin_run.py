@@ -1,0 +1,61 @@
+"""Run by pvbatch with the compiled plugin on PV_PLUGIN_PATH: describes the Orthofront Stream
+Surface filter's properties and runs it on WORK/helix.vti. Writes WORK/plugin.json and the
+surfaces as .vtp files."""
+
+import json
+import sys
+
+from paraview import servermanager as sm
+from paraview.simple import OrthofrontStreamSurface, SaveData, XMLImageDataReader
+
+work = sys.argv[1]
+reader = XMLImageDataReader(FileName=[work + "/helix.vti"])
+reader.UpdatePipeline()
+surface = OrthofrontStreamSurface(Input=reader)
+result = {"vectors": list(surface.Vectors), "properties": {}}
+for name in surface.ListProperties():
+    prop = surface.GetProperty(name)
+    smp = prop.SMProperty
+    doc = smp.GetDocumentation()
+    domains = []
+    it = smp.NewDomainIterator()
+    it.Begin()
+    while not it.IsAtEnd():
+        domain = it.GetDomain()
+        entry = {"class": domain.GetClassName()}
+        if domain.IsA("vtkSMDoubleRangeDomain") or domain.IsA("vtkSMIntRangeDomain"):
+            entry["min"] = domain.GetMinimum(0) if domain.GetMinimumExists(0) else None
+            entry["max"] = domain.GetMaximum(0) if domain.GetMaximumExists(0) else None
+        if domain.IsA("vtkSMEnumerationDomain"):
+            entry["entries"] = [domain.GetEntryText(i) for i in range(domain.GetNumberOfEntries())]
+        domains.append(entry)
+        it.Next()
+    value = None  # the raw elements, as the server manager holds them
+    if smp.IsA("vtkSMVectorProperty"):
+        value = [smp.GetElement(i) for i in range(smp.GetNumberOfElements())]
+        value = value[0] if len(value) == 1 else value
+    result["properties"][name] = {
+        "xml_name": smp.GetXMLName(),
+        "documentation": doc.GetDescription() if doc is not None else "",
+        "domains": domains,
+        "value": value,
+    }
+
+
+def run(out, **properties):
+    for key, value in properties.items():
+        setattr(surface, key, value)
+    surface.UpdatePipeline()
+    data = sm.Fetch(surface)
+    report = data.GetFieldData().GetAbstractArray("orthofront_report")
+    SaveData(out, proxy=surface, DataMode="Ascii")
+    return {"points": data.GetNumberOfPoints(), "cells": data.GetNumberOfCells(),
+            "report": json.loads(report.GetValue(0)) if report is not None else None}
+
+
+seed = dict(SeedPoint1=[0.5, 0.0, 0.2], SeedPoint2=[1.5, 0.0, 0.2], SeedCount=8, Steps=20)
+result["given_edge"] = run(work + "/plugin-edge.vtp", Edge=0.15, **seed)
+result["cell_edge"] = run(work + "/plugin-cell.vtp", Edge=0.0, **seed)
+result["bad_edge"] = run(work + "/plugin-bad.vtp", Edge=-1.0, **seed)
+with open(work + "/plugin.json", "w") as file:
+    json.dump(result, file)

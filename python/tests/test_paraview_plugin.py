@@ -1,0 +1,125 @@
+"""The compiled ParaView plugin under pvbatch, loaded through PV_PLUGIN_PATH: its properties are
+the option schema's (names, defaults, ranges, documentation), and its surface is the command
+line's, point for point."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import orthofront
+from conftest import run_cli, write_vti
+from orthofront import preview
+from test_module import helix_grid
+
+SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "paraview_plugin_run.py")
+
+
+def property_name(option):
+    """--flat-split -> FlatSplit, as the plugin's generator names properties."""
+    return "".join(word[:1].upper() + word[1:] for word in option.lstrip("-").split("-"))
+
+
+@pytest.fixture(scope="module")
+def plugin_run(tmp_path_factory):
+    plugin_dir = os.environ.get("ORTHOFRONT_PARAVIEW_PLUGIN_DIR", "")
+    if not plugin_dir:
+        pytest.skip("SKIPPED: built without the compiled ParaView plugin (Debian: paraview-dev)")
+    pvbatch = shutil.which("pvbatch")
+    if pvbatch is None:
+        pytest.skip("SKIPPED: no pvbatch (Debian: paraview, python3-paraview)")
+    work = tmp_path_factory.mktemp("plugin")
+    values, origin, spacing = helix_grid(9)
+    write_vti(work / "helix.vti", values, origin, spacing)
+    env = dict(os.environ, PV_PLUGIN_PATH=os.path.join(plugin_dir, "OrthofrontSurfaces"))
+    result = subprocess.run([pvbatch, SCRIPT, str(work)], capture_output=True, text=True,
+                            timeout=300, env=env)
+    assert result.returncode == 0 and (work / "plugin.json").exists(), (
+        "pvbatch failed (%d):\n%s\n%s" % (result.returncode, result.stdout, result.stderr))
+    return work, json.loads((work / "plugin.json").read_text()), result.stderr
+
+
+def panel_options():
+    """The stream surface's options a ParaView user sets: all but the device's."""
+    return [entry for entry in orthofront._orthofront._keywords("stream")
+            if not entry["option"].startswith("--device")]
+
+
+def test_every_option_is_a_property_with_the_same_default_and_documentation(plugin_run):
+    _, result, _ = plugin_run
+    properties = result["properties"]
+    own = {"Input", "Vectors", "SeedPoint1", "SeedPoint2", "ZerosAreNoData"}
+    expected = {property_name(entry["option"]) for entry in panel_options()}
+    assert set(properties) - own == expected
+    for entry in panel_options():
+        prop = properties[property_name(entry["option"])]
+        # The help's figures of the machine it runs on ("now 23.0 GiB") are left out.
+        help_text = re.sub(r", now [^)]*|; the figure shown is for the memory available now", "",
+                           entry["help"])
+        assert prop["documentation"].startswith(help_text.rstrip(".")), entry["option"]
+        assert "Command line: %s." % entry["option"] in prop["documentation"]
+        if entry["option"] in ("--edge", "--max-vertices") or not entry["default"]:
+            continue  # from the data: 0 on the panel (said in the documentation)
+        if entry["flag"]:
+            assert prop["value"] == (1 if entry["default"] == "true" else 0), entry["option"]
+        elif entry["choices"]:
+            enum = [d for d in prop["domains"] if d["class"] == "vtkSMEnumerationDomain"]
+            assert enum and enum[0]["entries"] == entry["choices"], entry["option"]
+            assert enum[0]["entries"][prop["value"]] == entry["default"], entry["option"]
+        elif entry["type"] in ("FLOAT", "INT", "UINT"):
+            assert float(prop["value"]) == float(entry["default"]), entry["option"]
+        else:
+            assert prop["value"] == entry["default"], entry["option"]
+
+
+def test_ranges_are_domains_and_the_vectors_an_array_list(plugin_run):
+    _, result, _ = plugin_run
+    properties = result["properties"]
+    damping = [d for d in properties["Damping"]["domains"] if "RangeDomain" in d["class"]]
+    assert damping and (damping[0]["min"], damping[0]["max"]) == (0.0, 1.0)
+    assert "greater than 0, less than 1" in properties["Damping"]["documentation"]
+    steps = [d for d in properties["Steps"]["domains"] if d["class"] == "vtkSMIntRangeDomain"]
+    assert steps and steps[0]["min"] == 0
+    assert any(d["class"] == "vtkSMArrayListDomain" for d in properties["Vectors"]["domains"])
+    assert result["vectors"] == ["POINTS", "velocity"]
+    assert any(d["class"] == "vtkSMBoundsDomain" for d in properties["SeedPoint1"]["domains"])
+
+
+def test_the_filters_surface_is_the_command_lines(plugin_run, orthofront_binary):
+    work, result, _ = plugin_run
+    out = work / "cli-edge.vtp"
+    run_cli(orthofront_binary, "stream", "--field", work / "helix.vti", "--seed",
+            "line:0.5,0,0.2:1.5,0,0.2", "--seed-count", 8, "--edge", 0.15, "--steps", 20,
+            "--out", out, "--quiet")
+    cli_vertices, cli_faces, cli_attributes = preview.read_mesh(out)
+    vertices, faces, attributes = preview.read_mesh(work / "plugin-edge.vtp")
+    assert result["given_edge"]["points"] == len(cli_vertices) > 50
+    assert np.array_equal(vertices, cli_vertices)
+    assert np.array_equal(faces, cli_faces)
+    for name in cli_attributes:
+        assert np.array_equal(attributes[name], cli_attributes[name]), name
+    assert result["given_edge"]["report"]["complete"] is True
+
+
+def test_edge_left_at_zero_takes_the_cell_size_as_the_command_line_does(plugin_run,
+                                                                        orthofront_binary):
+    work, result, _ = plugin_run
+    out = work / "cli-cell.vtp"
+    run_cli(orthofront_binary, "stream", "--field", work / "helix.vti", "--seed",
+            "line:0.5,0,0.2:1.5,0,0.2", "--seed-count", 8, "--steps", 20, "--out", out,
+            "--quiet")
+    report = result["cell_edge"]["report"]
+    assert (report["edge"], report["edge_source"]) == (0.5, "grid cell")
+    cli_vertices, _, _ = preview.read_mesh(out)
+    vertices, _, _ = preview.read_mesh(work / "plugin-cell.vtp")
+    assert np.array_equal(vertices, cli_vertices)
+
+
+def test_a_refused_value_names_the_property_and_leaves_no_surface(plugin_run):
+    _, result, stderr = plugin_run
+    assert result["bad_edge"]["points"] == 0 and result["bad_edge"]["report"] is None
+    assert re.search(r"Edge: .*-1.* not a positive number", stderr), stderr[-2000:]
