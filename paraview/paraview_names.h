@@ -10,7 +10,8 @@
 namespace orthofront::paraview {
 
 /// The kinds the compiled plugin has filters for.
-inline constexpr jobs::SurfaceKind kPluginKinds[] = {jobs::SurfaceKind::stream};
+inline constexpr jobs::SurfaceKind kPluginKinds[] = {
+    jobs::SurfaceKind::stream, jobs::SurfaceKind::path, jobs::SurfaceKind::streak};
 
 /// "flat-split" -> "FlatSplit" (the property and, with "Set", its setter).
 inline std::string property_name(const std::string& option) {
@@ -46,7 +47,9 @@ inline std::string property_label(const std::string& option) {
 /// Options whose default comes from the data or the machine (the grid's cell size, the memory
 /// available): the panel shows 0 (or nothing) for "as the command line chooses it".
 inline bool from_data(const jobs::OptionSpec& spec) {
-  return !spec.show_default || spec.name == "edge" || spec.name == "max-vertices";
+  for (const char* name : {"edge", "max-vertices", "t0", "t1", "release", "frames"})
+    if (spec.name == name) return true;
+  return !spec.show_default;
 }
 
 /// What the command line takes when a from_data() option is not given.
@@ -54,19 +57,29 @@ inline std::string from_data_meaning(const jobs::OptionSpec& spec) {
   if (spec.name == "edge") return "the input's cell size";
   if (spec.name == "max-vertices") return "from the memory limit";
   if (spec.name == "time-budget") return "no time limit";
+  if (spec.name == "t0") return "the input's first time";
+  if (spec.name == "t1") return "the input's last time";
+  if (spec.name == "release") return "over the input's whole time range";
+  if (spec.name == "frames") return "every input time step after the release begins";
+  if (spec.name == "vertex-budget") return "half the vertex cap";
+  if (spec.name == "cache-budget") return "a quarter of the memory limit";
   if (spec.name == "memory") return "the memory available when the filter runs";
   return "as the command line chooses it";
 }
 
-/// Baselines are never shown; the device is the command line's (the plugin runs on the CPU).
+/// Baselines are never shown; nor the device (the plugin runs on the CPU), the command line's
+/// other streak routes and its space-time output file.
 inline bool on_panel(const jobs::OptionSpec& spec) {
+  for (const char* name : {"route", "point", "spacetime-out"})
+    if (spec.name == name) return false;
   return spec.group != jobs::OptionGroup::baseline && spec.name.rfind("device", 0) != 0;
 }
 
 /// The options on the panel's first page; the rest are advanced.
 inline bool shown_by_default(const jobs::OptionSpec& spec) {
-  return spec.name == "edge" || spec.name == "steps" || spec.name == "seed-count" ||
-         spec.name == "method";
+  for (const char* name : {"edge", "steps", "seed-count", "method", "t0", "t1", "release", "frames"})
+    if (spec.name == name) return true;
+  return false;
 }
 
 inline const char* class_name(jobs::SurfaceKind kind) {
@@ -99,9 +112,13 @@ inline const char* filter_help(jobs::SurfaceKind kind) {
       return "A stream surface of a steady vector field from a seed line, its front kept "
              "orthogonal to the flow: flow-aligned, near-square quads (orthofront stream).";
     case jobs::SurfaceKind::path:
-      return "A path surface of a time-dependent field from a seed line (orthofront path).";
+      return "A path surface of a time-dependent field from a seed line: the surface its path "
+             "lines sweep from T0 to T1, front kept orthogonal to the flow (orthofront path). "
+             "The input's time steps are read one at a time.";
     case jobs::SurfaceKind::streak:
-      return "A streak surface of a time-dependent field from a seed line (orthofront streak).";
+      return "A streak surface of a time-dependent field from a seed line: dye released "
+             "continuously, one output time step per frame (orthofront streak). The input's time "
+             "steps are read one at a time.";
   }
   return "";
 }

@@ -214,6 +214,11 @@ void write_xml(std::ostream& out) {
         << "\" long_help=\"" << xml_escape(pv::filter_help(kind)) << "\">"
         << xml_escape(pv::filter_help(kind)) << "</Documentation>\n";
     write_input_properties(out);
+    if (kind == SurfaceKind::streak)  // the frames, as the output's time steps
+      out << "      <DoubleVectorProperty name=\"TimestepValues\" information_only=\"1\" "
+             "repeatable=\"1\">\n        <TimeStepsInformationHelper />\n"
+             "        <Documentation>The frames' times.</Documentation>\n"
+             "      </DoubleVectorProperty>\n";
     std::vector<OptionGroup> groups;
     for (const OptionSpec& spec : options.set.specs()) {
       if (!pv::on_panel(spec)) continue;

@@ -13,10 +13,12 @@
 #include "jobs/edge_default.h"
 #include "jobs/engine_options.h"
 #include "jobs/path_job.h"
+#include "jobs/path_run.h"
 #include "jobs/time_arg.h"
 #include "jobs/seed_spec.h"
 #include "jobs/streak_job.h"
 #include "jobs/streak_report.h"
+#include "jobs/streak_run.h"
 #include "jobs/stream_job.h"
 #include "jobs/surface_kind.h"
 #include "keyword_options.h"
@@ -202,49 +204,16 @@ py::dict path_surface(const py::object& field_in, const py::object& seed_in, boo
   args.field = series.name;
   check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
                     series.name);
-  // Numbers, or for NetCDF series dates and durations, as the command line takes them.
-  const io::TimeSeries* timed = analytic ? nullptr : series.series.get();
-  args.t0 = jobs::resolve_time(args.t0_text, "t0", timed ? timed->time(0) : 0.0, timed);
-  args.t1 = jobs::resolve_time(args.t1_text, "t1", args.t0, timed);
-  spacetime::PathSurfaceOptions o = jobs::path_options(args);
-  const jobs::EdgeChoice edge = jobs::choose_edge(o.engine.edge, set.given("edge"),
-                                                timed ? &timed->geometry() : nullptr);
-  o.engine.edge = edge.edge;
   InterruptCheck interrupt;
-  o.progress = [&](const spacetime::PathProgress&) { return interrupt.keep_going(); };
-  spacetime::PathSurfaceResult result;
-  std::size_t cache_budget = 0;
+  jobs::PathRun run;
   {
     py::gil_scoped_release release;
-    if (analytic) {
-      result = spacetime::build_path_surface(*analytic, seed, args.seed_count, o);
-    } else {
-      const spacetime::CacheOptions co = jobs::path_cache_options(args);
-      cache_budget = co.budget_bytes;
-      spacetime::BrickCache cache(*series.series, co);
-      result = spacetime::build_path_surface(cache, seed, args.seed_count, o);
-    }
+    run = jobs::run_path_surface(analytic ? nullptr : series.series.get(), analytic.get(), seed,
+                                 args, set.given("edge"), [&] { return interrupt.keep_going(); });
   }
   interrupt.rethrow_if_raised();
-  const bool two_d = !result.spacetime_positions.empty();
-  Mesh lifted;
-  if (two_d) {
-    lifted.positions.assign(result.spacetime_positions.begin(), result.spacetime_positions.end());
-    for (Vec3& p : lifted.positions) p.z() *= result.path.time_scale;
-  }
-  spacetime::place_for_output(result, args.flat);
-  nlohmann::json report = io::to_json(result.report);
-  report["field"] = args.field;
-  report["seed"] = args.seed;
-  report["seed_count"] = args.seed_count;
-  jobs::add_edge_keys(report, edge);
-  report["complete"] = result.report.complete;
-  report["path"] = spacetime::to_json(result.path);
-  report["path"]["positions"] = spacetime::path_positions(result, args.flat);
-  report["limits"] = args.limits.to_json();
-  if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
-  py::dict out = surface_dict(result.mesh, report);
-  if (two_d) out["spacetime_vertices"] = mesh_to_dict(lifted)["vertices"];
+  py::dict out = surface_dict(run.result.mesh, run.report);
+  if (!run.lifted.positions.empty()) out["spacetime_vertices"] = mesh_to_dict(run.lifted)["vertices"];
   return out;
 }
 
@@ -254,11 +223,6 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   jobs::OptionSet set;
   jobs::add_streak_options(set, args);
   parse_keywords(set, options);
-  if (args.route != "direct")
-    throw py::value_error("route '" + args.route +
-                          "': the module builds the direct route; the command line writes the "
-                          "others (orthofront streak --route " +
-                          args.route + ")");
   if (args.frames.empty()) throw py::type_error("frames is required (the observation times)");
   bool planar_seed = false;
   const SeedCurve seed = resolve_seed(seed_in, closed, args.seed, &planar_seed);
@@ -278,37 +242,16 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
   args.field = series.name;
   check_planar_seed(planar_seed, analytic ? analytic->dimension() : series.series->geometry().dimension,
                     series.name);
-  spacetime::StreakOptions o = jobs::streak_options(set, args);
-  const jobs::EdgeChoice edge = jobs::choose_edge(
-      o.edge, set.given("edge"), analytic ? nullptr : &series.series->geometry());
-  o.edge = edge.edge;
-  if (analytic && o.device)
-    throw py::value_error("device: bulk advection reads gridded series, not analytic fields");
   InterruptCheck interrupt;
-  o.progress = [&](const spacetime::StreakProgress&) { return interrupt.keep_going(); };
-  std::vector<spacetime::StreakFrame> frames;
-  const auto sink = [&](const spacetime::StreakFrame& frame) { frames.push_back(frame); };
-  spacetime::StreakReport result;
-  std::size_t cache_budget = 0;
+  jobs::StreakRun run;
   {
     py::gil_scoped_release release;
-    if (analytic) {
-      result = spacetime::build_streak_surface(*analytic, seed, o, sink);
-    } else {
-      spacetime::CacheOptions co;
-      co.budget_bytes = jobs::streak_cache_budget(args);
-      cache_budget = co.budget_bytes;
-      spacetime::BrickCache cache(*series.series, co);
-      result = spacetime::build_streak_surface(cache, seed, o, sink);
-    }
+    run = jobs::run_streak_surface(analytic ? nullptr : series.series.get(), analytic.get(), seed,
+                                   set, args, [&] { return interrupt.keep_going(); });
   }
   interrupt.rethrow_if_raised();
-  nlohmann::json report = jobs::streak_report_json(result);
-  report["field"] = args.field;
-  report["seed"] = args.seed;
-  jobs::add_edge_keys(report, edge);
-  report["limits"] = args.limits.to_json();
-  if (cache_budget > 0) report["limits"]["cache_budget_bytes"] = cache_budget;
+  const nlohmann::json& report = run.report;
+  const std::vector<spacetime::StreakFrame>& frames = run.frames;
   py::list frame_list;
   for (const spacetime::StreakFrame& f : frames) {
     py::dict d = mesh_to_dict(f.mesh);

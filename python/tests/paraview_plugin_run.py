@@ -1,12 +1,14 @@
 """Run by pvbatch with the compiled plugin on PV_PLUGIN_PATH: describes the Orthofront Stream
-Surface filter's properties and runs it on WORK/helix.vti. Writes WORK/plugin.json and the
-surfaces as .vtp files."""
+Surface filter's properties and runs it on WORK/helix.vti, and the path and streak filters on
+the series WORK/frame0.vti ... frame5.vti. Writes WORK/plugin.json and the surfaces as .vtp
+files."""
 
 import json
 import sys
 
 from paraview import servermanager as sm
-from paraview.simple import OrthofrontStreamSurface, SaveData, XMLImageDataReader
+from paraview.simple import (OrthofrontPathSurface, OrthofrontStreakSurface,
+                             OrthofrontStreamSurface, SaveData, XMLImageDataReader)
 
 work = sys.argv[1]
 reader = XMLImageDataReader(FileName=[work + "/helix.vti"])
@@ -57,5 +59,27 @@ seed = dict(SeedPoint1=[0.5, 0.0, 0.2], SeedPoint2=[1.5, 0.0, 0.2], SeedCount=8,
 result["given_edge"] = run(work + "/plugin-edge.vtp", Edge=0.15, **seed)
 result["cell_edge"] = run(work + "/plugin-cell.vtp", Edge=0.0, **seed)
 result["bad_edge"] = run(work + "/plugin-bad.vtp", Edge=-1.0, **seed)
+# A series of files: ParaView numbers them 0, 1, 2, ...
+frames = XMLImageDataReader(FileName=[work + "/frame%d.vti" % i for i in range(6)])
+frames.UpdatePipeline(0)
+seed2 = dict(SeedPoint1=[0.2, 0.2, 0.0], SeedPoint2=[0.2, 0.6, 0.0], SeedCount=9)
+path = OrthofrontPathSurface(Input=frames, Vectors=["POINTS", "velocity"], Edge=0.1, T0="0",
+                             T1="3", **seed2)
+path.UpdatePipeline()
+SaveData(work + "/plugin-path.vtp", proxy=path, DataMode="Ascii")
+result["path"] = json.loads(
+    sm.Fetch(path).GetFieldData().GetAbstractArray("orthofront_report").GetValue(0))
+streak = OrthofrontStreakSurface(Input=frames, Vectors=["POINTS", "velocity"], Edge=0.05,
+                                 Release="0:1", Frames="2,3", **seed2)
+streak.UpdatePipelineInformation()
+result["streak_times"] = list(streak.TimestepValues)
+for t in result["streak_times"]:
+    streak.UpdatePipeline(t)
+    SaveData(work + "/plugin-streak-%g.vtp" % t, proxy=streak, DataMode="Ascii")
+# Left at their defaults (empty), release and frames are the input's whole range and its steps.
+streak_default = OrthofrontStreakSurface(Input=frames, Vectors=["POINTS", "velocity"], Edge=0.1,
+                                         **seed2)
+streak_default.UpdatePipelineInformation()
+result["streak_default_times"] = list(streak_default.TimestepValues)
 with open(work + "/plugin.json", "w") as file:
     json.dump(result, file)

@@ -1,6 +1,6 @@
 """The compiled ParaView plugin under pvbatch, loaded through PV_PLUGIN_PATH: its properties are
-the option schema's (names, defaults, ranges, documentation), and its surface is the command
-line's, point for point."""
+the option schema's (names, defaults, ranges, documentation), and its stream, path and streak
+surfaces are the command line's, point for point."""
 
 import json
 import os
@@ -14,7 +14,7 @@ import pytest
 import orthofront
 from conftest import run_cli, write_vti
 from orthofront import preview
-from test_module import helix_grid
+from test_module import helix_grid, shear_series
 
 SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "paraview_plugin_run.py")
 
@@ -35,6 +35,9 @@ def plugin_run(tmp_path_factory):
     work = tmp_path_factory.mktemp("plugin")
     values, origin, spacing = helix_grid(9)
     write_vti(work / "helix.vti", values, origin, spacing)
+    steps, _, origin2, spacing2 = shear_series()
+    for i in range(len(steps)):
+        write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
     env = dict(os.environ, PV_PLUGIN_PATH=os.path.join(plugin_dir, "OrthofrontSurfaces"))
     result = subprocess.run([pvbatch, SCRIPT, str(work)], capture_output=True, text=True,
                             timeout=300, env=env)
@@ -123,3 +126,41 @@ def test_a_refused_value_names_the_property_and_leaves_no_surface(plugin_run):
     _, result, stderr = plugin_run
     assert result["bad_edge"]["points"] == 0 and result["bad_edge"]["report"] is None
     assert re.search(r"Edge: .*-1.* not a positive number", stderr), stderr[-2000:]
+
+
+def assert_same_mesh(plugin_file, cli_file):
+    vertices, faces, attributes = preview.read_mesh(plugin_file)
+    cli_vertices, cli_faces, cli_attributes = preview.read_mesh(cli_file)
+    assert len(cli_vertices) > 10
+    assert np.array_equal(vertices, cli_vertices)
+    assert np.array_equal(faces, cli_faces)
+    for name in cli_attributes:
+        assert np.array_equal(attributes[name], cli_attributes[name]), name
+
+
+def test_the_path_filter_reads_the_steps_and_makes_the_command_lines_surface(plugin_run,
+                                                                             orthofront_binary):
+    work, result, _ = plugin_run
+    out = work / "path-cli.vtp"
+    # ParaView numbers a list of files 0, 1, 2, ...: the glob's default dt of 1.
+    run_cli(orthofront_binary, "path", "--field", str(work / "frame*.vti"), "--seed",
+            "line:0.2,0.2,0:0.2,0.6,0", "--seed-count", 9, "--edge", 0.1, "--t0", 0, "--t1", 3,
+            "--out", out, "--quiet")
+    assert_same_mesh(work / "plugin-path.vtp", out)
+    assert result["path"]["complete"] is True and result["path"]["path"]["t1"] == 3
+
+
+def test_the_streak_filter_has_a_time_step_per_frame_each_the_command_lines(plugin_run,
+                                                                            orthofront_binary):
+    work, result, _ = plugin_run
+    assert result["streak_times"] == [2.0, 3.0]
+    out = work / "streak-cli.pvd"
+    run_cli(orthofront_binary, "streak", "--field", str(work / "frame*.vti"), "--seed",
+            "line:0.2,0.2,0:0.2,0.6,0", "--release", "0:1", "--frames", "2,3", "--edge", 0.05,
+            "--seed-count", 9, "--out", out, "--quiet")
+    frames = sorted((work / "streak-cli").glob("*.vtp"))
+    assert len(frames) == 2
+    for time, frame in zip((2, 3), frames):
+        assert_same_mesh(work / ("plugin-streak-%g.vtp" % time), frame)
+    # Release and frames left empty: the input's whole range, a frame at each later step.
+    assert result["streak_default_times"] == [1.0, 2.0, 3.0, 4.0, 5.0]

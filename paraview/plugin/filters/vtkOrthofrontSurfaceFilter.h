@@ -1,13 +1,20 @@
 #pragma once
-/// The orthofront surface filters' common part: the vector field from a vtkImageData input, the
-/// seed line, the options by name (each filter's generated setters store them), and the
-/// surface as vtkPolyData with its per-vertex attributes and the run's report as field data.
+/// The orthofront surface filters' common part: the vector field from a vtkImageData input (for
+/// path and streak surfaces its time steps, asked of the pipeline one at a time), the seed
+/// line, the options by name (each filter's generated setters store them), and the surface as
+/// vtkPolyData with its per-vertex attributes and the run's report as field data. A streak
+/// surface's output has a time step per frame.
 #include <initializer_list>
 #include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "OrthofrontFiltersModule.h"
 #include "vtkPolyDataAlgorithm.h"
+#include "vtkSmartPointer.h"
+
+class vtkPolyData;
 
 class ORTHOFRONTFILTERS_EXPORT vtkOrthofrontSurfaceFilter : public vtkPolyDataAlgorithm {
  public:
@@ -33,6 +40,10 @@ class ORTHOFRONTFILTERS_EXPORT vtkOrthofrontSurfaceFilter : public vtkPolyDataAl
   ~vtkOrthofrontSurfaceFilter() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation* request, vtkInformationVector** inputVector,
+                         vtkInformationVector* outputVector) override;
+  int RequestUpdateExtent(vtkInformation* request, vtkInformationVector** inputVector,
+                          vtkInformationVector* outputVector) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
                   vtkInformationVector* outputVector) override;
 
@@ -52,8 +63,22 @@ class ORTHOFRONTFILTERS_EXPORT vtkOrthofrontSurfaceFilter : public vtkPolyDataAl
   vtkOrthofrontSurfaceFilter(const vtkOrthofrontSurfaceFilter&) = delete;
   void operator=(const vtkOrthofrontSurfaceFilter&) = delete;
   void StoreOption(const char* option, const std::string& text);
+  // Path and streak surfaces: the input times the run needs (throws InvalidArgument).
+  std::vector<double> NeededTimes() const;
+  // Takes one time step of the input; builds the surface once the last is in.
+  void CollectStep(vtkInformation* request, vtkInformationVector** inputVector);
+  void OutputFrame(vtkInformationVector* outputVector);
+  void RunStream(vtkInformationVector** inputVector, vtkPolyData* output);
 
   std::string Kind;
   std::map<std::string, std::string> Options;
   std::string Report;
+  std::vector<double> InputTimes;
+  // Path and streak surfaces: the steps being collected, and the surfaces built from them (one,
+  // or one a frame) with the options and input they were built from.
+  struct Run;
+  std::unique_ptr<Run> Collecting;
+  std::vector<double> FrameTimes;
+  std::vector<vtkSmartPointer<vtkPolyData>> Surfaces;
+  vtkMTimeType SurfacesKey = 0;
 };

@@ -1,0 +1,5 @@
+#include "vtkOrthofrontPathSurface.h"
+
+#include "vtkObjectFactory.h"
+
+vtkStandardNewMacro(vtkOrthofrontPathSurface);

@@ -1,0 +1,5 @@
+#include "vtkOrthofrontStreakSurface.h"
+
+#include "vtkObjectFactory.h"
+
+vtkStandardNewMacro(vtkOrthofrontStreakSurface);
