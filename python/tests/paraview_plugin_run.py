@@ -15,8 +15,17 @@ reader = XMLImageDataReader(FileName=[work + "/helix.vti"])
 reader.UpdatePipeline()
 surface = OrthofrontStreamSurface(Input=reader)
 result = {"vectors": list(surface.Vectors), "properties": {}}
-for name in surface.ListProperties():
-    prop = surface.GetProperty(name)
+
+
+def describe(proxy):
+    """Each property's documentation, domains and raw elements."""
+    properties = {}
+    for name in proxy.ListProperties():
+        properties[name] = describe_property(proxy.GetProperty(name))
+    return properties
+
+
+def describe_property(prop):
     smp = prop.SMProperty
     doc = smp.GetDocumentation()
     domains = []
@@ -36,12 +45,15 @@ for name in surface.ListProperties():
     if smp.IsA("vtkSMVectorProperty"):
         value = [smp.GetElement(i) for i in range(smp.GetNumberOfElements())]
         value = value[0] if len(value) == 1 else value
-    result["properties"][name] = {
+    return {
         "xml_name": smp.GetXMLName(),
         "documentation": doc.GetDescription() if doc is not None else "",
         "domains": domains,
         "value": value,
     }
+
+
+result["properties"] = describe(surface)
 
 
 def run(out, **properties):
@@ -62,6 +74,9 @@ result["bad_edge"] = run(work + "/plugin-bad.vtp", Edge=-1.0, **seed)
 # A series of files: ParaView numbers them 0, 1, 2, ...
 frames = XMLImageDataReader(FileName=[work + "/frame%d.vti" % i for i in range(6)])
 frames.UpdatePipeline(0)
+# The properties as a new filter has them.
+result["path_properties"] = describe(OrthofrontPathSurface(Input=frames))
+result["streak_properties"] = describe(OrthofrontStreakSurface(Input=frames))
 seed2 = dict(SeedPoint1=[0.2, 0.2, 0.0], SeedPoint2=[0.2, 0.6, 0.0], SeedCount=9)
 path = OrthofrontPathSurface(Input=frames, Vectors=["POINTS", "velocity"], Edge=0.1, T0="0",
                              T1="3", **seed2)

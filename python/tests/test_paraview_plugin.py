@@ -46,27 +46,38 @@ def plugin_run(tmp_path_factory):
     return work, json.loads((work / "plugin.json").read_text()), result.stderr
 
 
-def panel_options():
-    """The stream surface's options a ParaView user sets: all but the device's."""
-    return [entry for entry in orthofront._orthofront._keywords("stream")
-            if not entry["option"].startswith("--device")]
+# The command line's options the plugin leaves to it: the device, the streak surface's other
+# routes, and the space-time output file.
+COMMAND_LINE_ONLY = ("--device", "--route", "--point", "--spacetime-out")
+# Their defaults come from the data: 0 or empty on the panel, as its documentation says.
+FROM_DATA = ("--edge", "--max-vertices", "--t0", "--t1", "--release", "--frames")
 
 
-def test_every_option_is_a_property_with_the_same_default_and_documentation(plugin_run):
+def panel_options(kind):
+    """The kind's options a ParaView user sets, as Python's keywords list them."""
+    return [entry for entry in orthofront._orthofront._keywords(kind)
+            if not entry["option"].startswith(COMMAND_LINE_ONLY)]
+
+
+@pytest.mark.parametrize("kind,key", [("stream", "properties"), ("path", "path_properties"),
+                                      ("streak", "streak_properties")])
+def test_every_option_is_a_property_with_the_same_default_and_documentation(plugin_run, kind,
+                                                                            key):
     _, result, _ = plugin_run
-    properties = result["properties"]
-    own = {"Input", "Vectors", "SeedPoint1", "SeedPoint2", "ZerosAreNoData"}
-    expected = {property_name(entry["option"]) for entry in panel_options()}
+    properties = result[key]
+    own = {"Input", "Vectors", "SeedPoint1", "SeedPoint2", "ZerosAreNoData", "TimestepValues"}
+    expected = {property_name(entry["option"]) for entry in panel_options(kind)}
     assert set(properties) - own == expected
-    for entry in panel_options():
+    for entry in panel_options(kind):
         prop = properties[property_name(entry["option"])]
         # The help's figures of the machine it runs on ("now 23.0 GiB") are left out.
         help_text = re.sub(r", now [^)]*|; the figure shown is for the memory available now", "",
                            entry["help"])
         assert prop["documentation"].startswith(help_text.rstrip(".")), entry["option"]
         assert "Command line: %s." % entry["option"] in prop["documentation"]
-        if entry["option"] in ("--edge", "--max-vertices") or not entry["default"]:
-            continue  # from the data: 0 on the panel (said in the documentation)
+        if entry["option"] in FROM_DATA or not entry["default"]:
+            assert prop["value"] in (0, "", None), entry["option"]
+            continue  # from the data: 0 or empty on the panel (said in the documentation)
         if entry["flag"]:
             assert prop["value"] == (1 if entry["default"] == "true" else 0), entry["option"]
         elif entry["choices"]:
