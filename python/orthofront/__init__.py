@@ -1,8 +1,8 @@
 """Flow-orthogonal stream, path and streak surfaces.
 
-Fields come from numpy arrays (``Field``, ``Series``), from files (``Field.open``,
-``Series.open``, or a file name where a field is expected) or by analytic name ("abc",
-"double-gyre:A=0.1"). Seeds are seed strings ("line:0,0,0:1,0,0") or arrays of points.
+Fields come from numpy arrays (``Field``, ``Series``), from xarray (``from_xarray``, or a
+Dataset or DataArray where a field is expected), from files (``Field.open``, ``Series.open``, or
+a file name where a field is expected) or by analytic name ("abc", "double-gyre:A=0.1"). Seeds are seed strings ("line:0,0,0:1,0,0") or arrays of points.
 Options are the command line's, with '_' for '-': ``stream_surface(f, s, edge=0.05,
 mu_mode="paper")`` is ``orthofront stream --edge 0.05 --mu-mode paper``, same defaults and checks.
 The interpreter lock is released while a surface is built; Ctrl-C stops the build.
@@ -17,9 +17,12 @@ import numpy as np
 
 from ._orthofront import Error, Field, Series, __version__
 from . import _orthofront
+from .xarray_input import (AxisOrderError, TimeError, UnitsError, from_xarray, is_xarray,
+                           times_in_seconds)
 
 __all__ = ["Error", "Field", "Series", "Surface", "StreakSurface", "stream_surface",
-           "path_surface", "streak_surface", "__version__"]
+           "path_surface", "streak_surface", "from_xarray", "AxisOrderError", "UnitsError",
+           "TimeError", "__version__"]
 
 
 class Surface:
@@ -137,6 +140,8 @@ def stream_surface(field, seed, closed=False, **options):
     or (n, 3) array of points (``closed=True`` joins the last point to the first). options: the
     options of ``orthofront stream`` (seed_count, edge, steps, method, mu_mode, ...).
     """
+    if is_xarray(field):
+        field = from_xarray(field)
     surface = Surface(_orthofront._stream_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the stream surface")
     if len(surface.faces) == 0:
@@ -157,6 +162,9 @@ def path_surface(field, seed, closed=False, **options):
     vertices are (x, y, c t), c = ``report["path"]["time_scale"]`` (``flat=True``: (x, y, 0));
     ``spacetime_vertices`` are (x, y, c t) either way, and ``attributes["time"]`` is t.
     """
+    if is_xarray(field):
+        field = from_xarray(field)
+    times_in_seconds(field, options, ("t0", "t1"))
     surface = Surface(_orthofront._path_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the path surface")
     return surface
@@ -168,6 +176,9 @@ def streak_surface(field, seed, closed=False, **options):
     Options are those of ``orthofront streak`` (release=(t0, t1), frames=[...] or "a:b:n", edge,
     split, merge, insert, cache_budget, device, ...).
     """
+    if is_xarray(field):
+        field = from_xarray(field)
+    times_in_seconds(field, options, ("release", "frames"))
     surface = StreakSurface(_orthofront._streak_surface(field, seed, closed=closed, **options))
     _check_complete(surface.report, "the streak surface")
     return surface
@@ -238,20 +249,22 @@ closed : bool, optional
 """
 
 _document(stream_surface, "stream", """
-field : Field or str
-    A Field, a data file name or an analytic field name.
+field : Field, xarray.Dataset, xarray.DataArray or str
+    A Field, an xarray object (see ``from_xarray``), a data file name or an analytic field name.
 seed : str or array_like
     A seed string ("line:0,0,0:1,0,0") or an (n, 2) or (n, 3) array of points.
 """)
 _document(path_surface, "path", """
-field : Series or str
-    A Series, a file or glob of a series, or an unsteady analytic field name.
+field : Series, xarray.Dataset, xarray.DataArray or str
+    A Series, an xarray object with a time dimension (see ``from_xarray``; t0 and t1 may then be
+    datetime64), a file or glob of a series, or an unsteady analytic field name.
 seed : str or array_like
     A seed string or an (n, 2) or (n, 3) array of points, at t0.
 """)
 _document(streak_surface, "streak", """
-field : Series or str
-    A Series, a file or glob of a series, or an unsteady analytic field name.
+field : Series, xarray.Dataset, xarray.DataArray or str
+    A Series, an xarray object with a time dimension (see ``from_xarray``; release and frames
+    may then be datetime64), a file or glob of a series, or an unsteady analytic field name.
 seed : str or array_like
     The curve the dye leaves: a seed string or an (n, 2) or (n, 3) array of points.
 """)
