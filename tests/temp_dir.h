@@ -53,4 +53,15 @@ inline std::string read_text(const std::filesystem::path& path) {
   return text.str();
 }
 
+/// A .vtp file's text without its field data (the notes of where it came from): two runs of
+/// one surface from different files of the same data give the same rest, byte for byte.
+inline std::string vtp_geometry_text(const std::filesystem::path& path) {
+  std::string text = read_text(path);
+  const std::size_t begin = text.find("<FieldData>");
+  const std::size_t end = text.find("</FieldData>");
+  if (begin != std::string::npos && end != std::string::npos && end > begin)
+    text.erase(begin, end + std::string("</FieldData>").size() - begin);
+  return text;
+}
+
 }  // namespace test_support

@@ -23,6 +23,7 @@
 #include "cli/commands.h"
 #include "orthofront/io/open_field.h"
 #include "jobs/edge_default.h"
+#include "jobs/output_notes.h"
 #include "jobs/process_memory.h"
 #include "cli/progress_bar.h"
 #include "jobs/seed_spec.h"
@@ -526,7 +527,7 @@ class BatchRun {
       for (std::size_t k = 0; k < tasks.size(); ++k) {
         if (finished[k] || waiting[k]) continue;
         if (!tasks[k]->ready()) {  // stopped: write it now
-          complete(*tasks[k], index[k]);
+          complete(*tasks[k], index[k], series.get());
           finished[k] = 1;
           continue;
         }
@@ -624,6 +625,7 @@ class BatchRun {
         o.device = advect::parse_device(args_.device);
         o.device_bytes = device_bytes();
       }
+      writer.set_notes(output_notes("streak", s.field, nullptr));
       const auto sink = [&](const spacetime::StreakFrame& frame) {
         writer.add_frame(frame.mesh, frame.time);
       };
@@ -634,6 +636,7 @@ class BatchRun {
         result = spacetime::build_streak_surface(*make_unsteady_field(s.field), seed, o, sink);
       } else {
         const auto series = io::open_time_series(s.field, "streak surfaces");
+        writer.set_notes(output_notes("streak", s.field, series.get()));
         // As `streak`: without an edge, the series' cell size.
         edge = choose_edge(o.edge, s.given("edge"), &series->geometry());
         o.edge = edge.edge;
@@ -708,11 +711,13 @@ class BatchRun {
                   checkpoints_.folder().string() + "'; continue with --resume");
   }
 
-  void complete(SurfaceTask& task, std::size_t i) {
+  // `series`: the group's streamed series (null for steady fields and analytic flows).
+  void complete(SurfaceTask& task, std::size_t i, const io::TimeSeries* series) {
     const SurfaceSpec& s = task.spec();
     const auto t0 = Clock::now();
     try {
       auto [mesh, report] = task.finish();
+      mesh.notes = output_notes(to_string(s.kind), s.field, series);
       const std::filesystem::path out = output_path(job_, s);
       report["name"] = s.name;
       report["field"] = s.field;

@@ -12,6 +12,7 @@
 #include "cli/option_flags.h"
 #include "jobs/edge_default.h"
 #include "jobs/engine_options.h"
+#include "jobs/output_notes.h"
 #include "jobs/path_job.h"
 #include "cli/pictures.h"
 #include "jobs/process_memory.h"
@@ -120,6 +121,7 @@ void add_path_command(CLI::App& app) {
       o.t1 = args->t1;
     };
     EdgeChoice edge = choose_edge(o.engine.edge, c->count("--edge") > 0, nullptr);
+    MeshNotes notes = output_notes("path", args->field, nullptr);
     if (is_unsteady_field_name(args->field)) {
       if (o.device)
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
@@ -131,6 +133,7 @@ void add_path_command(CLI::App& app) {
       const std::unique_ptr<io::TimeSeries> series =
           io::open_time_series(args->field, "path surfaces");
       resolve_times(series.get());
+      notes = output_notes("path", args->field, series.get());
       edge = choose_edge(o.engine.edge, c->count("--edge") > 0, &series->geometry());
       o.engine.edge = edge.edge;
       const spacetime::CacheOptions co = path_cache_options(*args);
@@ -166,6 +169,7 @@ void add_path_command(CLI::App& app) {
     }
     spacetime::place_for_output(result, args->flat);
     Mesh& mesh = result.mesh;
+    mesh.notes = std::move(notes);
     // The mesh and its report are replaced together: both are written in full to temporaries
     // before either is renamed (a failure replaces neither), and a concurrent run of the same
     // outputs cannot interleave its files with these.

@@ -10,6 +10,7 @@
 #include "cli/option_flags.h"
 #include "jobs/edge_default.h"
 #include "jobs/engine_options.h"
+#include "jobs/output_notes.h"
 #include "jobs/grid_args.h"
 #include "cli/pictures.h"
 #include "jobs/process_memory.h"
@@ -254,6 +255,7 @@ void add_streak_command(CLI::App& app) {
         throw InvalidArgument("--device: bulk advection reads gridded series; '" + args->field +
                               "' is an analytic field (sample it with `generate` first)");
       const auto flow = make_unsteady_field(args->field);
+      writer.set_notes(output_notes("streak", args->field, nullptr));
       result = spacetime::build_streak_surface(*flow, seed, o, sink);
     } else {
       const std::unique_ptr<io::TimeSeries> series =
@@ -264,6 +266,7 @@ void add_streak_command(CLI::App& app) {
       co.budget_bytes = streak_cache_budget(*args);
       cache_budget = co.budget_bytes;
       zero_is_no_data = series->zero_is_no_data();
+      writer.set_notes(output_notes("streak", args->field, series.get()));
       spacetime::BrickCache cache(*series, co);
       result = spacetime::build_streak_surface(cache, seed, o, sink);
     }

@@ -5,6 +5,7 @@
 #include "cli/option_flags.h"
 #include "jobs/edge_default.h"
 #include "jobs/engine_options.h"
+#include "jobs/output_notes.h"
 #include "cli/pictures.h"
 #include "jobs/process_memory.h"
 #include "cli/quality_warnings.h"
@@ -89,6 +90,7 @@ void add_stream_command(CLI::App& app) {
     // The mesh and its report are replaced together: both are written in full to temporaries
     // before either is renamed (a failure replaces neither), and a concurrent run of the same
     // outputs cannot interleave its files with these.
+    result.mesh.notes = output_notes("stream", args->job.field, nullptr);
     const io::OutputLock lock(out);
     io::AtomicFileSet outputs;
     io::write_mesh(result.mesh, out, outputs);

@@ -293,6 +293,16 @@ TEST_CASE("NetCDF: path lines of a uniform eastward flow stay on their latitude"
   INFO("latitude drift " << worst_lat << "°, longitude error " << worst_lon << "°, farthest "
                          << longest << "° east; relative error on grid rows " << worst_on_rows
                          << " over " << on_rows << " vertices");
+  // The file says what its positions and times are in.
+  const auto note = [&](const std::string& name) {
+    for (const auto& [key, text] : mesh.notes)
+      if (key == name) return text;
+    return std::string("(none)");
+  };
+  CHECK(note("position_units") == "degrees: x longitude east, y latitude north");
+  CHECK(note("time").find("seconds since") != std::string::npos);
+  CHECK(note("source") == (days / "day*.nc").string());
+  CHECK(note("orthofront_surface").rfind("path surface, orthofront ", 0) == 0);
   CHECK(longest > 0.35);  // one day at 0.5 m/s: 0.39° to 0.44° at these latitudes
   CHECK(worst_lat < 1e-9);
   CHECK(worst_lon < 1e-4);  // bilinear 1 / cos(lat) between grid rows

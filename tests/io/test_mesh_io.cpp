@@ -170,6 +170,24 @@ TEST_CASE("meshes round-trip through .ply, .vtp and .obj", "[io][mesh]") {
   }
 }
 
+TEST_CASE(".vtp files carry the mesh's notes as field data, read back exactly", "[io][mesh]") {
+  Mesh mesh = sample_mesh();
+  mesh.notes = {{"source", "data/day*.nc:u,v & \"w\" <tab>\there"},
+                {"position_units", "degrees: x longitude east (\u00b0)"}, {"empty", ""}};
+  TempDir dir;
+  write_mesh(mesh, dir / "noted.vtp");
+  const std::string text = read_text(dir / "noted.vtp");
+  CHECK(text.find("<FieldData>") < text.find("<Piece"));
+  const Mesh back = read_mesh(dir / "noted.vtp");
+  CHECK(back.notes == mesh.notes);
+  require_same_positions(back, mesh);
+  CHECK(back.faces == mesh.faces);
+  // Other formats have no room for them; a mesh without notes writes no field data.
+  mesh.notes.clear();
+  write_mesh(mesh, dir / "plain.vtp");
+  CHECK(read_text(dir / "plain.vtp").find("FieldData") == std::string::npos);
+}
+
 TEST_CASE("empty meshes and meshes without attributes round-trip", "[io][mesh]") {
   const std::string extension = GENERATE(as<std::string>{}, ".ply", ".vtp", ".obj");
   INFO("format " << extension);

@@ -1,4 +1,5 @@
 #include "orthofront/io/hdf5_detail.h"
+#include "orthofront/io/xml_text.h"
 
 #include <blosc.h>
 
@@ -300,28 +301,6 @@ std::string number(double value) {
   return text;
 }
 
-std::string escape_xml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 // "nz ny nx" (2D: "ny nx"): XDMF lists dimensions slowest first.
 std::string point_dims(const GridGeometry& g) {
@@ -368,7 +347,7 @@ std::string topology_and_geometry(const Hdf5Description& d, const std::string& h
       out += indent + "  <DataItem Dimensions=\"" +
              std::to_string(g.size[static_cast<std::size_t>(a)]) +
              "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + h5 + ":" +
-             escape_xml(child_path(d.group, name)) + "</DataItem>\n";
+             xml_escaped(child_path(d.group, name)) + "</DataItem>\n";
     }
     if (!three_d)
       out += indent +
@@ -399,7 +378,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
     out += indent + "    <DataItem Dimensions=\"3 " + std::to_string(rank) + "\" Format=\"XML\">" +
            start + " " + stride + " " + count + "</DataItem>\n";
     out += indent + "    <DataItem Dimensions=\"" + std::to_string(d.times.size()) + " " + dims +
-           "\" " + type + ">" + h5 + ":" + escape_xml(d.dataset) + "</DataItem>\n";
+           "\" " + type + ">" + h5 + ":" + xml_escaped(d.dataset) + "</DataItem>\n";
     out += indent + "  </DataItem>\n";
   } else {
     char name[32];
@@ -407,7 +386,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
     const std::string path =
         d.storage == Hdf5Storage::per_step ? child_path(d.dataset, name) : d.dataset;
     out += indent + "  <DataItem Dimensions=\"" + declared + "\" " + type + ">" + h5 + ":" +
-           escape_xml(path) + "</DataItem>\n";
+           xml_escaped(path) + "</DataItem>\n";
   }
   return out + indent + "</Attribute>\n";
 }
@@ -415,7 +394,7 @@ std::string step_attribute(const Hdf5Description& d, const std::string& h5, std:
 }  // namespace
 
 std::string xdmf_text(const Hdf5Description& d, const std::string& h5_name) {
-  const std::string h5 = escape_xml(h5_name);
+  const std::string h5 = xml_escaped(h5_name);
   std::string out =
       "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
       "<Xdmf Version=\"2.0\">\n  <Domain>\n";

@@ -13,26 +13,9 @@
 #include "orthofront/io/atomic_file.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_io.h"
+#include "orthofront/io/xml_text.h"
 
 namespace orthofront::io {
-
-namespace {
-
-std::string xml_escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 MeshSeriesWriter::MeshSeriesWriter(std::filesystem::path pvd) : pvd_(std::move(pvd)) {
   if (pvd_.extension() != ".pvd")
@@ -82,7 +65,13 @@ std::filesystem::path MeshSeriesWriter::add_frame(const Mesh& mesh, double time)
   std::snprintf(file, sizeof file, "%s_%04zu.vtp", "", entries_.size());
   const std::string relative = name_ + "/" + name_ + file;
   const std::filesystem::path path = pvd_.parent_path() / relative;
-  write_mesh(mesh, path);
+  if (notes_.empty() || !mesh.notes.empty()) {
+    write_mesh(mesh, path);
+  } else {
+    Mesh noted = mesh;
+    noted.notes = notes_;
+    write_mesh(noted, path);
+  }
   entries_.push_back({time, relative});
   try {
     write_collection();
@@ -102,7 +91,7 @@ void MeshSeriesWriter::write_collection() const {
     for (const Entry& e : entries_) {
       std::snprintf(time, sizeof time, "%.17g", e.time);
       out << "    <DataSet timestep=\"" << time << "\" group=\"\" part=\"0\" file=\""
-          << xml_escape(e.file) << "\"/>\n";
+          << xml_escaped(e.file) << "\"/>\n";
     }
     out << "  </Collection>\n</VTKFile>\n";
   });

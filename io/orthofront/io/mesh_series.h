@@ -27,6 +27,8 @@ class MeshSeriesWriter {
   /// frame's path. Throws IoError naming the file on a failed write (the .pvd then still lists
   /// only the frames before this one).
   std::filesystem::path add_frame(const Mesh& mesh, double time);
+  /// Notes every frame carries where its mesh has none of its own (Mesh::notes).
+  void set_notes(std::vector<std::pair<std::string, std::string>> notes) { notes_ = std::move(notes); }
 
   const std::filesystem::path& pvd() const { return pvd_; }
   const std::filesystem::path& frame_folder() const { return folder_; }
@@ -41,6 +43,7 @@ class MeshSeriesWriter {
   std::filesystem::path pvd_, folder_;
   std::string name_;
   std::vector<Entry> entries_;
+  std::vector<std::pair<std::string, std::string>> notes_;
   int lock_ = -1;         // the frame folder, flock'ed
   bool made_folder_ = false;  // removed again if no frame was written
 };

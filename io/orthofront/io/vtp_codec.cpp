@@ -1,6 +1,8 @@
 #include "orthofront/io/vtp_codec.h"
 
 #include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -10,6 +12,7 @@
 
 #include "orthofront/io/base64.h"
 #include "orthofront/io/vtk_xml.h"
+#include "orthofront/io/xml_text.h"
 #include "orthofront/io/error.h"
 #include "orthofront/io/mesh_attributes.h"
 #include "orthofront/io/number_text.h"
@@ -129,6 +132,8 @@ class VtpReader {
         start_piece(tag);
       } else if (tag.name == "DataArray") {
         read_data_array(tag, parent);
+      } else if (tag.name == "Array" && parent == "FieldData") {
+        read_note(tag);
       }
       if (!tag.self_closing) open.push_back(tag.name);
     }
@@ -210,6 +215,31 @@ class VtpReader {
     } else if (parent == "PointData" && is_attribute) {
       piece_->point_data.emplace_back(name, decode(tag, content, what));
     }
+  }
+
+  // A field-data string array in ascii: byte values, each string ended by a 0 (the first kept).
+  void read_note(const XmlTag& tag) {
+    const std::string* type = tag.attribute("type");
+    const std::string* format = tag.attribute("format");
+    const std::string* name = tag.attribute("Name");
+    const std::string_view content = tag.self_closing ? std::string_view() : xml_.text();
+    if (type == nullptr || *type != "String" || format == nullptr || *format != "ascii" ||
+        name == nullptr)
+      return;  // other field data: not a note
+    std::string text;
+    std::size_t at = 0;
+    while (at < content.size()) {
+      while (at < content.size() && std::isspace(static_cast<unsigned char>(content[at]))) ++at;
+      if (at >= content.size()) break;
+      unsigned value = 0;
+      const auto [end, ec] = std::from_chars(content.data() + at, content.data() + content.size(), value);
+      if (ec != std::errc() || value > 255)
+        throw error("field data '" + *name + "' is not a string array of byte values");
+      at = static_cast<std::size_t>(end - content.data());
+      if (value == 0) break;
+      text += static_cast<char>(value);
+    }
+    mesh_.notes.emplace_back(*name, std::move(text));
   }
 
   ArrayData decode(const XmlTag& tag, std::string_view content, const std::string& what) const {
@@ -426,7 +456,20 @@ void write_vtp(const Mesh& mesh, std::ostream& out) {
              "<?xml version=\"1.0\"?>\n"
              "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\" "
              "header_type=\"UInt64\">\n"
-             "  <PolyData>\n"
+             "  <PolyData>\n");
+  if (!mesh.notes.empty()) {
+    // String arrays as VTK writes them: each string's bytes as numbers, then a 0.
+    write_text(out, "    <FieldData>\n");
+    for (const auto& [name, text] : mesh.notes) {
+      std::string codes;
+      for (const unsigned char c : text) codes += std::to_string(static_cast<int>(c)) + " ";
+      write_text(out, "      <Array type=\"String\" Name=\"" + xml_escaped(name) +
+                          "\" NumberOfTuples=\"1\" format=\"ascii\">\n        " + codes +
+                          "0\n      </Array>\n");
+    }
+    write_text(out, "    </FieldData>\n");
+  }
+  write_text(out,
              "    <Piece NumberOfPoints=\"" +
                  std::to_string(n) +
                  "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" "

@@ -4,6 +4,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "orthofront/huge_pages.h"
@@ -42,6 +44,9 @@ struct Mesh {
   /// 1: the particle lies on the path of its label (release_time, s); 0: it was placed by
   /// interpolation, so its label is approximate. Empty where not recorded.
   Array<std::int32_t> on_path;
+  /// What the mesh means, as (name, text) pairs: what it is, the data it came from, what its
+  /// positions and times are in. Written where the format has room for them (.vtp field data).
+  std::vector<std::pair<std::string, std::string>> notes;
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t face_count() const { return faces.size(); }
