@@ -42,7 +42,7 @@ std::vector<std::string> includes_matching(const fs::path& folder, const std::re
   std::vector<std::string> hits;
   for (const auto& entry : fs::recursive_directory_iterator(folder)) {
     const auto ext = entry.path().extension();
-    if (ext != ".h" && ext != ".cpp") continue;
+    if (ext != ".h" && ext != ".cpp" && ext != ".cxx") continue;
     std::ifstream in(entry.path());
     std::string line;
     int number = 0;
@@ -57,11 +57,12 @@ std::vector<std::string> includes_matching(const fs::path& folder, const std::re
 
 }  // namespace
 
-TEST_CASE("the jobs layer and Python never include the command line", "[layering]") {
+TEST_CASE("the jobs layer, Python and the ParaView plugin never include the command line",
+          "[layering]") {
   const fs::path source(ORTHOFRONT_SOURCE_DIR);
   // apps/jobs holds every front end's options and checks: no command-line parser in it.
   const std::regex command_line(R"(#\s*include\s*[<"](cli/|CLI/))");
-  for (const char* folder : {"apps/jobs", "python/src"}) {
+  for (const char* folder : {"apps/jobs", "python/src", "paraview"}) {
     INFO(folder);
     REQUIRE(fs::is_directory(source / folder));
     const std::vector<std::string> hits = includes_matching(source / folder, command_line);
@@ -76,4 +77,13 @@ TEST_CASE("the jobs layer and Python never include the command line", "[layering
   while (std::getline(cmake, line)) text += line + "\n";
   CHECK(text.find("orthofront_cli") == std::string::npos);
   CHECK(text.find("orthofront_jobs") != std::string::npos);
+  // Nor does the ParaView plugin.
+  for (const char* file : {"paraview/CMakeLists.txt", "paraview/plugin/filters/CMakeLists.txt"}) {
+    INFO(file);
+    std::ifstream in(source / file);
+    std::string plugin_text;
+    while (std::getline(in, line)) plugin_text += line + "\n";
+    CHECK(plugin_text.find("orthofront_cli") == std::string::npos);
+    CHECK(plugin_text.find("orthofront_jobs") != std::string::npos);
+  }
 }
