@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "jobs/surface_kind.h"
+#include "orthofront/io/xml_text.h"
 #include "paraview_names.h"
 
 namespace {
@@ -24,19 +25,6 @@ using orthofront::jobs::OptionType;
 using orthofront::jobs::SurfaceKind;
 namespace pv = orthofront::paraview;
 
-std::string xml_escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 std::string number(double value) {
   char text[32];
@@ -97,7 +85,7 @@ void write_property(std::ostream& out, const OptionSpec& spec) {
   const std::string name = pv::property_name(spec.name);
   const std::string attributes = " name=\"" + name + "\" label=\"" + pv::property_label(spec.name) +
                                  "\" command=\"Set" + name + "\" number_of_elements=\"1\"" +
-                                 " default_values=\"" + xml_escape(panel_default(spec)) + "\"" +
+                                 " default_values=\"" + orthofront::io::xml_escaped(panel_default(spec)) + "\"" +
                                  (pv::shown_by_default(spec) ? "" : " panel_visibility=\"advanced\"");
   const auto range = [&](const char* domain) {
     if (!std::isfinite(spec.lo) && !std::isfinite(spec.hi)) return;
@@ -126,7 +114,7 @@ void write_property(std::ostream& out, const OptionSpec& spec) {
     case OptionType::choice:
       out << "      <IntVectorProperty" << attributes << ">\n        <EnumerationDomain name=\"enum\">\n";
       for (std::size_t i = 0; i < spec.choices.size(); ++i)
-        out << "          <Entry value=\"" << i << "\" text=\"" << xml_escape(spec.choices[i])
+        out << "          <Entry value=\"" << i << "\" text=\"" << orthofront::io::xml_escaped(spec.choices[i])
             << "\" />\n";
       out << "        </EnumerationDomain>\n";
       break;
@@ -134,12 +122,26 @@ void write_property(std::ostream& out, const OptionSpec& spec) {
       out << "      <StringVectorProperty" << attributes << ">\n";
       break;
   }
-  out << "        <Documentation>" << xml_escape(documentation(spec)) << "</Documentation>\n";
+  out << "        <Documentation>" << orthofront::io::xml_escaped(documentation(spec)) << "</Documentation>\n";
   const char* element = spec.type == OptionType::real      ? "DoubleVectorProperty"
                         : spec.type == OptionType::count   ? "IdTypeVectorProperty"
                         : spec.type == OptionType::text    ? "StringVectorProperty"
                                                            : "IntVectorProperty";
   out << "      </" << element << ">\n";
+}
+
+// A seed line end: a point of the input's bounds (its lowest or highest corner by default).
+void write_seed_point(std::ostream& out, int end, const char* default_mode, const char* corner) {
+  out << "      <DoubleVectorProperty name=\"Point" << end << "\" label=\"Seed Point " << end
+      << "\" command=\"SetPoint" << end << "\"\n          number_of_elements=\"3\" "
+      << "default_values=\"" << (end == 1 ? "0 0 0" : "1 0 0") << "\">\n"
+      << "        <BoundsDomain name=\"range\" mode=\"normal\" default_mode=\"" << default_mode
+      << "\">\n          <RequiredProperties>\n            <Property name=\"Input\" "
+      << "function=\"Input\" />\n          </RequiredProperties>\n        </BoundsDomain>\n"
+      << "        <Documentation>The seed line's " << (end == 1 ? "first" : "second")
+      << " end (world units); by default the input's " << corner
+      << " corner. Command line: --seed line:P1:P2.</Documentation>\n"
+      << "      </DoubleVectorProperty>\n";
 }
 
 // The input, its vector array and the seed line: the filter's own properties.
@@ -168,27 +170,10 @@ void write_input_properties(std::ostream& out) {
         <Documentation>The velocity: a point array of 3 components (of which a 2D flow uses x
         and y).</Documentation>
       </StringVectorProperty>
-      <DoubleVectorProperty name="Point1" label="Seed Point 1" command="SetPoint1"
-          number_of_elements="3" default_values="0 0 0">
-        <BoundsDomain name="range" mode="normal" default_mode="min">
-          <RequiredProperties>
-            <Property name="Input" function="Input" />
-          </RequiredProperties>
-        </BoundsDomain>
-        <Documentation>The seed line's first end (world units); by default the input's lowest
-        corner. Command line: --seed line:P1:P2.</Documentation>
-      </DoubleVectorProperty>
-      <DoubleVectorProperty name="Point2" label="Seed Point 2" command="SetPoint2"
-          number_of_elements="3" default_values="1 0 0">
-        <BoundsDomain name="range" mode="normal" default_mode="max">
-          <RequiredProperties>
-            <Property name="Input" function="Input" />
-          </RequiredProperties>
-        </BoundsDomain>
-        <Documentation>The seed line's second end (world units); by default the input's highest
-        corner. Command line: --seed line:P1:P2.</Documentation>
-      </DoubleVectorProperty>
-      <PropertyGroup label="Seed Line" panel_widget="InteractiveLine">
+)";
+  write_seed_point(out, 1, "min", "lowest");
+  write_seed_point(out, 2, "max", "highest");
+  out << R"(      <PropertyGroup label="Seed Line" panel_widget="InteractiveLine">
         <Property name="Point1" function="Point1WorldPosition" />
         <Property name="Point2" function="Point2WorldPosition" />
         <Property name="Input" function="Input" />
@@ -210,9 +195,9 @@ void write_xml(std::ostream& out) {
     const KindOptions options(kind);
     out << "    <SourceProxy name=\"" << pv::proxy_name(kind) << "\" class=\"" << pv::class_name(kind)
         << "\" label=\"" << pv::filter_label(kind) << "\">\n";
-    out << "      <Documentation short_help=\"" << xml_escape(pv::filter_help(kind))
-        << "\" long_help=\"" << xml_escape(pv::filter_help(kind)) << "\">"
-        << xml_escape(pv::filter_help(kind)) << "</Documentation>\n";
+    out << "      <Documentation short_help=\"" << orthofront::io::xml_escaped(pv::filter_help(kind))
+        << "\" long_help=\"" << orthofront::io::xml_escaped(pv::filter_help(kind)) << "\">"
+        << orthofront::io::xml_escaped(pv::filter_help(kind)) << "</Documentation>\n";
     write_input_properties(out);
     if (kind == SurfaceKind::streak)  // the frames, as the output's time steps
       out << "      <DoubleVectorProperty name=\"TimestepValues\" information_only=\"1\" "

@@ -10,18 +10,6 @@
 namespace orthofront::jobs {
 namespace {
 
-double parse_time(const std::string& text, const std::string& option) {
-  std::size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(value))
-    throw InvalidArgument(option + ": '" + text + "' is not a finite number");
-  return value;
-}
 
 std::vector<std::string> split_on(const std::string& text, char separator) {
   std::vector<std::string> parts;
@@ -36,11 +24,24 @@ std::vector<std::string> split_on(const std::string& text, char separator) {
 
 }  // namespace
 
+double parse_time_number(const std::string& text, const std::string& option) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(value))
+    throw InvalidArgument(option + ": '" + text + "' is not a finite number");
+  return value;
+}
+
 std::pair<double, double> parse_streak_release(const std::string& text) {
   const auto parts = split_on(text, ':');
   if (parts.size() != 2)
     throw InvalidArgument("--release '" + text + "': expected T0:T1 (the release interval)");
-  return {parse_time(parts[0], "--release"), parse_time(parts[1], "--release")};
+  return {parse_time_number(parts[0], "--release"), parse_time_number(parts[1], "--release")};
 }
 
 // "t1,t2,..." or "START:END:COUNT" (COUNT times from START to END, both included).
@@ -51,8 +52,8 @@ std::vector<double> parse_streak_frames(const std::string& text) {
     if (parts.size() != 3)
       throw InvalidArgument("--frames '" + text +
                             "': expected START:END:COUNT or a list t1,t2,...");
-    const double a = parse_time(parts[0], "--frames"), b = parse_time(parts[1], "--frames");
-    const double n = parse_time(parts[2], "--frames");
+    const double a = parse_time_number(parts[0], "--frames"), b = parse_time_number(parts[1], "--frames");
+    const double n = parse_time_number(parts[2], "--frames");
     if (!(n >= 1 && n <= 100000 && n == std::floor(n)))
       throw InvalidArgument("--frames '" + text +
                             "': COUNT must be a whole number from 1 to 100000");
@@ -63,7 +64,7 @@ std::vector<double> parse_streak_frames(const std::string& text) {
     return frames;
   }
   for (const std::string& part : split_on(text, ','))
-    frames.push_back(parse_time(part, "--frames"));
+    frames.push_back(parse_time_number(part, "--frames"));
   return frames;
 }
 

@@ -73,3 +73,20 @@ def assert_picture(path, size):
     assert drawn.mean() > 0.05, "%s is nearly blank (%.3f drawn)" % (path, drawn.mean())
     colours = np.unique(pixels[drawn].reshape(-1, 3) // 32, axis=0)
     assert len(colours) >= 8, "%s has only %d colour classes" % (path, len(colours))
+
+
+def pvbatch_inputs(tmp_path_factory, name):
+    """pvbatch (skipping visibly without it) and a folder holding the ParaView tests' inputs:
+    helix.vti (a linear 3D field) and frame0.vti ... frame5.vti (a 2D shear series)."""
+    import shutil
+    from test_module import helix_grid, shear_series
+    pvbatch = shutil.which("pvbatch")
+    if pvbatch is None:
+        pytest.skip("SKIPPED: no pvbatch (Debian: paraview, python3-paraview)")
+    work = tmp_path_factory.mktemp(name)
+    values, origin, spacing = helix_grid(9)
+    write_vti(work / "helix.vti", values, origin, spacing)
+    steps, _, origin2, spacing2 = shear_series()
+    for i in range(len(steps)):
+        write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
+    return pvbatch, work

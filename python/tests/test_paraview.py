@@ -3,30 +3,20 @@ of the command line's mesh for the same options, and a screenshot shows the surf
 
 import json
 import os
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import assert_picture, run_cli, write_vti
+from conftest import assert_picture, pvbatch_inputs, run_cli
 from orthofront import preview
-from test_module import helix_grid, shear_series
 
 SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "paraview_run_filters.py")
 
 
 @pytest.fixture(scope="module")
 def paraview_run(tmp_path_factory):
-    pvbatch = shutil.which("pvbatch")
-    if pvbatch is None:
-        pytest.skip("SKIPPED: no pvbatch (Debian: paraview, python3-paraview)")
-    work = tmp_path_factory.mktemp("paraview")
-    values, origin, spacing = helix_grid(9)
-    write_vti(work / "helix.vti", values, origin, spacing)
-    steps, _, origin2, spacing2 = shear_series()
-    for i in range(len(steps)):
-        write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
+    pvbatch, work = pvbatch_inputs(tmp_path_factory, "paraview")
     # A private Xvfb on a display number of its own (xvfb-run -a guesses a free number and fails
     # when another test's server takes it first), started with -noreset (see preview.display).
     with preview.display():

@@ -5,16 +5,14 @@ surfaces are the command line's, point for point."""
 import json
 import os
 import re
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
 
 import orthofront
-from conftest import run_cli, write_vti
+from conftest import pvbatch_inputs, run_cli
 from orthofront import preview
-from test_module import helix_grid, shear_series
 
 SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "paraview_plugin_run.py")
 
@@ -29,15 +27,7 @@ def plugin_run(tmp_path_factory):
     plugin_dir = os.environ.get("ORTHOFRONT_PARAVIEW_PLUGIN_DIR", "")
     if not plugin_dir:
         pytest.skip("SKIPPED: built without the compiled ParaView plugin (Debian: paraview-dev)")
-    pvbatch = shutil.which("pvbatch")
-    if pvbatch is None:
-        pytest.skip("SKIPPED: no pvbatch (Debian: paraview, python3-paraview)")
-    work = tmp_path_factory.mktemp("plugin")
-    values, origin, spacing = helix_grid(9)
-    write_vti(work / "helix.vti", values, origin, spacing)
-    steps, _, origin2, spacing2 = shear_series()
-    for i in range(len(steps)):
-        write_vti(work / ("frame%d.vti" % i), steps[i], origin2, spacing2)
+    pvbatch, work = pvbatch_inputs(tmp_path_factory, "plugin")
     env = dict(os.environ, PV_PLUGIN_PATH=os.path.join(plugin_dir, "OrthofrontSurfaces"))
     result = subprocess.run([pvbatch, SCRIPT, str(work)], capture_output=True, text=True,
                             timeout=300, env=env)

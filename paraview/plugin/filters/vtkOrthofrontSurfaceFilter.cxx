@@ -156,19 +156,6 @@ std::string option_text(const std::map<std::string, std::string>& stored, const 
   return it == stored.end() ? std::string() : it->second;
 }
 
-double time_number(const std::string& text, const char* property) {
-  std::size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(value))
-    throw InvalidArgument(std::string(property) + ": '" + text +
-                          "' is not a number (ParaView's times are numbers)");
-  return value;
-}
 
 /// The input times from the last at or before lo to the first at or after hi.
 std::vector<double> times_covering(const std::vector<double>& times, double lo, double hi) {
@@ -308,8 +295,8 @@ std::vector<double> vtkOrthofrontSurfaceFilter::NeededTimes() const {
   const std::vector<double>& times = this->InputTimes;
   if (this->Kind == "path") {
     const std::string t0 = option_text(this->Options, "t0"), t1 = option_text(this->Options, "t1");
-    const double a = t0.empty() ? times.front() : time_number(t0, "T0");
-    const double b = t1.empty() ? times.back() : time_number(t1, "T1");
+    const double a = t0.empty() ? times.front() : jobs::parse_time_number(t0, "T0");
+    const double b = t1.empty() ? times.back() : jobs::parse_time_number(t1, "T1");
     return times_covering(times, std::min(a, b), std::max(a, b));
   }
   const std::string release = option_text(this->Options, "release");
