@@ -153,10 +153,11 @@ void write_input_properties(std::ostream& out) {
         </ProxyGroupDomain>
         <DataTypeDomain name="input_type">
           <DataType value="vtkImageData" />
+          <DataType value="vtkRectilinearGrid" />
         </DataTypeDomain>
         <InputArrayDomain name="input_vectors" attribute_type="point" />
-        <Documentation>A vtkImageData (a 3D grid, or one slice: a 2D flow in x, y) with a point
-        vector array.</Documentation>
+        <Documentation>Image data or a rectilinear grid (3D, or one point thick in z: a 2D flow
+        in x, y) with a point vector array.</Documentation>
       </InputProperty>
       <StringVectorProperty name="SelectInputVectors" label="Vectors"
           command="SetInputArrayToProcess" number_of_elements="5" element_types="0 0 0 0 2"

@@ -90,7 +90,9 @@ SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name,
     name = seed.cast<std::string>();
     return jobs::parse_seed(name);
   }
-  const auto points = FloatArray::ensure(seed);
+  // Doubles, as a seed string's numbers are read: float32 would move the seed by its rounding.
+  using SeedArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+  const auto points = SeedArray::ensure(seed);
   if (!points || points.ndim() != 2 || (points.shape(1) != 2 && points.shape(1) != 3) ||
       points.shape(0) < 2)
     throw py::value_error(
@@ -100,7 +102,7 @@ SeedCurve resolve_seed(const py::object& seed, bool closed, std::string& name,
   std::vector<Vec3> polyline;
   const auto p = points.unchecked<2>();
   for (py::ssize_t i = 0; i < points.shape(0); ++i)
-    polyline.emplace_back(p(i, 0), p(i, 1), points.shape(1) == 3 ? p(i, 2) : 0.0f);
+    polyline.emplace_back(p(i, 0), p(i, 1), points.shape(1) == 3 ? p(i, 2) : 0.0);
   name = "array of " + std::to_string(points.shape(0)) + " points";
   return SeedCurve::polyline(std::move(polyline), closed);
 }

@@ -71,6 +71,30 @@ seed = dict(SeedPoint1=[0.5, 0.0, 0.2], SeedPoint2=[1.5, 0.0, 0.2], SeedCount=8,
 result["given_edge"] = run(work + "/plugin-edge.vtp", Edge=0.15, **seed)
 result["cell_edge"] = run(work + "/plugin-cell.vtp", Edge=0.0, **seed)
 result["bad_edge"] = run(work + "/plugin-bad.vtp", Edge=-1.0, **seed)
+# A rectilinear grid (z spacing growing): the helix field v = (-y, x, 1) at its points.
+import numpy as np
+from paraview.simple import PVTrivialProducer
+from vtkmodules.util import numpy_support
+from vtkmodules.vtkCommonDataModel import vtkRectilinearGrid
+axes = [np.linspace(-2.0, 2.0, 9), np.linspace(-2.0, 2.0, 9), 4.0 * np.linspace(0.0, 1.0, 9) ** 1.5]
+rectilinear = vtkRectilinearGrid()
+rectilinear.SetDimensions(9, 9, 9)
+for setter, axis in zip((rectilinear.SetXCoordinates, rectilinear.SetYCoordinates,
+                         rectilinear.SetZCoordinates), axes):
+    setter(numpy_support.numpy_to_vtk(axis.copy(), deep=1))
+zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+velocity = np.stack([-yy, xx, np.ones_like(xx)], axis=-1).reshape(-1, 3).astype(np.float32)
+array = numpy_support.numpy_to_vtk(velocity, deep=1)
+array.SetName("velocity")
+rectilinear.GetPointData().AddArray(array)
+producer = PVTrivialProducer()
+producer.GetClientSideObject().SetOutput(rectilinear)
+producer.UpdatePipeline()
+on_rectilinear = OrthofrontStreamSurface(Input=producer, Vectors=["POINTS", "velocity"], Edge=0.15,
+                                         **seed)
+on_rectilinear.UpdatePipeline()
+SaveData(work + "/plugin-rectilinear.vtp", proxy=on_rectilinear, DataMode="Ascii")
+
 # A series of files: ParaView numbers them 0, 1, 2, ...
 frames = XMLImageDataReader(FileName=[work + "/frame%d.vti" % i for i in range(6)])
 frames.UpdatePipeline(0)

@@ -165,3 +165,18 @@ def test_the_streak_filter_has_a_time_step_per_frame_each_the_command_lines(plug
         assert_same_mesh(work / ("plugin-streak-%g.vtp" % time), frame)
     # Release and frames left empty: the input's whole range, a frame at each later step.
     assert result["streak_default_times"] == [1.0, 2.0, 3.0, 4.0, 5.0]
+
+
+def test_a_rectilinear_grid_gives_the_surface_of_the_same_grid_in_python(plugin_run):
+    work, _, _ = plugin_run
+    axes = [np.linspace(-2.0, 2.0, 9), np.linspace(-2.0, 2.0, 9),
+            4.0 * np.linspace(0.0, 1.0, 9) ** 1.5]
+    zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    values = np.stack([-yy, xx, np.ones_like(xx)], axis=-1).astype(np.float32)
+    field = orthofront.Field(values, axes=[list(a) for a in axes])
+    reference = orthofront.stream_surface(field, [[0.5, 0.0, 0.2], [1.5, 0.0, 0.2]], seed_count=8,
+                                          edge=0.15, steps=20)
+    vertices, faces, _ = preview.read_mesh(work / "plugin-rectilinear.vtp")
+    assert len(reference.vertices) > 50
+    assert np.array_equal(vertices, reference.vertices)
+    assert np.array_equal(faces, reference.faces)

@@ -16,6 +16,7 @@
 #include "orthofront/io/mesh_attributes.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/seed/seed_curve.h"
+#include "dataset_grid.h"
 #include "paraview_names.h"
 #include "step_collector.h"
 #include "vtkCellArray.h"
@@ -23,11 +24,10 @@
 #include "vtkDemandDrivenPipeline.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
-#include "vtkImageData.h"
+#include "vtkDataSet.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
-#include "vtkMatrix3x3.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
@@ -42,50 +42,6 @@ std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", value);
   return text;
-}
-
-/// The image's vectors as a grid: 2D where the image is one slice thick (x, y of each vector),
-/// 3D otherwise. Throws InvalidArgument naming what does not fit.
-std::shared_ptr<const VectorGrid> image_grid(vtkImageData* image, vtkDataArray* vectors) {
-  int extent[6];
-  image->GetExtent(extent);
-  double origin[3], spacing[3];
-  image->GetOrigin(origin);
-  image->GetSpacing(spacing);
-  if (vtkMatrix3x3* direction = image->GetDirectionMatrix(); direction && !direction->IsIdentity())
-    throw InvalidArgument("the input image is rotated (its direction matrix is not the "
-                          "identity); resample it to an axis-aligned image first");
-  const int dims[3] = {extent[1] - extent[0] + 1, extent[3] - extent[2] + 1,
-                       extent[5] - extent[4] + 1};
-  auto grid = std::make_shared<VectorGrid>();
-  GridGeometry& g = grid->geometry;
-  g.dimension = dims[2] == 1 ? 2 : 3;
-  for (int a = 0; a < 3; ++a) {
-    g.size[static_cast<std::size_t>(a)] = dims[a];
-    g.origin[a] = origin[a] + extent[2 * a] * spacing[a];
-    g.spacing[a] = spacing[a];
-  }
-  if (g.dimension == 2) g.spacing.z() = 1;
-  const int components = vectors->GetNumberOfComponents();
-  if (components < g.dimension || components > 3)
-    throw InvalidArgument("the vector array '" + std::string(vectors->GetName() ? vectors->GetName() : "") +
-                          "' has " + std::to_string(components) + " components; a " +
-                          std::to_string(g.dimension) + "D image needs " +
-                          std::to_string(g.dimension) + (g.dimension == 2 ? " or 3" : ""));
-  const vtkIdType points = vectors->GetNumberOfTuples();
-  if (static_cast<std::size_t>(points) != g.point_count())
-    throw InvalidArgument("the vector array has " + std::to_string(points) +
-                          " tuples for an image of " + std::to_string(g.point_count()) + " points");
-  grid->components = g.dimension;
-  grid->values.resize(g.point_count() * static_cast<std::size_t>(g.dimension));
-  double tuple[3];
-  for (vtkIdType i = 0; i < points; ++i) {  // VTK's point order is x fastest, as the grid's
-    vectors->GetTuple(i, tuple);
-    for (int c = 0; c < g.dimension; ++c)
-      grid->values[static_cast<std::size_t>(i) * static_cast<std::size_t>(g.dimension) +
-                   static_cast<std::size_t>(c)] = static_cast<float>(tuple[c]);
-  }
-  return grid;
 }
 
 /// The mesh as polydata: points, polygons (triangles and quads) and the recorded attributes.
@@ -170,14 +126,14 @@ std::vector<double> times_covering(const std::vector<double>& times, double lo, 
           times.begin() + static_cast<std::ptrdiff_t>(last) + 1};
 }
 
-/// The input's image and selected vectors, or InvalidArgument saying which is missing.
+/// The input and its selected vectors as a grid, or InvalidArgument saying what is missing.
 std::shared_ptr<const VectorGrid> input_grid(vtkInformationVector** inputVector,
                                              vtkDataArray* vectors) {
-  vtkImageData* image = vtkImageData::GetData(inputVector[0]);
-  if (image == nullptr) throw InvalidArgument("the input is not a vtkImageData");
+  vtkDataSet* data = vtkDataSet::GetData(inputVector[0]);
+  if (data == nullptr) throw InvalidArgument("the input is not a dataset");
   if (vectors == nullptr)
     throw InvalidArgument("the input has no point vector array (choose one under Vectors)");
-  return image_grid(image, vectors);
+  return orthofront::paraview::dataset_grid(data, vectors);
 }
 
 }  // namespace
@@ -204,7 +160,7 @@ void vtkOrthofrontSurfaceFilter::PrintSelf(ostream& os, vtkIndent indent) {
 }
 
 int vtkOrthofrontSurfaceFilter::FillInputPortInformation(int, vtkInformation* info) {
-  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataSet");  // dataset_grid() says which
   return 1;
 }
 

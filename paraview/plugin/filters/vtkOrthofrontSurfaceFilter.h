@@ -1,9 +1,9 @@
 #pragma once
-/// The orthofront surface filters' common part: the vector field from a vtkImageData input (for
-/// path and streak surfaces its time steps, asked of the pipeline one at a time), the seed
-/// line, the options by name (each filter's generated setters store them), and the surface as
-/// vtkPolyData with its per-vertex attributes and the run's report as field data. A streak
-/// surface's output has a time step per frame.
+/// The orthofront surface filters' common part: the vector field from image data or a
+/// rectilinear grid (for path and streak surfaces its time steps, asked of the pipeline one at a
+/// time), the seed line, the options by name (each filter's generated setters store them), and
+/// the surface as vtkPolyData with its per-vertex attributes and the run's report as field data.
+/// A streak surface's output has a time step per frame.
 #include <initializer_list>
 #include <map>
 #include <memory>
