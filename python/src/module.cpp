@@ -12,6 +12,7 @@
 
 #include "jobs/edge_default.h"
 #include "jobs/engine_options.h"
+#include "jobs/option_spelling.h"
 #include "jobs/path_job.h"
 #include "jobs/path_run.h"
 #include "jobs/time_arg.h"
@@ -152,6 +153,7 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
     const std::string prefix = "orthofront: warning: ";
     if (cap.rfind(prefix, 0) == 0) cap.erase(0, prefix.size());
     while (!cap.empty() && cap.back() == '\n') cap.pop_back();
+    cap = jobs::spell_options(cap, jobs::OptionSpelling::python);
     if (PyErr_WarnEx(PyExc_UserWarning, cap.c_str(), 1) != 0) throw py::error_already_set();
   }
   InterruptCheck interrupt;
@@ -271,6 +273,15 @@ py::dict streak_surface(const py::object& field_in, const py::object& seed_in, b
 
 }  // namespace orthofront::python
 
+namespace orthofront::python {
+namespace {
+// Messages name options as flags (--cache-budget); a Python user types keywords.
+std::string python_spelling(const char* message) {
+  return jobs::spell_options(message, jobs::OptionSpelling::python);
+}
+}  // namespace
+}  // namespace orthofront::python
+
 PYBIND11_MODULE(_orthofront, m) {
   using namespace orthofront;
   using namespace orthofront::python;
@@ -285,13 +296,13 @@ PYBIND11_MODULE(_orthofront, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const io::IoError& e) {
-      PyErr_SetString(PyExc_OSError, e.what());
+      PyErr_SetString(PyExc_OSError, python_spelling(e.what()).c_str());
     } catch (const InvalidArgument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, python_spelling(e.what()).c_str());
     } catch (const io::FormatError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, python_spelling(e.what()).c_str());
     } catch (const Error& e) {
-      error(e.what());
+      error(python_spelling(e.what()).c_str());
     }
   });
 

@@ -159,7 +159,7 @@ def test_keywords_are_the_command_line_options():
                                   frames=[1], flat_split=-1)
     with pytest.raises(TypeError, match="edge: takes a value"):
         orthofront.stream_surface("abc", "line:0,0,0:1,0,0", edge=True)
-    with pytest.raises(ValueError, match="seed-count"):
+    with pytest.raises(ValueError, match="seed_count must be at least 2"):
         orthofront.stream_surface("abc", "line:0,0,0:1,0,0", seed_count=1)
     with pytest.raises(TypeError, match="release"):
         orthofront.streak_surface("double-gyre", "line:0.3,0.3,0:0.3,0.45,0", frames=[1])
@@ -427,3 +427,12 @@ def test_keywords_given_at_their_defaults_change_nothing():
                                         skip_fraction=0.5)
     assert np.array_equal(plain.vertices, spelled.vertices)
     assert np.array_equal(plain.faces, spelled.faces)
+
+
+def test_messages_name_the_keywords_a_python_user_types_not_the_flags():
+    values, times, origin, spacing = shear_series()
+    series = orthofront.Series(values, times, origin=origin, spacing=spacing)
+    with pytest.raises(ValueError) as refused:
+        orthofront.path_surface(series, [[0.2, 0.2], [0.2, 0.6]], cache_budget="100", t0=0, t1=2)
+    assert "raise cache_budget" in str(refused.value)
+    assert "--cache-budget" not in str(refused.value)

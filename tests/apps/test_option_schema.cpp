@@ -13,6 +13,7 @@
 #include "cli/batch_job.h"
 #include "cli/option_flags.h"
 #include "jobs/option_set.h"
+#include "jobs/option_spelling.h"
 #include "jobs/path_job.h"
 #include "jobs/streak_job.h"
 #include "jobs/stream_job.h"
@@ -284,4 +285,20 @@ TEST_CASE("option schema: a job file's surface without keys takes the command's 
   CHECK(f.flat_split == 0.25);
   CHECK(f.collapse == 0.5);
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("option schema: messages name options as Python and ParaView spell them",
+          "[apps][options]") {
+  using orthofront::jobs::OptionSpelling;
+  using orthofront::jobs::spell_options;
+  const std::string message =
+      "the band needs 3 steps (4 MiB); raise --cache-budget or --max-vertices, not --frobnicate; "
+      "--field 'x.h5': bad --seed-count. A range 1--2 and a-b--flat-split stay.";
+  CHECK(spell_options(message, OptionSpelling::command_line) == message);
+  CHECK(spell_options(message, OptionSpelling::python) ==
+        "the band needs 3 steps (4 MiB); raise cache_budget or max_vertices, not --frobnicate; "
+        "field 'x.h5': bad seed_count. A range 1--2 and a-b--flat-split stay.");
+  CHECK(spell_options(message, OptionSpelling::paraview) ==
+        "the band needs 3 steps (4 MiB); raise Cache Budget or Max Vertices, not --frobnicate; "
+        "the input 'x.h5': bad Seed Count. A range 1--2 and a-b--flat-split stay.");
 }

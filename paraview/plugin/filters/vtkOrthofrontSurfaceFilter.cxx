@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "jobs/edge_default.h"
+#include "jobs/option_spelling.h"
 #include "jobs/path_run.h"
 #include "jobs/streak_report.h"
 #include "jobs/streak_run.h"
@@ -310,7 +311,7 @@ int vtkOrthofrontSurfaceFilter::RequestData(vtkInformation* request,
     this->Surfaces.clear();
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
     output->Initialize();
-    vtkErrorMacro(<< e.what());
+    vtkErrorMacro(<< jobs::spell_options(e.what(), jobs::OptionSpelling::paraview));
     return 0;
   }
   return 1;
@@ -379,7 +380,8 @@ void vtkOrthofrontSurfaceFilter::CollectStep(vtkInformation* request,
     }
     if (result.frames.size() < this->FrameTimes.size())
       vtkWarningMacro(<< "the streak surface stopped after " << result.frames.size() << " of "
-                      << this->FrameTimes.size() << " frames: " << result.result.message);
+                      << this->FrameTimes.size() << " frames: "
+                      << jobs::spell_options(result.result.message, jobs::OptionSpelling::paraview));
     if (this->Surfaces.empty()) throw InvalidArgument("the streak surface made no frame: " + result.result.message);
   }
   this->SurfacesKey = run->key;
@@ -420,7 +422,7 @@ void vtkOrthofrontSurfaceFilter::RunStream(vtkInformationVector** inputVector, v
   const Seed<3> seed = jobs::prepare_stream_seed(field, curve, job);
   const std::string cap =
       jobs::vertex_cap_warning(curve.length(), field.domain().extent(), job.options);
-  if (!cap.empty()) vtkWarningMacro(<< cap);
+  if (!cap.empty()) vtkWarningMacro(<< jobs::spell_options(cap, jobs::OptionSpelling::paraview));
   const SurfaceResult result = jobs::run_stream_job(
       field, seed, job,
       [this](const orthofront::Progress& p) {
