@@ -67,12 +67,12 @@ inline std::string from_data_meaning(const jobs::OptionSpec& spec) {
   return "as the command line chooses it";
 }
 
-/// Baselines are never shown; nor the device (the plugin runs on the CPU), the command line's
-/// other streak routes and its space-time output file.
+/// All but the device (the plugin runs on the CPU), the command line's other streak routes and
+/// its space-time output file.
 inline bool on_panel(const jobs::OptionSpec& spec) {
   for (const char* name : {"route", "point", "spacetime-out"})
     if (spec.name == name) return false;
-  return spec.group != jobs::OptionGroup::baseline && spec.name.rfind("device", 0) != 0;
+  return spec.name.rfind("device", 0) != 0;
 }
 
 /// The options on the panel's first page; the rest are advanced.

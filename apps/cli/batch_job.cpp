@@ -481,7 +481,7 @@ std::set<std::string> batch_surface_keys(SurfaceKind kind) {
   if (kind == SurfaceKind::streak) keys.erase("format");
   const KindOptions options(kind);
   for (const OptionSpec& spec : options.set.specs()) {
-    if (spec.group == OptionGroup::baseline || batch_job_level(kind, spec.name)) continue;
+    if (batch_job_level(kind, spec.name)) continue;
     std::string key = spec.name;
     std::replace(key.begin(), key.end(), '-', '_');
     keys.insert(key);

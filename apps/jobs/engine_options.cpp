@@ -67,18 +67,6 @@ void add_engine_options(OptionSet& set, StreamSurfaceOptions& o) {
               "A front vertex that kept its mesh vertex more than this many steps (it stopped "
               "advancing) leaves the front; 0: never")
       .at_least(0);
-  // Baselines of orthofront-bench (the same surface, in the old order of work): accepted, left
-  // out of the user's help.
-  set.flag("no-shots-ahead", o.shots_ahead,
-           "Integrate seed shots only when an insertion needs them, not a step ahead on an idle "
-           "thread (the same surface, for timing)",
-           false)
-      .group(G::baseline);
-  set.flag("no-samples-ahead", o.samples_ahead,
-           "Sample each front when its step begins, not while the previous strip is stitched on "
-           "an idle thread (the same surface, for timing)",
-           false)
-      .group(G::baseline);
   set.integer("shot-evaluations", o.shot_evaluations,
               "The most field evaluations an insertion's stream line from the seed may cost; from "
               "the first that runs out, insertions on longer ones start from the previous row "

@@ -51,7 +51,6 @@ const char* group_title(OptionGroup group) {
     case OptionGroup::budget: return "Budget";
     case OptionGroup::output: return "Output";
     case OptionGroup::performance: return "Performance";
-    case OptionGroup::baseline: return "";
   }
   return "";
 }

@@ -15,11 +15,10 @@
 
 namespace orthofront::jobs {
 
-/// What an option is about, for help pages and property panels. `baseline`: a benchmark's
-/// baseline (the same surface in an old order of work), accepted but never shown to users.
-enum class OptionGroup { input, algorithm, budget, output, performance, baseline };
+/// What an option is about, for help pages and property panels.
+enum class OptionGroup { input, algorithm, budget, output, performance };
 
-/// The group's name as help pages title it ("" for baseline).
+/// The group's name as help pages title it.
 const char* group_title(OptionGroup group);
 
 /// The kind of value an option takes.

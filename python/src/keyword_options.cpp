@@ -42,7 +42,6 @@ std::string joined(const py::sequence& items, const char* separator) {
 py::list option_schema(const jobs::OptionSet& options) {
   py::list out;
   for (const jobs::OptionSpec& spec : options.specs()) {
-    if (spec.group == jobs::OptionGroup::baseline) continue;  // benchmarks' switches
     py::dict entry;
     entry["name"] = keyword_of(spec.name);
     entry["option"] = "--" + spec.name;

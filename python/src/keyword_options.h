@@ -12,7 +12,7 @@ namespace orthofront::python {
 void parse_keywords(jobs::OptionSet& options, const pybind11::kwargs& keywords);
 
 /// The options the keywords set, one dict each (name, option, type, default, flag, help, unit,
-/// group, choices, required), benchmarks' baselines left out.
+/// group, choices, required).
 pybind11::list option_schema(const jobs::OptionSet& options);
 
 }  // namespace orthofront::python
