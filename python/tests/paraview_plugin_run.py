@@ -63,8 +63,12 @@ def run(out, **properties):
     data = sm.Fetch(surface)
     report = data.GetFieldData().GetAbstractArray("orthofront_report")
     SaveData(out, proxy=surface, DataMode="Ascii")
+    field_data = data.GetFieldData()
+    notes = {field_data.GetAbstractArray(i).GetName(): field_data.GetAbstractArray(i).GetValue(0)
+             for i in range(field_data.GetNumberOfArrays())}
     return {"points": data.GetNumberOfPoints(), "cells": data.GetNumberOfCells(),
-            "report": json.loads(report.GetValue(0)) if report is not None else None}
+            "report": json.loads(report.GetValue(0)) if report is not None else None,
+            "notes": notes}
 
 
 seed = dict(SeedPoint1=[0.5, 0.0, 0.2], SeedPoint2=[1.5, 0.0, 0.2], SeedCount=8, Steps=20)

@@ -107,6 +107,11 @@ def test_the_filters_surface_is_the_command_lines(plugin_run, orthofront_binary)
     for name in cli_attributes:
         assert np.array_equal(attributes[name], cli_attributes[name]), name
     assert result["given_edge"]["report"]["complete"] is True
+    # The output says what it is, as the command line's .vtp files do.
+    notes = result["given_edge"]["notes"]
+    assert notes["orthofront_surface"].startswith("stream surface, orthofront ")
+    assert notes["source"] == "ParaView input, array 'velocity'"
+    assert "position_units" in notes and "time" in notes
 
 
 def test_edge_left_at_zero_takes_the_cell_size_as_the_command_line_does(plugin_run,

@@ -8,32 +8,28 @@
 
 #include "jobs/edge_default.h"
 #include "jobs/option_spelling.h"
+#include "jobs/output_notes.h"
 #include "jobs/path_run.h"
 #include "jobs/streak_report.h"
 #include "jobs/streak_run.h"
 #include "jobs/surface_kind.h"
 #include "orthofront/error.h"
 #include "orthofront/field/grid_field.h"
-#include "orthofront/io/mesh_attributes.h"
 #include "orthofront/io/report_json.h"
 #include "orthofront/seed/seed_curve.h"
 #include "dataset_grid.h"
+#include "mesh_polydata.h"
 #include "paraview_names.h"
 #include "step_collector.h"
-#include "vtkCellArray.h"
 #include "vtkDataArray.h"
-#include "vtkDemandDrivenPipeline.h"
-#include "vtkDoubleArray.h"
-#include "vtkFieldData.h"
 #include "vtkDataSet.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkDemandDrivenPipeline.h"
+#include "vtkFieldData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
-#include "vtkIntArray.h"
-#include "vtkPointData.h"
-#include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
-#include "vtkStringArray.h"
 
 namespace {
 
@@ -43,48 +39,6 @@ std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", value);
   return text;
-}
-
-/// The mesh as polydata: points, polygons (triangles and quads) and the recorded attributes.
-void mesh_to_polydata(const Mesh& mesh, vtkPolyData* out) {
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(static_cast<vtkIdType>(mesh.vertex_count()));
-  for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
-    points->SetPoint(static_cast<vtkIdType>(i), mesh.positions[i].data());
-  vtkNew<vtkCellArray> polys;
-  for (const Face& face : mesh.faces) {
-    vtkIdType ids[4];
-    for (int c = 0; c < face.size; ++c) ids[c] = face.v[static_cast<std::size_t>(c)];
-    polys->InsertNextCell(face.size, ids);
-  }
-  out->SetPoints(points);
-  out->SetPolys(polys);
-  for (const auto& a : io::detail::kRealAttributes) {
-    if (!io::detail::is_recorded(mesh, mesh.*a.values)) continue;
-    vtkNew<vtkDoubleArray> array;
-    array->SetName(a.name);
-    array->SetNumberOfValues(static_cast<vtkIdType>(mesh.vertex_count()));
-    for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
-      array->SetValue(static_cast<vtkIdType>(i), (mesh.*a.values)[i]);
-    out->GetPointData()->AddArray(array);
-  }
-  for (const auto& a : io::detail::kIntAttributes) {
-    if (!io::detail::is_recorded(mesh, mesh.*a.values)) continue;
-    vtkNew<vtkIntArray> array;
-    array->SetName(a.name);
-    array->SetNumberOfValues(static_cast<vtkIdType>(mesh.vertex_count()));
-    for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
-      array->SetValue(static_cast<vtkIdType>(i), (mesh.*a.values)[i]);
-    out->GetPointData()->AddArray(array);
-  }
-}
-
-void add_text(vtkFieldData* data, const char* name, const std::string& text) {
-  vtkNew<vtkStringArray> array;
-  array->SetName(name);
-  array->InsertNextValue(text);
-  data->AddArray(array);
 }
 
 /// The options stored by the setters, parsed into `options` as the command line parses its
@@ -347,12 +301,13 @@ void vtkOrthofrontSurfaceFilter::CollectStep(vtkInformation* request,
     if (!options.set.given("t1")) args.t1_text = number(series->time(series->step_count() - 1));
     jobs::apply_memory_limits(options.set, args.limits, args.options);
     jobs::check_seed_count(args.seed_count, args.options.max_vertices);
-    const jobs::PathRun result = jobs::run_path_surface(series.get(), nullptr, curve, args,
-                                                        options.set.given("edge"), keep_going);
+    jobs::PathRun result = jobs::run_path_surface(series.get(), nullptr, curve, args,
+                                                  options.set.given("edge"), keep_going);
+    result.result.mesh.notes = jobs::output_notes("path", field, series.get());
     vtkNew<vtkPolyData> surface;
-    mesh_to_polydata(result.result.mesh, surface);
+    orthofront::paraview::mesh_to_polydata(result.result.mesh, surface);
     this->Report = result.report.dump(2);
-    add_text(surface->GetFieldData(), "orthofront_report", this->Report);
+    orthofront::paraview::add_text(surface->GetFieldData(), "orthofront_report", this->Report);
     this->Surfaces.emplace_back(surface);
     if (!result.result.report.complete)
       vtkWarningMacro(<< "the path surface is not complete (stopped: "
@@ -369,13 +324,15 @@ void vtkOrthofrontSurfaceFilter::CollectStep(vtkInformation* request,
       for (const double t : this->FrameTimes) list += (list.empty() ? "" : ",") + number(t);
       options.set.set("frames", list);
     }
-    const jobs::StreakRun result =
+    jobs::StreakRun result =
         jobs::run_streak_surface(series.get(), nullptr, curve, options.set, args, keep_going);
     this->Report = result.report.dump(2);
-    for (const spacetime::StreakFrame& frame : result.frames) {
+    const jobs::MeshNotes notes = jobs::output_notes("streak", field, series.get());
+    for (spacetime::StreakFrame& frame : result.frames) {
+      frame.mesh.notes = notes;
       vtkNew<vtkPolyData> surface;
-      mesh_to_polydata(frame.mesh, surface);
-      add_text(surface->GetFieldData(), "orthofront_report", this->Report);
+      orthofront::paraview::mesh_to_polydata(frame.mesh, surface);
+      orthofront::paraview::add_text(surface->GetFieldData(), "orthofront_report", this->Report);
       this->Surfaces.emplace_back(surface);
     }
     if (result.frames.size() < this->FrameTimes.size())
@@ -423,15 +380,16 @@ void vtkOrthofrontSurfaceFilter::RunStream(vtkInformationVector** inputVector, v
   const std::string cap =
       jobs::vertex_cap_warning(curve.length(), field.domain().extent(), job.options);
   if (!cap.empty()) vtkWarningMacro(<< jobs::spell_options(cap, jobs::OptionSpelling::paraview));
-  const SurfaceResult result = jobs::run_stream_job(
+  SurfaceResult result = jobs::run_stream_job(
       field, seed, job,
       [this](const orthofront::Progress& p) {
         if (p.max_steps > 0) this->UpdateProgress(static_cast<double>(p.step) / p.max_steps);
         return this->GetAbortExecute() == 0;
       },
       {}, nullptr);
+  result.mesh.notes = jobs::output_notes("stream", job.field, nullptr);
   output->Initialize();
-  mesh_to_polydata(result.mesh, output);
+  orthofront::paraview::mesh_to_polydata(result.mesh, output);
   nlohmann::json report = io::to_json(result.report);
   report["field"] = job.field;
   report["seed"] = job.seed;
@@ -440,7 +398,7 @@ void vtkOrthofrontSurfaceFilter::RunStream(vtkInformationVector** inputVector, v
   report["complete"] = result.report.complete;
   report["limits"] = options.stream_limits.to_json();
   this->Report = report.dump(2);
-  add_text(output->GetFieldData(), "orthofront_report", this->Report);
+  orthofront::paraview::add_text(output->GetFieldData(), "orthofront_report", this->Report);
   if (!result.report.complete)
     vtkWarningMacro(<< "the surface is not complete (stopped: "
                     << to_string(result.report.stop_reason) << ")");
