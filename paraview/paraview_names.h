@@ -2,46 +2,23 @@
 /// How the option schemas become ParaView properties: the names, which options the panel shows,
 /// and which take their default from the data. Shared by the property generator and the filters,
 /// so the properties a filter reads are the ones the XML declares.
-#include <cctype>
+#include <algorithm>
 #include <string>
 
+#include "jobs/option_spelling.h"
 #include "jobs/surface_kind.h"
 
 namespace orthofront::paraview {
 
-/// The kinds the compiled plugin has filters for.
-inline constexpr jobs::SurfaceKind kPluginKinds[] = {
-    jobs::SurfaceKind::stream, jobs::SurfaceKind::path, jobs::SurfaceKind::streak};
+/// "flat-split" -> "Flat Split": the property's label, as messages name it
+/// (jobs::option_label).
+inline std::string property_label(const std::string& option) { return jobs::option_label(option); }
 
-/// "flat-split" -> "FlatSplit" (the property and, with "Set", its setter).
+/// "flat-split" -> "FlatSplit": the property's name and, with "Set", its setter.
 inline std::string property_name(const std::string& option) {
-  std::string name;
-  bool upper = true;
-  for (const char c : option) {
-    if (c == '-') {
-      upper = true;
-      continue;
-    }
-    name += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
-    upper = false;
-  }
+  std::string name = property_label(option);
+  name.erase(std::remove(name.begin(), name.end(), ' '), name.end());
   return name;
-}
-
-/// "flat-split" -> "Flat Split".
-inline std::string property_label(const std::string& option) {
-  std::string label;
-  bool upper = true;
-  for (const char c : option) {
-    if (c == '-') {
-      label += ' ';
-      upper = true;
-      continue;
-    }
-    label += upper ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
-    upper = false;
-  }
-  return label;
 }
 
 /// Options whose default comes from the data or the machine (the grid's cell size, the memory
@@ -82,45 +59,31 @@ inline bool shown_by_default(const jobs::OptionSpec& spec) {
   return false;
 }
 
-inline const char* class_name(jobs::SurfaceKind kind) {
-  switch (kind) {
-    case jobs::SurfaceKind::stream: return "vtkOrthofrontStreamSurface";
-    case jobs::SurfaceKind::path: return "vtkOrthofrontPathSurface";
-    case jobs::SurfaceKind::streak: return "vtkOrthofrontStreakSurface";
-  }
-  return "";
-}
-inline const char* proxy_name(jobs::SurfaceKind kind) {
-  switch (kind) {
-    case jobs::SurfaceKind::stream: return "OrthofrontStreamSurface";
-    case jobs::SurfaceKind::path: return "OrthofrontPathSurface";
-    case jobs::SurfaceKind::streak: return "OrthofrontStreakSurface";
-  }
-  return "";
-}
-inline const char* filter_label(jobs::SurfaceKind kind) {
-  switch (kind) {
-    case jobs::SurfaceKind::stream: return "Orthofront Stream Surface";
-    case jobs::SurfaceKind::path: return "Orthofront Path Surface";
-    case jobs::SurfaceKind::streak: return "Orthofront Streak Surface";
-  }
-  return "";
-}
-inline const char* filter_help(jobs::SurfaceKind kind) {
-  switch (kind) {
-    case jobs::SurfaceKind::stream:
-      return "A stream surface of a steady vector field from a seed line, its front kept "
-             "orthogonal to the flow: flow-aligned, near-square quads (orthofront stream).";
-    case jobs::SurfaceKind::path:
-      return "A path surface of a time-dependent field from a seed line: the surface its path "
-             "lines sweep from T0 to T1, front kept orthogonal to the flow (orthofront path). "
-             "The input's time steps are read one at a time.";
-    case jobs::SurfaceKind::streak:
-      return "A streak surface of a time-dependent field from a seed line: dye released "
-             "continuously, one output time step per frame (orthofront streak). The input's time "
-             "steps are read one at a time.";
-  }
-  return "";
-}
+/// A kind's filter: its VTK class, server-manager proxy, menu label and help.
+struct PluginFilter {
+  jobs::SurfaceKind kind;
+  const char* class_name;
+  const char* proxy_name;
+  const char* label;
+  const char* help;
+};
+
+/// The kinds the compiled plugin has filters for.
+inline constexpr PluginFilter kPluginFilters[] = {
+    {jobs::SurfaceKind::stream, "vtkOrthofrontStreamSurface", "OrthofrontStreamSurface",
+     "Orthofront Stream Surface",
+     "A stream surface of a steady vector field from a seed line, its front kept orthogonal to "
+     "the flow: flow-aligned, near-square quads (orthofront stream)."},
+    {jobs::SurfaceKind::path, "vtkOrthofrontPathSurface", "OrthofrontPathSurface",
+     "Orthofront Path Surface",
+     "A path surface of a time-dependent field from a seed line: the surface its path lines "
+     "sweep from T0 to T1, front kept orthogonal to the flow (orthofront path). The input's time "
+     "steps are read one at a time."},
+    {jobs::SurfaceKind::streak, "vtkOrthofrontStreakSurface", "OrthofrontStreakSurface",
+     "Orthofront Streak Surface",
+     "A streak surface of a time-dependent field from a seed line: dye released continuously, "
+     "one output time step per frame (orthofront streak). The input's time steps are read one "
+     "at a time."},
+};
 
 }  // namespace orthofront::paraview

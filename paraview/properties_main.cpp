@@ -4,8 +4,8 @@
 //
 //   orthofront-paraview-properties xml OUT.xml
 //   orthofront-paraview-properties header KIND OUT.h
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -26,10 +26,11 @@ using orthofront::jobs::SurfaceKind;
 namespace pv = orthofront::paraview;
 
 
+// The shortest text that reads back as exactly `value`.
 std::string number(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  return std::string(text, end);
 }
 
 // The panel's default: the schema's, or the "from the data" value where the schema's comes from
@@ -192,13 +193,14 @@ void write_input_properties(std::ostream& out) {
 void write_xml(std::ostream& out) {
   out << "<ServerManagerConfiguration>\n  <!-- Made by orthofront-paraview-properties from the "
          "option schemas: do not edit. -->\n  <ProxyGroup name=\"filters\">\n";
-  for (const SurfaceKind kind : pv::kPluginKinds) {
+  for (const pv::PluginFilter& filter : pv::kPluginFilters) {
+    const SurfaceKind kind = filter.kind;
     const KindOptions options(kind);
-    out << "    <SourceProxy name=\"" << pv::proxy_name(kind) << "\" class=\"" << pv::class_name(kind)
-        << "\" label=\"" << pv::filter_label(kind) << "\">\n";
-    out << "      <Documentation short_help=\"" << orthofront::io::xml_escaped(pv::filter_help(kind))
-        << "\" long_help=\"" << orthofront::io::xml_escaped(pv::filter_help(kind)) << "\">"
-        << orthofront::io::xml_escaped(pv::filter_help(kind)) << "</Documentation>\n";
+    const std::string help = orthofront::io::xml_escaped(filter.help);
+    out << "    <SourceProxy name=\"" << filter.proxy_name << "\" class=\"" << filter.class_name
+        << "\" label=\"" << filter.label << "\">\n";
+    out << "      <Documentation short_help=\"" << help << "\" long_help=\"" << help << "\">"
+        << help << "</Documentation>\n";
     write_input_properties(out);
     if (kind == SurfaceKind::streak)  // the frames, as the output's time steps
       out << "      <DoubleVectorProperty name=\"TimestepValues\" information_only=\"1\" "
@@ -235,13 +237,14 @@ const char* setter_type(const OptionSpec& spec) {
   }
 }
 
-void write_header(std::ostream& out, SurfaceKind kind) {
+void write_header(std::ostream& out, const pv::PluginFilter& filter) {
+  const SurfaceKind kind = filter.kind;
   const KindOptions options(kind);
-  const std::string cls = pv::class_name(kind);
+  const std::string cls = filter.class_name;
   out << "// Made by orthofront-paraview-properties from the option schema: do not edit.\n"
       << "#pragma once\n#include \"vtkOrthofrontSurfaceFilter.h\"\n\n"
       << "#include \"OrthofrontFiltersModule.h\"\n\n"
-      << "/// " << pv::filter_help(kind) << "\n"
+      << "/// " << filter.help << "\n"
       << "class ORTHOFRONTFILTERS_EXPORT " << cls << " : public vtkOrthofrontSurfaceFilter {\n"
       << " public:\n  static " << cls << "* New();\n  vtkTypeMacro(" << cls
       << ", vtkOrthofrontSurfaceFilter)\n\n";
@@ -298,7 +301,14 @@ int main(int argc, char** argv) {
       std::cerr << "orthofront-paraview-properties: unknown kind '" << args[1] << "'\n";
       return 2;
     }
-    write_header(text, *kind);
+    for (const pv::PluginFilter& filter : pv::kPluginFilters)
+      if (filter.kind == *kind) {
+        write_header(text, filter);
+        return write_file(args[2], text.str());
+      }
+    std::cerr << "orthofront-paraview-properties: the plugin has no filter for '" << args[1]
+              << "'\n";
+    return 2;
     return write_file(args[2], text.str());
   }
   std::cerr << "usage: orthofront-paraview-properties xml OUT.xml | header KIND OUT.h\n";

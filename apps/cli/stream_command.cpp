@@ -95,18 +95,10 @@ void add_stream_command(CLI::App& app) {
     io::AtomicFileSet outputs;
     io::write_mesh(result.mesh, out, outputs);
     if (!args->report.empty()) {
-      nlohmann::json report = io::to_json(result.report);
-      report["field"] = args->job.field;
-      report["seed"] = args->job.seed;
-      report["seed_count"] = args->job.seed_count;
-      add_edge_keys(report, {args->job.options.edge, args->job.edge_source});
+      nlohmann::json report = stream_report(result.report, args->job, args->limits, device);
       report["output"] = args->out;
-      report["limits"] = args->limits.to_json();
       report["process"] = {{"peak_rss_bytes", peak_rss_bytes()},
                            {"rss_bytes", current_rss_bytes()}};
-      if (!device.backend.empty())
-        report["device"] = spacetime::device_json(device.backend, device.min_vertices, device.calls,
-                                                  device.statistics);
       io::write_json(report, args->report, outputs);
     }
     if (!args->exr.empty()) {

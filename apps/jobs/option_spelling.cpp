@@ -1,5 +1,6 @@
 #include "jobs/option_spelling.h"
 
+#include <algorithm>
 #include <cctype>
 #include <set>
 
@@ -22,14 +23,26 @@ const std::set<std::string>& option_names() {
 }
 
 std::string respelled(const std::string& name, OptionSpelling spelling) {
-  if (spelling == OptionSpelling::python) {
-    std::string keyword = name;
-    for (char& c : keyword)
-      if (c == '-') c = '_';
-    return keyword;
-  }
+  if (spelling == OptionSpelling::python) return option_keyword(name);
   if (name == "field") return "the input";
   if (name == "seed") return "the seed";
+  return option_label(name);
+}
+
+bool name_char(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  return std::islower(u) || std::isdigit(u) || c == '-';
+}
+
+}  // namespace
+
+std::string option_keyword(const std::string& name) {
+  std::string keyword = name;
+  std::replace(keyword.begin(), keyword.end(), '-', '_');
+  return keyword;
+}
+
+std::string option_label(const std::string& name) {
   std::string label;
   bool upper = true;
   for (const char c : name) {
@@ -43,10 +56,6 @@ std::string respelled(const std::string& name, OptionSpelling spelling) {
   }
   return label;
 }
-
-bool name_char(char c) { return std::islower(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '-'; }
-
-}  // namespace
 
 std::string spell_options(const std::string& message, OptionSpelling spelling) {
   if (spelling == OptionSpelling::command_line) return message;

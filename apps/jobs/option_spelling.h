@@ -13,6 +13,11 @@ enum class OptionSpelling {
   paraview,      ///< Cache Budget (the property's label)
 };
 
+/// An option's name as Python's keyword: "flat-split" -> "flat_split".
+std::string option_keyword(const std::string& name);
+/// An option's name as a label (ParaView's property): "flat-split" -> "Flat Split".
+std::string option_label(const std::string& name);
+
 /// `message` with every --NAME of an option some surface kind takes (and --field, --seed)
 /// written in `spelling`; other text, and --words that name no option, stay as they are.
 std::string spell_options(const std::string& message, OptionSpelling spelling);

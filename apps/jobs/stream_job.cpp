@@ -7,6 +7,8 @@
 
 #include "jobs/edge_default.h"
 #include "jobs/path_job.h"
+#include "orthofront/io/report_json.h"
+#include "orthofront/spacetime/path_command_json.h"
 #include "orthofront/advect/steady_front_integrator.h"
 #include "orthofront/error.h"
 #include "orthofront/field/grid_field.h"
@@ -117,6 +119,20 @@ void check_stream_seed(const Field3& field, const Seed<3>& seed, const SurfaceJo
   context.domain = describe_box(field.domain(), 3);
   context.about = field.describe();
   require_seed_inside(survey, context, true);
+}
+
+nlohmann::json stream_report(const SurfaceReport& report, const SurfaceJob& job,
+                             const MemoryLimits& limits, const DeviceUse& device) {
+  nlohmann::json out = io::to_json(report);
+  out["field"] = job.field;
+  out["seed"] = job.seed;
+  out["seed_count"] = job.seed_count;
+  add_edge_keys(out, {job.options.edge, job.edge_source});
+  out["limits"] = limits.to_json();
+  if (!device.backend.empty())
+    out["device"] = spacetime::device_json(device.backend, device.min_vertices, device.calls,
+                                           device.statistics);
+  return out;
 }
 
 std::string vertex_cap_warning(double seed_length, const Vec3& domain_extent,

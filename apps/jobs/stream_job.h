@@ -2,6 +2,7 @@
 /// One stream-surface job: its options, as every front end takes them, and the checks of its
 /// seed.
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "jobs/engine_options.h"
@@ -52,6 +53,12 @@ Seed<3> prepare_stream_seed(const Field3& field, const SeedCurve& curve, Surface
 SurfaceResult run_stream_job(const Field3& field, const Seed<3>& seed, const SurfaceJob& job,
                              const ProgressCallback& progress, const StopRequest& stop,
                              DeviceUse* used);
+
+/// The report of a run as every front end writes it: the engine's report with the field, the
+/// seed and its count, ℓ and where it came from, the memory limits and, where `device` ran the
+/// fronts, what it did.
+nlohmann::json stream_report(const SurfaceReport& report, const SurfaceJob& job,
+                             const MemoryLimits& limits, const DeviceUse& device);
 
 /// A warning (empty when none) for a run whose rows alone, about seed_length / ℓ vertices a
 /// step, would pass options.max_vertices before options.max_steps: it names the seed's length,

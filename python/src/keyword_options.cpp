@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <string>
 
+#include "jobs/option_spelling.h"
 #include "orthofront/error.h"
 
 namespace py = pybind11;
@@ -12,11 +13,6 @@ namespace py = pybind11;
 namespace orthofront::python {
 
 namespace {
-
-std::string keyword_of(std::string name) {
-  std::replace(name.begin(), name.end(), '-', '_');
-  return name;
-}
 
 std::string option_of(std::string keyword) {
   std::replace(keyword.begin(), keyword.end(), '_', '-');
@@ -43,7 +39,7 @@ py::list option_schema(const jobs::OptionSet& options) {
   py::list out;
   for (const jobs::OptionSpec& spec : options.specs()) {
     py::dict entry;
-    entry["name"] = keyword_of(spec.name);
+    entry["name"] = jobs::option_keyword(spec.name);
     entry["option"] = "--" + spec.name;
     entry["type"] = jobs::type_name(spec);
     entry["default"] = spec.show_default ? spec.current() : std::string();
@@ -89,7 +85,7 @@ void parse_keywords(jobs::OptionSet& options, const py::kwargs& keywords) {
   }
   const std::vector<std::string> missing = options.missing();
   if (!missing.empty())
-    throw py::type_error("missing keyword argument: " + keyword_of(missing.front()));
+    throw py::type_error("missing keyword argument: " + jobs::option_keyword(missing.front()));
 }
 
 }  // namespace orthofront::python

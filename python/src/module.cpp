@@ -166,17 +166,7 @@ py::dict stream_surface(const py::object& field_in, const py::object& seed_in, b
         &device);
   }
   interrupt.rethrow_if_raised();
-  nlohmann::json report = io::to_json(result.report);
-  report["field"] = job.field;
-  report["seed"] = job.seed;
-  report["seed_count"] = job.seed_count;
-  jobs::add_edge_keys(report, {job.options.edge, job.edge_source});
-  if (!device.backend.empty())
-    report["device"] = spacetime::device_json(device.backend, device.min_vertices, device.calls,
-                                              device.statistics);
-  report["complete"] = result.report.complete;
-  report["limits"] = limits.to_json();
-  return surface_dict(result.mesh, report);
+  return surface_dict(result.mesh, jobs::stream_report(result.report, job, limits, device));
 }
 
 py::dict path_surface(const py::object& field_in, const py::object& seed_in, bool closed,

@@ -1,12 +1,11 @@
 #include "vtkOrthofrontSurfaceFilter.h"
 
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <exception>
 #include <memory>
 #include <vector>
 
-#include "jobs/edge_default.h"
 #include "jobs/option_spelling.h"
 #include "jobs/output_notes.h"
 #include "jobs/path_run.h"
@@ -15,7 +14,6 @@
 #include "jobs/surface_kind.h"
 #include "orthofront/error.h"
 #include "orthofront/field/grid_field.h"
-#include "orthofront/io/report_json.h"
 #include "orthofront/seed/seed_curve.h"
 #include "dataset_grid.h"
 #include "mesh_polydata.h"
@@ -35,10 +33,11 @@ namespace {
 
 using namespace orthofront;
 
+// The shortest text that reads back as exactly `value` (as the schema parses it).
 std::string number(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  return std::string(text, end);
 }
 
 /// The options stored by the setters, parsed into `options` as the command line parses its
@@ -390,14 +389,7 @@ void vtkOrthofrontSurfaceFilter::RunStream(vtkInformationVector** inputVector, v
   result.mesh.notes = jobs::output_notes("stream", job.field, nullptr);
   output->Initialize();
   orthofront::paraview::mesh_to_polydata(result.mesh, output);
-  nlohmann::json report = io::to_json(result.report);
-  report["field"] = job.field;
-  report["seed"] = job.seed;
-  report["seed_count"] = job.seed_count;
-  jobs::add_edge_keys(report, {job.options.edge, job.edge_source});
-  report["complete"] = result.report.complete;
-  report["limits"] = options.stream_limits.to_json();
-  this->Report = report.dump(2);
+  this->Report = jobs::stream_report(result.report, job, options.stream_limits, {}).dump(2);
   orthofront::paraview::add_text(output->GetFieldData(), "orthofront_report", this->Report);
   if (!result.report.complete)
     vtkWarningMacro(<< "the surface is not complete (stopped: "
