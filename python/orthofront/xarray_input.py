@@ -7,7 +7,8 @@ Axes are found by name and attributes, never by position: a coordinate's ``axis`
 decrease are turned round (with the data). Uniform coordinates become origin and spacing, others
 rectilinear axes. What would give a silently wrong surface is refused with a typed error:
 ``AxisOrderError`` for a dimension that is no axis, ``UnitsError`` for positions in degrees with
-velocities in metres per second or a depth axis that points down, ``TimeError`` for times that
+velocities not in degrees per second (metres per second, or no unit stated) or a depth axis that
+points down, ``TimeError`` for times that
 are not numbers, datetime64 or CF "UNITS since DATE" values.
 
 Times become seconds since a reference, ``time_reference`` (default: the first time), which the
@@ -60,7 +61,8 @@ _COMPONENT_STANDARD = [
     ("sea_water_x_velocity", "sea_water_y_velocity", "upward_sea_water_velocity"),
 ]
 _DEGREES = re.compile(r"^degrees?(_?(east|north|e|n))?$", re.IGNORECASE)
-_PER_SECOND_METRES = re.compile(r"^(m|cm|km|mm)\s*(/\s*s|s-1|s\^-1|s\*\*-1)$", re.IGNORECASE)
+_DEGREES_PER_SECOND = re.compile(r"^degrees?(_?(east|north|e|n))?\s*(/\s*s|s-1|s\^-1|s\*\*-1)$",
+                                 re.IGNORECASE)
 _SINCE = re.compile(r"^\s*(\w+)\s+since\s+(.+?)\s*$", re.IGNORECASE)
 _SECONDS_PER = {"s": 1, "sec": 1, "secs": 1, "second": 1, "seconds": 1, "min": 60, "mins": 60,
                 "minute": 60, "minutes": 60, "h": 3600, "hr": 3600, "hrs": 3600, "hour": 3600,
@@ -127,18 +129,22 @@ def _components(data, u, v, w):
 
 
 def _check_units(components, coords):
-    """UnitsError for positions in degrees with velocities in m/s."""
+    """UnitsError for positions in degrees unless the velocities are in degrees per second too:
+    metres per second, or velocities that state no unit, would move degrees by metres."""
     degree_axes = [role for role, c in coords.items()
                    if c is not None and _DEGREES.match(str(c.attrs.get("units", "")).strip())]
-    speed_units = {str(c.attrs.get("units", "")).strip() for c in components} - {""}
-    metric = sorted(u for u in speed_units if _PER_SECOND_METRES.match(u))
-    if degree_axes and metric:
-        raise UnitsError(
-            "positions in degrees (%s) and velocities in %s: the surface would move degrees by "
-            "metres. Give the coordinates in metres, or open the NetCDF file with "
-            "orthofront.Series.open('FILE.nc:u,v,lonlat=metres')"
-            % (", ".join("%s: %s" % (r, coords[r].attrs.get("units")) for r in degree_axes),
-               ", ".join(metric)))
+    if not degree_axes:
+        return
+    speed_units = [str(c.attrs.get("units", "")).strip() for c in components]
+    if all(_DEGREES_PER_SECOND.match(u) for u in speed_units):
+        return
+    raise UnitsError(
+        "positions in degrees (%s) and velocities in %s: the surface would move degrees by "
+        "metres. Give the coordinates in metres, velocities in degrees per second (units "
+        "'degrees s-1'), or open the NetCDF file with "
+        "orthofront.Series.open('FILE.nc:u,v,lonlat=metres')"
+        % (", ".join("%s: %s" % (r, coords[r].attrs.get("units")) for r in degree_axes),
+           ", ".join(sorted({u or "no stated unit" for u in speed_units}))))
 
 
 def time_seconds(values, reference=None, units=""):

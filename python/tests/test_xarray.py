@@ -74,6 +74,14 @@ def test_degrees_with_metres_per_second_and_depth_pointing_down_are_refused():
     lonlat["lat"].attrs["units"] = "degrees_north"
     with pytest.raises(orthofront.UnitsError, match="degrees_east.*m s-1"):
         orthofront.from_xarray(lonlat)
+    # Velocities that state no unit could be either: refused too; degrees per second are taken.
+    for name in "uvw":
+        lonlat[name].attrs.pop("units")
+    with pytest.raises(orthofront.UnitsError, match="no stated unit"):
+        orthofront.from_xarray(lonlat)
+    for name in "uvw":
+        lonlat[name].attrs["units"] = "degrees s-1"
+    assert isinstance(orthofront.from_xarray(lonlat), orthofront.Field)
     down = ds.rename({"z": "depth"})
     down["depth"].attrs["positive"] = "down"
     with pytest.raises(orthofront.UnitsError, match="positive down"):
