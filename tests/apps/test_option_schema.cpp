@@ -234,6 +234,9 @@ TEST_CASE("option schema: a job file's surface without keys takes the command's 
   const auto same_defaults = [](const jobs::OptionSet& fresh, const jobs::OptionSet& replayed) {
     for (const jobs::OptionSpec& spec : fresh.specs()) {
       INFO(spec.name);
+      // The vertex cap's default follows the memory available at the moment it is read, which
+      // other processes change between the two reads.
+      if (spec.name == "max-vertices") continue;
       CHECK(replayed.find(spec.name)->current() == spec.current());
     }
   };
